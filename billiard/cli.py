@@ -1,0 +1,208 @@
+"""Command line: ``billiard derive | run | scenes``.
+
+Errors a user can cause (a bad scene, a bad curve expression, a stop condition) print one
+line and exit with status 2; no traceback.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+import time
+from collections.abc import Sequence
+from pathlib import Path
+
+
+class UserError(Exception):
+    """An error to report in one line, without a traceback."""
+
+
+def _user_errors() -> tuple[type[BaseException], ...]:
+    """Exception classes that mean bad input or a documented stop, not a bug."""
+    import importlib
+
+    errors: list[type[BaseException]] = [UserError]
+    for module, names in (
+        ("billiard.expr", ["CurveExpressionError"]),
+        ("billiard.curves", ["CurveNotFoundError"]),
+        ("billiard.scene", ["SceneError"]),
+        ("billiard.errors", ["GeometryError", "SimulationError"]),
+        ("billiard.derivation.curve", ["CurveDerivationError"]),
+    ):
+        try:
+            mod = importlib.import_module(module)
+        except ImportError:  # a part that is not installed cannot raise its errors
+            continue
+        errors += [getattr(mod, n) for n in names if hasattr(mod, n)]
+    return tuple(errors)
+
+
+# --- derive ----------------------------------------------------------------------------
+
+def cmd_derive(args: argparse.Namespace) -> int:
+    from .derivation import build
+
+    if args.curve is not None or args.name is not None:
+        if not (args.curve and args.name):
+            raise UserError("derive: --name and --curve go together")
+        params = dict(_key_value(p, "--param") for p in args.param)
+        from .curves import user_curve_dir
+
+        directory = Path(args.dir) if args.dir else user_curve_dir()
+        started = time.perf_counter()
+        path = build.derive_user_curve(args.name, args.curve, params, directory)
+        print(f"curve {args.name!r}: f(x) = {args.curve} -> {path} "
+              f"({time.perf_counter() - started:.1f} s); a scene can now use "
+              f"curve = \"{args.name}\"")
+        return 0
+    if args.check:
+        problems = build.check()
+        for line in problems:
+            print(line)
+        if problems:
+            print(f"derive --check: {len(problems)} file(s) differ; run `billiard derive`")
+            return 1
+        print("derive --check: generated/ is current")
+        return 0
+    started = time.perf_counter()
+    written = build.regenerate()
+    for path in written:
+        print(f"wrote {path}")
+    print(f"derive: {len(written)} file(s) changed ({time.perf_counter() - started:.1f} s)")
+    return 0
+
+
+def _key_value(text: str, flag: str) -> tuple[str, float]:
+    key, sep, value = text.partition("=")
+    if not sep or not key:
+        raise UserError(f"{flag} {text!r}: expected NAME=VALUE")
+    try:
+        return key.strip(), float(value)
+    except ValueError:
+        raise UserError(f"{flag} {text!r}: value is not a number") from None
+
+
+# --- scenes ----------------------------------------------------------------------------
+
+def cmd_scenes(args: argparse.Namespace) -> int:
+    from .scene import builtin_scenes
+
+    scenes = builtin_scenes()
+    width = max(map(len, scenes))
+    for name, description in scenes.items():
+        print(f"{name:<{width}}  {description}")
+    return 0
+
+
+# --- run -------------------------------------------------------------------------------
+
+class ProgressBar:
+    """A one-line progress bar on a terminal; silent when stderr is not a terminal."""
+
+    def __init__(self, stream=sys.stderr, width: int = 30):
+        self.stream = stream
+        self.width = width
+        self.enabled = stream.isatty()
+        self.started = time.perf_counter()
+        self.last = 0.0
+
+    def __call__(self, done: int, total: int) -> None:
+        if not self.enabled:
+            return
+        now = time.perf_counter()
+        if done < total and now - self.last < 0.1:
+            return
+        self.last = now
+        frac = done / total if total else 1.0
+        filled = int(self.width * frac)
+        rate = done / max(now - self.started, 1e-9)
+        self.stream.write(f"\r[{'#' * filled}{'.' * (self.width - filled)}] "
+                          f"{done}/{total} impacts, {rate:,.0f}/s ")
+        if done >= total:
+            self.stream.write("\n")
+        self.stream.flush()
+
+    def close(self) -> None:
+        if self.enabled:
+            self.stream.write("\n")
+            self.stream.flush()
+
+
+def cmd_run(args: argparse.Namespace) -> int:
+    from .scene import load_scene, scene_to_toml
+    from .simulate import simulate
+
+    scene = load_scene(args.scene, overrides=args.set)
+    out = Path(args.out) if args.out else Path("runs") / scene.name
+    out.mkdir(parents=True, exist_ok=True)
+    bar = ProgressBar()
+    try:
+        result = simulate(scene, collisions=args.collisions, method=args.method, out_dir=out,
+                          progress=bar)
+    finally:
+        if bar.enabled:
+            bar.stream.write("\n")
+    resolved = result.scene
+    (out / "scene.toml").write_text(scene_to_toml(resolved))
+    print(result.summary())
+    print(f"wrote {out / 'collisions.csv'} and {out / 'scene.toml'}")
+    if result.stop_reason:
+        print(f"billiard: stopped: {result.stop_reason}", file=sys.stderr)
+        return 3
+    return 0
+
+
+# --- entry point -----------------------------------------------------------------------
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(
+        prog="billiard",
+        description="Driven gravitational billiard with a spinning, rubbing ball (SI units).")
+    sub = parser.add_subparsers(dest="command", required=True)
+
+    p = sub.add_parser("derive", help="regenerate the generated code from the derivation",
+                       description="Regenerate generated/ and docs/derivation.md, check them, "
+                                   "or derive a user's curve.")
+    p.add_argument("--check", action="store_true",
+                   help="verify that generated/ equals a fresh regeneration (exit 1 if not)")
+    p.add_argument("--name", help="name of a user curve to derive (with --curve)")
+    p.add_argument("--curve", help="curve expression in x, metres, e.g. '30*x**4 + 0.0063'")
+    p.add_argument("--param", action="append", default=[], metavar="NAME=VALUE",
+                   help="value of a named parameter of --curve (repeatable)")
+    p.add_argument("--dir", help="where to write a user curve (default: the user curve "
+                                 "directory, see `billiard.curves.user_curve_dir`)")
+    p.set_defaults(func=cmd_derive)
+
+    p = sub.add_parser("scenes", help="list the built-in scenes")
+    p.set_defaults(func=cmd_scenes)
+
+    p = sub.add_parser("run", help="simulate a scene and write collisions.csv",
+                       description="Simulate a built-in scene or a scene file (TOML, SI units).")
+    p.add_argument("scene", help="built-in scene name (see `billiard scenes`) or a .toml file")
+    p.add_argument("--collisions", type=int, help="number of impacts (default: the scene's)")
+    p.add_argument("--method", choices=["event", "rk4"],
+                   help="flight and impact-detection method (default: the scene's, 'event')")
+    p.add_argument("--out", help="output directory (default: runs/SCENE)")
+    p.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
+                   help="override a scene key, e.g. --set drive.frequency=6.0 (repeatable)")
+    p.set_defaults(func=cmd_run)
+    return parser
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    errors = _user_errors()
+    try:
+        return args.func(args)
+    except errors as exc:
+        message = " ".join(str(exc).split())
+        print(f"billiard: error: {message}", file=sys.stderr)
+        return 2
+    except KeyboardInterrupt:
+        print("billiard: interrupted; rows written so far are kept", file=sys.stderr)
+        return 130
+
+
+if __name__ == "__main__":  # pragma: no cover
+    sys.exit(main())

@@ -1,0 +1,1 @@
+"""Generated numeric code. Never edit by hand: run `billiard derive`."""

@@ -1,0 +1,1 @@
+"""Generated curve modules, one per boundary curve. Never edit by hand."""
