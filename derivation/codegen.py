@@ -31,6 +31,8 @@ _printer = _Printer()
 
 
 def pyexpr(expr: sm.Basic) -> str:
+    if isinstance(expr, sm.Basic) and expr.is_Number:
+        return repr(float(expr))  # a constant output is a float, like every other output
     return _printer.doprint(expr)
 
 

@@ -2,7 +2,7 @@
 # Source: derivation/ball.py (Kane's method)
 # sympy 1.14.0
 # Functions: mass_matrix, forcing_drag, flight_rhs_drag, flight_rhs_magnus, flight_exact, contact_velocity, frame_velocity, impact_stick, impact_slip, energy
-# content sha256: 90b94c83f9b7788c5e663383288657eee0477470716d1ae0d199361c86a08e90
+# content sha256: e7d9f6f53671ed23d2e81948d2e156b301f9fd672c67125a979723bca250a1f1
 """Dynamics and impact maps of the rotating ball (Kane's method, Kane-Levinson impacts).
 
 Symbols and conventions: see docs/design.md and docs/derivation.md. SI units.
@@ -27,7 +27,7 @@ def forcing_drag(u1, u2, u3, m, g, c_lin, c_quad):
     return (
         _c0*u1,
         _c0*u2 - g*m,
-        0,
+        0.0,
     )
 
 

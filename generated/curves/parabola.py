@@ -4,7 +4,7 @@
 # Curve 'parabola': f(x) = a*x**2 + c
 # Parameters: a = 26, c = 0.0063
 # Walls: 1; nearest-point polynomial degree: 3
-# content sha256: b19af6bcebfd0908f6501c42ab54c21c317a21575910b781392fb70961f638a7
+# content sha256: 55e7465ed9d2885a5d26e618ca2ab99e2558865a946dc6994f4db0672a426fe4
 """Boundary curve 'parabola': f(x) = a*x**2 + c (x and f in metres)."""
 
 import math
@@ -42,7 +42,7 @@ def make(a=26.0, c=0.0063):
         _c0 = 2*a
         return (
             2*a**2,
-            0,
+            0.0,
             _c0*c - _c0*py + 1,
             -px,
         )

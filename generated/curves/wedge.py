@@ -4,7 +4,7 @@
 # Curve 'wedge': f(x) = b*abs(x) + c
 # Parameters: b = 1.85, c = 0.0063
 # Walls: 2; nearest-point polynomial degree: 1, 1
-# content sha256: da49925ad32e03496359f913f9d528427b6f87780b40170da6e454fc2406ff3b
+# content sha256: 65fca2705066690cffa5ca698f7f12d3120fea9298a51531c7e37279602072d6
 """Boundary curve 'wedge': f(x) = b*abs(x) + c (x and f in metres)."""
 
 import math
@@ -26,7 +26,7 @@ def make(b=1.85, c=0.0063):
 
     def d2f_0(x):
         """Second derivative f''(x) (1/m)."""
-        return 0
+        return 0.0
 
     def near_0(s, px, py):
         """Nearest-point condition g(s) = (s - px) + (f(s) - py) f'(s) (m)."""
@@ -53,7 +53,7 @@ def make(b=1.85, c=0.0063):
 
     def d2f_1(x):
         """Second derivative f''(x) (1/m)."""
-        return 0
+        return 0.0
 
     def near_1(s, px, py):
         """Nearest-point condition g(s) = (s - px) + (f(s) - py) f'(s) (m)."""
@@ -71,11 +71,11 @@ def make(b=1.85, c=0.0063):
         )
 
     return (
-        {"lo": -math.inf, "hi": float(0), "f": f_0, "df": df_0, "d2f": d2f_0, "near": near_0, "dnear": dnear_0, "poly": poly_0},
-        {"lo": float(0), "hi": math.inf, "f": f_1, "df": df_1, "d2f": d2f_1, "near": near_1, "dnear": dnear_1, "poly": poly_1},
+        {"lo": -math.inf, "hi": float(0.0), "f": f_0, "df": df_0, "d2f": d2f_0, "near": near_0, "dnear": dnear_0, "poly": poly_0},
+        {"lo": float(0.0), "hi": math.inf, "f": f_1, "df": df_1, "d2f": d2f_1, "near": near_1, "dnear": dnear_1, "poly": poly_1},
     )
 
 
 def breakpoints(b=1.85, c=0.0063):
     """x positions of the kinks (m)."""
-    return (float(0),)
+    return (float(0.0),)
