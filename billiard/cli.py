@@ -28,6 +28,8 @@ def _user_errors() -> tuple[type[BaseException], ...]:
         ("billiard.scene", ["SceneError"]),
         ("billiard.errors", ["GeometryError", "SimulationError"]),
         ("billiard.derivation.curve", ["CurveDerivationError"]),
+        ("billiard.calibrate", ["CalibrationError"]),
+        ("billiard.camera", ["RunDataError"]),
     ):
         try:
             mod = importlib.import_module(module)
@@ -146,10 +148,66 @@ def cmd_run(args: argparse.Namespace) -> int:
     (out / "scene.toml").write_text(scene_to_toml(resolved))
     print(result.summary())
     print(f"wrote {out / 'collisions.csv'} and {out / 'scene.toml'}")
+    if not args.no_plot and len(result) > 1:
+        from .plot import plot_run
+
+        paths = plot_run(out, frame_interval=args.frame_interval)
+        print(f"plots: {', '.join(p.name for p in paths)} in {out}")
     if result.stop_reason:
         print(f"billiard: stopped: {result.stop_reason}", file=sys.stderr)
         return 3
     return 0
+
+
+# --- calibrate -------------------------------------------------------------------------
+
+def cmd_calibrate(args: argparse.Namespace) -> int:
+    import json
+
+    from .calibrate import calibrate
+    from .scene import load_scene
+
+    scene = load_scene(args.scene, overrides=args.set)
+    started = time.perf_counter()
+    result = calibrate(scene, args.parameter, args.target_height, low=args.low, high=args.high,
+                       impacts=args.impacts)
+    if args.json:
+        print(json.dumps(result.as_dict()))
+        return 0
+    o = result.orbit
+    print(f"{args.parameter} = {result.value:.6g}  "
+          f"(period-one orbit at q2 = {o.height:.6f} m, target {args.target_height} m)")
+    print(f"orbit: time of flight {o.time_of_flight:.6f} s, locked after {o.impacts_to_lock} "
+          f"impacts from the scene's initial state, energy {o.energy:.4e} J")
+    print(f"normalized point (q2/q2max, u4/u4max) = ({o.q2_normalized:.4f}, "
+          f"+-{abs(o.u4_normalized):.4f})   paper: (0.376, +-0.0372)")
+    print("q2max = E/(m g), u4max = sqrt(2 E/m), E the mechanical energy after the impact "
+          "(potential zero at q2 = 0, spin included)")
+    print(f"{result.evaluations} runs, {time.perf_counter() - started:.1f} s")
+    return 0
+
+
+# --- plot ------------------------------------------------------------------------------
+
+def cmd_plot(args: argparse.Namespace) -> int:
+    from .plot import plot_run
+
+    window = _window(args.window) if args.window else None
+    paths = plot_run(Path(args.dir), frame_interval=args.frame_interval, window=window,
+                     gif=not args.no_gif)
+    for path in paths:
+        print(f"wrote {path}")
+    return 0
+
+
+def _window(text: str) -> tuple[int, int]:
+    a, sep, b = text.partition(":")
+    try:
+        if not sep:
+            raise ValueError
+        return int(a), int(b)
+    except ValueError:
+        raise UserError(f"--window {text!r}: expected N0:N1, impact numbers") from None
 
 
 # --- entry point -----------------------------------------------------------------------
@@ -185,7 +243,38 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--out", help="output directory (default: runs/SCENE)")
     p.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
                    help="override a scene key, e.g. --set drive.frequency=6.0 (repeatable)")
+    p.add_argument("--no-plot", action="store_true", help="do not draw the plots afterwards")
+    p.add_argument("--frame-interval", type=float, metavar="S",
+                   help="also plot what a camera with this frame interval (s) would record")
     p.set_defaults(func=cmd_run)
+
+    p = sub.add_parser("calibrate", help="fit a parameter to a period-one orbit's height",
+                       description="Find the value of a scene parameter for which the ball "
+                                   "locks into a period-one orbit with impacts at the target "
+                                   "height (the paper's calibration).")
+    p.add_argument("scene", help="built-in scene name or a .toml file")
+    p.add_argument("--parameter", required=True,
+                   help="dotted scene key, e.g. drive.amplitude or contact.restitution")
+    p.add_argument("--target-height", type=float, required=True, metavar="H",
+                   help="height q2 of the ball centre at the orbit's impacts (m)")
+    p.add_argument("--low", type=float, help="lower end of the scan (default: value/4)")
+    p.add_argument("--high", type=float, help="upper end of the scan (default: 4 x value)")
+    p.add_argument("--impacts", type=int, default=1500,
+                   help="impacts per trial run (default 1500)")
+    p.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
+                   help="override a scene key first (repeatable)")
+    p.add_argument("--json", action="store_true", help="print one JSON object")
+    p.set_defaults(func=cmd_calibrate)
+
+    p = sub.add_parser("plot", help="draw the paper's plots of a run",
+                       description="Return map, time-of-flight map, phase plot, trajectory "
+                                   "and animation from DIR/collisions.csv and DIR/scene.toml.")
+    p.add_argument("dir", help="run directory")
+    p.add_argument("--frame-interval", type=float, metavar="S",
+                   help="also show what a camera with this frame interval (s) would record")
+    p.add_argument("--window", metavar="N0:N1", help="impacts drawn in the trajectory and GIF")
+    p.add_argument("--no-gif", action="store_true", help="skip the animated GIF")
+    p.set_defaults(func=cmd_plot)
     return parser
 
 

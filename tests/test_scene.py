@@ -102,7 +102,9 @@ def test_builtin_scene_loads(name: str) -> None:
     assert scene.boundary.curve == curve
     assert scene.boundary.kind == "builtin"
     assert scene.boundary.ceiling == 0.15
-    assert scene.drive == Drive(amplitude=0.005, frequency=frequency, direction="horizontal")
+    # One apparatus: every paper scene shares the parabola's calibrated amplitude.
+    amplitude = load_scene("parabola-5.4hz").drive.amplitude
+    assert scene.drive == Drive(amplitude=amplitude, frequency=frequency, direction="horizontal")
     assert scene.ball == Ball(radius=1.55e-3, mass=1.3028e-4, inertia_factor=0.4)
     assert scene.contact == Contact(restitution=0.393, mu_static=0.61, mu_kinetic=0.47)
     assert scene.air.drag == "fowles"
@@ -114,9 +116,10 @@ def test_builtin_scene_loads(name: str) -> None:
 
 
 @pytest.mark.parametrize("name", sorted(BUILTIN_FREQUENCIES))
-def test_builtin_files_say_amplitude_and_lid_are_provisional(name: str) -> None:
+def test_builtin_files_say_where_amplitude_and_lid_come_from(name: str) -> None:
     text = resources.files("billiard.scenes").joinpath(f"{name}.toml").read_text("utf-8")
-    assert "provisional" in text
+    assert "billiard calibrate parabola-5.4hz --parameter drive.amplitude" in text
+    assert "lid height" in text
     assert "amplitude" in text and "lid" in text
 
 

@@ -1,0 +1,23 @@
+"""Exceptions raised by the simulation engine.
+
+Both carry a one-line message meant for the user: the command line prints it without a
+traceback.
+"""
+
+from __future__ import annotations
+
+__all__ = ["GeometryError", "SimulationError"]
+
+
+class GeometryError(ValueError):
+    """The scene's geometry cannot be simulated (raised before a run starts).
+
+    Examples: a ball too large for the boundary's curvature (contact would not be at a
+    single point), or an initial position that overlaps the wall or the lid.
+    """
+
+
+class SimulationError(RuntimeError):
+    """A run cannot continue: the ball escaped, the impacts collapsed, a number became
+    non-finite, or a root solve failed. :func:`billiard.simulate.simulate` turns it into
+    ``Result.stop_reason`` and keeps the impacts recorded so far."""

@@ -1,0 +1,157 @@
+"""Impact laws: the jump of the ball's speeds when it hits the moving boundary.
+
+An impact law takes the ball's speeds just before the impact and a :class:`Contact`
+(tangent angle and boundary velocity at the contact point) and returns an
+:class:`ImpactResult`. :class:`KaneLevinsonImpact` is the paper's law; another law only
+needs the same ``apply(state, contact)`` method.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Any, Protocol
+
+from billiard.generated import ball as _ball
+
+__all__ = ["Contact", "ImpactLaw", "ImpactResult", "KaneLevinsonImpact"]
+
+STICK = "stick"
+SLIP = "slip"
+ELASTIC = "elastic"
+
+
+@dataclass(frozen=True, slots=True)
+class Contact:
+    """Where and how the ball touches the boundary.
+
+    Attributes:
+        z: tangent angle of the boundary at the contact point (rad); pi for the lid.
+        vb1, vb2: lab-frame velocity of the boundary (m/s).
+        pressing: the ball's acceleration relative to the boundary points into the
+            surface (it would stay in contact rather than fly off on its own).
+    """
+
+    z: float
+    vb1: float
+    vb2: float
+    pressing: bool = False
+
+
+@dataclass(frozen=True, slots=True)
+class ImpactResult:
+    """Speeds just after an impact and the impulse that produced them.
+
+    Attributes:
+        u1, u2: lab velocity of the centre (m/s); u3: spin (rad/s).
+        Rt, Rn: impulse on the ball along c1 and c2 (N s).
+        regime: ``"stick"``, ``"slip"`` or ``"elastic"`` (the low-velocity rule).
+        wt, wn: velocity of the ball's contact point relative to the boundary just
+            before the impact, along c1 and c2 (m/s; wn < 0 when approaching).
+        resting: the low-velocity rule met a ball lying on the surface (see
+            :class:`KaneLevinsonImpact`).
+    """
+
+    u1: float
+    u2: float
+    u3: float
+    Rt: float
+    Rn: float
+    regime: str
+    wt: float
+    wn: float
+    resting: bool = False
+
+
+class ImpactLaw(Protocol):
+    def apply(self, state: Any, contact: Contact) -> ImpactResult: ...
+
+
+class KaneLevinsonImpact:
+    """Kane and Levinson's impact theory with a moving boundary (generated maps).
+
+    Newton restitution on the contact point's normal velocity relative to the boundary.
+    The no-slip solution is tried first and kept if its impulse lies in the static
+    friction cone, |Rt| <= mu_s Rn; otherwise the ball slips with Rt = -mu_k Rn sign(wt).
+
+    Low-velocity rule (to prevent inelastic collapse, after Luding): when the relative
+    normal speed |wn| is below ``elastic_below``, e = 1 and the regime is ``"elastic"``.
+    A ball *lying* on the surface (|wn| below the threshold while its relative
+    acceleration presses it into the surface, e.g. at rest at the bottom of a shaken
+    container) cannot be lifted by any restitution, as there is nothing to reflect. For
+    it the impact is evaluated as if the ball approached at ``elastic_below``: it leaves
+    at that speed, and the ensuing micro-bounces, each carrying its friction impulse,
+    stand in for the rolling or sliding contact that the impact-only model lacks. The
+    paper's fixed time step plays the same role implicitly.
+
+    Args:
+        mass, radius, inertia_factor: the ball (kg, m, I / (m r^2)).
+        restitution, mu_static, mu_kinetic: contact coefficients.
+        elastic_below: threshold of the low-velocity rule (m/s); 0 disables it.
+    """
+
+    def __init__(
+        self,
+        mass: float,
+        radius: float,
+        inertia_factor: float,
+        restitution: float,
+        mu_static: float,
+        mu_kinetic: float,
+        elastic_below: float,
+    ):
+        self.m = float(mass)
+        self.r = float(radius)
+        self.k = float(inertia_factor)
+        self.e = float(restitution)
+        self.mu_s = float(mu_static)
+        self.mu_k = float(mu_kinetic)
+        self.elastic_below = float(elastic_below)
+
+    @classmethod
+    def from_scene(cls, scene: Any) -> KaneLevinsonImpact:
+        return cls(
+            scene.ball.mass,
+            scene.ball.radius,
+            scene.ball.inertia_factor,
+            scene.contact.restitution,
+            scene.contact.mu_static,
+            scene.contact.mu_kinetic,
+            scene.contact.elastic_below,
+        )
+
+    def apply(self, state: Any, contact: Contact) -> ImpactResult:
+        """Post-impact speeds for a ball with speeds ``state.u1, state.u2, state.u3``."""
+        u1, u2, u3 = state.u1, state.u2, state.u3
+        z, vb1, vb2 = contact.z, contact.vb1, contact.vb2
+        m, r, k = self.m, self.r, self.k
+        wt, wn = _ball.contact_velocity(u1, u2, u3, z, vb1, vb2, r)
+        e = self.e
+        low = abs(wn) < self.elastic_below
+        resting = False
+        v1, v2 = u1, u2
+        if low:
+            e = 1.0
+            if contact.pressing and wn > -self.elastic_below:
+                # a lying ball: shift its normal velocity to an approach at elastic_below
+                shift = -self.elastic_below - wn
+                v1 -= math.sin(z) * shift
+                v2 += math.cos(z) * shift
+                resting = True
+        n1, n2, n3, rt, rn = _ball.impact_stick(v1, v2, u3, z, vb1, vb2, m, r, k, e)
+        regime = STICK
+        if abs(rt) > self.mu_s * rn:
+            sgn = math.copysign(1.0, wt)
+            n1, n2, n3, rt, rn = _ball.impact_slip(
+                v1, v2, u3, z, vb1, vb2, m, r, k, e, self.mu_k, sgn
+            )
+            regime = SLIP
+        if low:
+            regime = ELASTIC
+        if resting:
+            # report the impulse actually applied to the ball's true pre-impact velocity
+            c, s = math.cos(z), math.sin(z)
+            du1, du2 = n1 - u1, n2 - u2
+            rt = m * (c * du1 + s * du2)
+            rn = m * (c * du2 - s * du1)
+        return ImpactResult(n1, n2, n3, rt, rn, regime, wt, wn, resting)

@@ -1,0 +1,62 @@
+"""The paper's calibration: a period-one orbit on the parabola at 0.075 m."""
+
+from __future__ import annotations
+
+import json
+import math
+
+import pytest
+
+from billiard.calibrate import CalibrationError, calibrate, find_period_one
+from billiard.cli import main
+from billiard.scene import load_scene, with_values
+from billiard.simulate import simulate
+
+
+@pytest.fixture(scope="module")
+def parabola_calibration():
+    scene = load_scene("parabola-5.4hz")
+    return scene, calibrate(scene, "drive.amplitude", 0.075, low=0.02, high=0.03, points=3)
+
+
+def test_calibrated_amplitude_is_the_scenes_default(parabola_calibration):
+    scene, cal = parabola_calibration
+    # The built-in scenes carry the calibrated amplitude rounded to 4 significant digits.
+    assert cal.value == pytest.approx(scene.drive.amplitude, rel=2e-4)
+    assert cal.orbit.height == pytest.approx(0.075, abs=1e-5)
+    # Period one: the ball crosses from wall to wall in half a drive period.
+    assert cal.orbit.time_of_flight == pytest.approx(0.5 / scene.drive.frequency, rel=1e-6)
+    # The normalized point, computed from its definition on the orbit's own numbers.
+    o = cal.orbit
+    m, g = scene.ball.mass, scene.run.gravity
+    assert o.q2_normalized == pytest.approx(m * g * o.height / o.energy, rel=1e-12)
+    assert abs(o.u4_normalized) == pytest.approx(abs(o.u4) / math.sqrt(2 * o.energy / m),
+                                                 rel=1e-12)
+    assert 0 < o.q2_normalized < 1 and abs(o.u4_normalized) < 0.2
+
+
+def test_low_energy_state_is_not_a_period_one_orbit():
+    scene = with_values(load_scene("parabola-5.4hz"), {"drive.amplitude": 0.01})
+    result = simulate(scene, collisions=1500)
+    assert find_period_one(result.columns, scene.ball.mass, scene.run.gravity) is None
+
+
+def test_calibration_without_an_orbit_in_range_fails_in_one_line():
+    scene = load_scene("parabola-5.4hz")
+    with pytest.raises(CalibrationError) as info:
+        calibrate(scene, "drive.amplitude", 0.075, low=0.005, high=0.008, points=2,
+                  impacts=300)
+    assert "\n" not in str(info.value) and "no period-one orbit" in str(info.value)
+    with pytest.raises(CalibrationError):
+        calibrate(scene, "drive.colour", 0.075)
+
+
+def test_calibrate_command_prints_json(capsys):
+    code = main(["calibrate", "parabola-5.4hz", "--parameter", "drive.amplitude",
+                 "--target-height", "0.075", "--low", "0.024", "--high", "0.027",
+                 "--json"])
+    assert code == 0
+    data = json.loads(capsys.readouterr().out)
+    assert data["parameter"] == "drive.amplitude"
+    assert data["value"] == pytest.approx(0.02543, rel=2e-4)
+    assert data["orbit_height"] == pytest.approx(0.075, abs=1e-5)
