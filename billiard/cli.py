@@ -210,6 +210,12 @@ def _window(text: str) -> tuple[int, int]:
         raise UserError(f"--window {text!r}: expected N0:N1, impact numbers") from None
 
 
+def cmd_reproduce(args: argparse.Namespace) -> int:
+    from .reproduce import run_reproduce
+
+    return run_reproduce(args)
+
+
 # --- entry point -----------------------------------------------------------------------
 
 def build_parser() -> argparse.ArgumentParser:
@@ -275,6 +281,16 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--window", metavar="N0:N1", help="impacts drawn in the trajectory and GIF")
     p.add_argument("--no-gif", action="store_true", help="skip the animated GIF")
     p.set_defaults(func=cmd_plot)
+
+    p = sub.add_parser("reproduce", help="regenerate docs/paper-reproduction.md",
+                       description="Calibrate, run the four paper scenes, draw the paper's "
+                                   "figures and write docs/paper-reproduction.md.")
+    p.add_argument("--docs", default="docs", help="documentation folder (default docs)")
+    p.add_argument("--runs", default="runs/paper", help="where the runs go")
+    p.add_argument("--collisions", type=int, default=25000, help="impacts per scene")
+    p.add_argument("--lyapunov", type=int, default=2000, metavar="N",
+                   help="impacts for each Lyapunov exponent (0 to skip; default 2000)")
+    p.set_defaults(func=cmd_reproduce)
     return parser
 
 

@@ -148,7 +148,9 @@ def test_geometry_errors():
         r"into the wall",
     ):
         simulate(scene, collisions=1)
-    scene = replace(load_scene("parabola-5.4hz"), initial=Initial(q1=0.0, q2=0.1495))
+    base = load_scene("parabola-5.4hz")
+    lid = base.boundary.ceiling - 0.5 * base.ball.radius  # centre closer to the lid than r
+    scene = replace(base, initial=Initial(q1=0.0, q2=lid))
     with pytest.raises(GeometryError, match="into the lid"):
         simulate(scene, collisions=1)
 

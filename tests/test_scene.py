@@ -101,7 +101,7 @@ def test_builtin_scene_loads(name: str) -> None:
     assert scene.name == name
     assert scene.boundary.curve == curve
     assert scene.boundary.kind == "builtin"
-    assert scene.boundary.ceiling == 0.15
+    assert scene.boundary.ceiling == 0.2
     # One apparatus: every paper scene shares the parabola's calibrated amplitude.
     amplitude = load_scene("parabola-5.4hz").drive.amplitude
     assert scene.drive == Drive(amplitude=amplitude, frequency=frequency, direction="horizontal")
