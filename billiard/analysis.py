@@ -219,8 +219,7 @@ def lyapunov_exponent(
     try:
         state = _advance(ref, ref.initial, transient)
         # first comparison instant: the middle of the next long enough flight
-        x_state, n_extra = _comparison_state(ref, state, min_flight)
-        counted += n_extra
+        x_state, _ = _comparison_state(ref, state, min_flight)
         t_start = x_state.t
         x = vector(x_state)
         y = x + d0 * direction

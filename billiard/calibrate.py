@@ -23,7 +23,8 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.optimize import brentq
 
-from .scene import Scene, with_values
+from .errors import GeometryError
+from .scene import Scene, SceneError, with_values
 from .simulate import simulate
 
 
@@ -76,8 +77,11 @@ def find_period_one(columns: dict[str, np.ndarray], mass: float, gravity: float,
 
 def orbit_for(scene: Scene, parameter: str, value: float, impacts: int) -> Orbit | None:
     """Run the scene with ``parameter = value`` and return its period-one orbit, if any."""
-    trial = with_values(scene, {parameter: value})
-    result = simulate(trial, collisions=impacts)
+    try:
+        trial = with_values(scene, {parameter: value})
+        result = simulate(trial, collisions=impacts)
+    except (SceneError, GeometryError):  # e.g. a restitution above 1 in the scan: no orbit
+        return None
     if result.stop_reason:
         return None
     return find_period_one(result.columns, trial.ball.mass, trial.run.gravity)

@@ -60,3 +60,10 @@ def test_calibrate_command_prints_json(capsys):
     assert data["parameter"] == "drive.amplitude"
     assert data["value"] == pytest.approx(0.02543, rel=2e-4)
     assert data["orbit_height"] == pytest.approx(0.075, abs=1e-5)
+
+
+def test_restitution_round_trip():
+    """At the calibrated amplitude, fitting e the paper's way gives back the paper's e."""
+    scene = load_scene("parabola-5.4hz")
+    cal = calibrate(scene, "contact.restitution", 0.075, low=0.3, high=0.5, points=3)
+    assert cal.value == pytest.approx(0.393, abs=5e-4)
