@@ -54,6 +54,14 @@ FLOOR = 0.001
 F = 20.0  # Hz
 
 
+@pytest.fixture(autouse=True, scope="module")
+def billiard_home(tmp_path_factory):
+    """The flat curve "0.001" is derived on first use into a temporary BILLIARD_HOME."""
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setenv("BILLIARD_HOME", str(tmp_path_factory.mktemp("billiard_home")))
+        yield
+
+
 def onset(e: float, n: int) -> float:
     return math.pi * n * (1 - e) / (1 + e)
 

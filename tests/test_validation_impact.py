@@ -137,7 +137,7 @@ def test_spin_after_the_impact_has_the_physical_sign():
     assert out.u1 == pytest.approx((0.3 - K * R * w) / (1 + K), rel=1e-12)
     assert out.u1 + R * out.u3 == pytest.approx(0.0, abs=1e-15)
     # fast sliding with strong backspin: it slips, friction acts backwards (Rt < 0) and
-    # its torque r Rt only slows the spin down (by 1.5 mu_k (1 + e) |vn| / (k r) =
+    # its torque r Rt only slows the spin down (by mu_k (1 + e) |vn| / (k r) =
     # 569 rad/s here), which keeps its sign; with 300 rad/s instead it would reverse
     for w, sign in ((2000.0, 1.0), (300.0, -1.0)):
         out = impact.apply(SimpleNamespace(u1=2.0, u2=-0.5, u3=w), floor)
@@ -150,13 +150,13 @@ def test_spin_after_the_impact_has_the_physical_sign():
 # ------------------------------------------------------------ complete simulations
 
 
-def thrown_scene(curve: str, v1: float, v2: float, omega: float, **extra):
+def thrown_scene(curve: str, q2: float, v1: float, v2: float, omega: float, **extra):
     data = {
         "boundary": {"curve": curve, "escape_height": 1.0},
         "contact": {"restitution": 0.6, "mu_static": 0.5, "mu_kinetic": 0.35,
                     "elastic_below": 0.0},
         "air": {"drag": "none"},
-        "initial": {"q1": 0.0, "q2": 0.05, "v1": v1, "v2": v2, "omega": omega},
+        "initial": {"q1": 0.0, "q2": q2, "v1": v1, "v2": v2, "omega": omega},
     }
     for key, value in extra.items():
         section, name = key.split("__")
@@ -164,40 +164,44 @@ def thrown_scene(curve: str, v1: float, v2: float, omega: float, **extra):
     return scene_from_dict(data)
 
 
-def first_contact_on_line(slope: float, v1: float, v2: float) -> tuple[float, float, float]:
-    """Time and centre position (t, q1, q2) at which a ball thrown from (0, 0.05) first
+def first_contact_on_line(
+    slope: float, q2: float, v1: float, v2: float
+) -> tuple[float, float, float]:
+    """Time and centre position (t, q1, q2) at which a ball thrown from (0, q2) first
     touches the line y = slope x + FLOOR: the centre meets the parallel line shifted by
     r sqrt(1 + slope^2), a quadratic in t."""
     lift = FLOOR + R * math.sqrt(1.0 + slope * slope)
-    # 0.05 + v2 t - g t^2 / 2 = slope v1 t + lift
-    a, b, c = 0.5 * G, -(v2 - slope * v1), lift - 0.05
+    # q2 + v2 t - g t^2 / 2 = slope v1 t + lift
+    a, b, c = 0.5 * G, -(v2 - slope * v1), lift - q2
     t = (-b + math.sqrt(b * b - 4 * a * c)) / (2 * a)
-    return t, v1 * t, 0.05 + v2 * t - 0.5 * G * t * t
+    return t, v1 * t, q2 + v2 * t - 0.5 * G * t * t
 
 
 CASES = {
-    # name: (curve, slope, v1, v2, omega, drive)
-    "flat, stick": ("0.001", 0.0, 0.2, -0.5, 0.0, None),
-    "flat, slip forward": ("0.001", 0.0, 1.5, -0.2, 0.0, None),
-    "flat, backspin reverses": ("0.001", 0.0, 0.2, -1.0, 400.0, None),
-    "flat, slip with backspin": ("0.001", 0.0, 1.0, -0.1, 900.0, None),
-    "tilted plane": ("0.5*x + 0.001", 0.5, -0.4, 0.3, -200.0, None),
-    "shaken floor": ("0.001", 0.0, 0.3, -0.2, 100.0, (0.004, 7.0, 0.8)),
+    # name: (curve, slope, q2, v1, v2, omega, drive, regime the case is meant to reach)
+    "flat, stick": ("0.001", 0.0, 0.05, 0.2, -0.5, 0.0, None, "stick"),
+    "flat, backspin reverses the bounce": ("0.001", 0.0, 0.05, 0.2, -1.0, 400.0, None, "stick"),
+    "flat, slip forward": ("0.001", 0.0, 0.01, 1.5, -0.1, 0.0, None, "slip"),
+    "flat, slip with backspin": ("0.001", 0.0, 0.01, 1.0, -0.1, 900.0, None, "slip"),
+    "tilted plane, stick": ("0.5*x + 0.001", 0.5, 0.05, -0.4, 0.3, -200.0, None, "stick"),
+    "tilted plane, slip": ("0.5*x + 0.001", 0.5, 0.01, 1.5, 0.5, 300.0, None, "slip"),
+    "shaken floor, stick": ("0.001", 0.0, 0.05, 0.3, -0.2, 100.0, (0.004, 7.0, 0.8), "stick"),
+    "shaken floor, slip": ("0.001", 0.0, 0.005, 0.3, 0.0, 1200.0, (0.004, 7.0, 0.8), "slip"),
 }
 
 
 @pytest.mark.parametrize("case", list(CASES))
 def test_ball_thrown_onto_a_plane(case, tmp_path, monkeypatch):
     monkeypatch.setenv("BILLIARD_HOME", str(tmp_path))
-    curve, slope, v1, v2, omega, drive = CASES[case]
+    curve, slope, q2_0, v1, v2, omega, drive, regime = CASES[case]
     extra = {}
     if drive is not None:
         amplitude, frequency, phase = drive
         extra = {"drive__amplitude": amplitude, "drive__frequency": frequency,
                  "drive__phase": phase, "drive__direction": "horizontal"}
-    scene = thrown_scene(curve, v1, v2, omega, **extra)
+    scene = thrown_scene(curve, q2_0, v1, v2, omega, **extra)
     row = {k: v[0] for k, v in simulate(scene, collisions=1).columns.items()}
-    t, q1, q2 = first_contact_on_line(slope, v1, v2)
+    t, q1, q2 = first_contact_on_line(slope, q2_0, v1, v2)
     assert row["t"] == pytest.approx(t, rel=1e-14)
     assert (row["q1"], row["q2"]) == pytest.approx((q1, q2), abs=1e-15)
     vb1 = 0.0
@@ -206,6 +210,7 @@ def test_ball_thrown_onto_a_plane(case, tmp_path, monkeypatch):
         vb1 = amplitude * w * math.cos(w * t + phase)
     z = math.atan(slope)
     ref = lab_impact(v1, v2 - G * t, omega, z, vb1, 0.0, 0.6, 0.5, 0.35)
+    assert ref[5] == regime  # the case reaches the regime it is meant to test
     assert row["regime"] == ref[5]
     assert (row["v1"], row["v2"]) == pytest.approx(ref[:2], rel=1e-12, abs=1e-14)
     assert row["omega"] == pytest.approx(ref[2], rel=1e-12, abs=1e-10)
