@@ -107,8 +107,13 @@ def test_builtin_scene_loads(name: str) -> None:
     assert scene.drive == Drive(amplitude=amplitude, frequency=frequency, direction="horizontal")
     assert scene.ball == Ball(radius=1.55e-3, mass=1.3028e-4, inertia_factor=0.4)
     assert scene.contact == Contact(restitution=0.393, mu_static=0.61, mu_kinetic=0.47)
-    assert scene.air.drag == "fowles"
-    assert scene.air.coefficients == fowles_coefficients(1.55e-3)
+    # Model ladder (docs/performance.md): drag changes nothing reported in the chaotic
+    # scenes, so it is off there; it moves the calibrated orbits, so it is on in the others.
+    if name in ("wedge-6.6hz", "hyperbola-5.8hz"):
+        assert scene.air.drag == "none" and scene.air.coefficients == (0.0, 0.0)
+    else:
+        assert scene.air.drag == "fowles"
+        assert scene.air.coefficients == fowles_coefficients(1.55e-3)
     assert scene.initial == Initial()
     assert scene.initial.q1 is None and scene.initial.q2 is None
     assert scene.run.collisions == 25000
