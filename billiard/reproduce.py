@@ -229,8 +229,11 @@ Model with the camera filter beside it:
    {o.q2_normalized / 0.376 - 1:+.0%}; see the note on the energy's zero above.
 3. **Wedge, 6.6 Hz: chaotic; the ball is driven up towards the top; most return-map points
    lie above the diagonal.** Ours: {w.above_diagonal:.0%} of return-map points above the
-   diagonal ({w.camera_above_diagonal:.0%} with the camera filter); mean impact height
-   {w.q2_mean:.3f} m, and {w.lid_fraction:.0%} of impacts are on the lid at {lid} m. The lid height
+   diagonal ({w.camera_above_diagonal:.0%} with the camera filter), impacts up to
+   {w.q2_max:.3f} m; between excursions the ball hops in the vertex ({w.counts.get("elastic", 0)}
+   of {w.impacts} impacts under the low-velocity rule, median time of flight
+   {w.tof_median * 1000:.2f} ms), so the mean impact height is {w.q2_mean:.3f} m, and
+   {w.lid_fraction:.0%} of impacts are on the lid at {lid} m. The lid height
    is not given by the paper and matters here: with a lid at 0.15 m the ball locks into a
    periodic orbit bouncing off the lid, which is why the built-in scenes put it at 0.2 m.
    Lyapunov exponent: {lyap(w)}.
