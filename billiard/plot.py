@@ -36,6 +36,8 @@ from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
 from matplotlib.patches import Circle
+from matplotlib.ticker import MultipleLocator
+from PIL import Image
 
 from .camera import RunDataError, camera_filter, read_collisions
 
@@ -218,14 +220,15 @@ def _fmt(value: float) -> str:
 
 
 def scene_title(scene: Mapping[str, Any], n_impacts: int | None = None,
-                width: int = 78) -> str:
+                width: int = 90) -> str:
     """A figure title: the scene's name, then curve, drive, restitution and friction.
 
-    Example (wrapped to ``width`` characters per line)::
+    The parts are joined with "; " on lines of at most ``width`` characters, e.g.::
 
         parabola-5.4hz, 25000 impacts
-        curve parabola (a=26, c=0.0063); drive 5.4 Hz, A = 5 mm horizontal;
-        e = 0.393, mu_s = 0.61, mu_k = 0.47
+        curve parabola; drive 5.4 Hz, A = 5 mm horizontal; e = 0.393, mu_s = 0.61, mu_k = 0.47
+
+    (mu_s and mu_k are drawn as Greek letters).
     """
     name = str(scene.get("name", "run"))
     head = name if n_impacts is None else f"{name}, {n_impacts} impacts"
@@ -234,14 +237,11 @@ def scene_title(scene: Mapping[str, Any], n_impacts: int | None = None,
     from .curves import is_expression
 
     if is_expression(curve):
-        text = curve if len(curve) <= 50 else curve[:47] + "..."
-        curve_text = f"f(x) = {text}"
-        if params:
-            curve_text += " (" + ", ".join(f"{k}={_fmt(v)}" for k, v in params.items()) + ")"
+        curve_text = "f(x) = " + (curve if len(curve) <= 50 else curve[:47] + "...")
     else:
         curve_text = f"curve {curve}"
-        if params:
-            curve_text += " (" + ", ".join(f"{k}={_fmt(v)}" for k, v in params.items()) + ")"
+    if params:
+        curve_text += " (" + ", ".join(f"{k}={_fmt(v)}" for k, v in params.items()) + ")"
     amplitude, frequency, _, direction = _drive(scene)
     drive_text = f"drive {_fmt(frequency)} Hz, A = {_fmt(amplitude * MM)} mm {direction}"
     contact = _section(scene, "contact")
@@ -250,12 +250,26 @@ def scene_title(scene: Mapping[str, Any], n_impacts: int | None = None,
         for key, label in (("restitution", "e"), ("mu_static", "$\\mu_s$"),
                            ("mu_kinetic", "$\\mu_k$"))
         if key in contact)
-    body = "; ".join(part for part in (curve_text, drive_text, contact_text) if part)
-    # Wrap on the plain text, so that the mathtext of mu does not count as characters.
-    plain = body.replace("$\\mu_s$", "mu_s").replace("$\\mu_k$", "mu_k")
-    wrapped = textwrap.fill(plain, width=width)
-    wrapped = wrapped.replace("mu_s", "$\\mu_s$").replace("mu_k", "$\\mu_k$")
+    # Break between the parts where possible; wrap a part only if it is too long alone.
+    # Lengths are measured on plain text, so that the mathtext of mu counts as 4 characters.
+    lines: list[str] = []
+    for part in (curve_text, drive_text, contact_text):
+        if not part:
+            continue
+        plain = _plain(part)
+        current = lines[-1] if lines else None
+        if current is not None and len(_plain(current)) + 2 + len(plain) <= width:
+            lines[-1] = f"{current}; {part}"
+        elif len(plain) <= width:
+            lines.append(part)
+        else:
+            lines += textwrap.wrap(part, width=width)
+    wrapped = "\n".join(lines)
     return f"{head}\n{wrapped}"
+
+
+def _plain(text: str) -> str:
+    return text.replace("$\\mu_s$", "mu_s").replace("$\\mu_k$", "mu_k")
 
 
 def _short_label(scene: Mapping[str, Any]) -> str:
@@ -271,13 +285,36 @@ def _short_label(scene: Mapping[str, Any]) -> str:
 
 # --- small helpers ---------------------------------------------------------------------
 
-def _marker_size(count: int) -> float:
-    """Marker size (points) that keeps a cloud of ``count`` points readable."""
-    if count <= 300:
+def _marker_size(x: np.ndarray, y: np.ndarray,
+                 spans: tuple[float, float] | None = None) -> float:
+    """Marker size (points) that keeps a cloud of points readable.
+
+    It depends on how many distinct places the points occupy (cells of a 250 x 250 grid
+    over ``spans``, the axes' data ranges, by default the data's own), not on how many
+    points there are: 25,000 impacts on a period-one orbit still get visible markers.
+    """
+    good = np.isfinite(x) & np.isfinite(y)
+    if not good.any():
         return 3.5
-    if count <= 3000:
+    x, y = x[good], y[good]
+    sx, sy = spans if spans is not None else (float(np.ptp(x)), float(np.ptp(y)))
+    sx = sx if sx > 0 else 1.0
+    sy = sy if sy > 0 else 1.0
+    ix = np.floor((x - x.min()) / sx * 250).astype(np.int64)
+    iy = np.floor((y - y.min()) / sy * 250).astype(np.int64)
+    cells = np.unique(ix * 1_000_003 + iy).size
+    if cells <= 300:
+        return 3.5
+    if cells <= 3000:
         return 2.0
     return 1.0
+
+
+def _uniform_legend_markers(legend: Any, size: float = 4.0) -> None:
+    """Draw every marker of a legend at one readable size."""
+    for handle in getattr(legend, "legend_handles", []):
+        if isinstance(handle, Line2D) and handle.get_marker() not in (None, "None", ""):
+            handle.set_markersize(size)
 
 
 def _column(columns: Columns, name: str) -> np.ndarray:
@@ -370,14 +407,14 @@ def return_map(columns: Columns, ax: Axes, *,
     if interval is not None:
         seen = _column(camera_filter(columns, interval), "q2") * MM
         sets.append((seen, _camera_label(interval, seen.size), CAMERA_COLOR))
-    lines = [_pairs_axes(ax, h[:-1], h[1:], label, color, _marker_size(h.size))
+    lines = [_pairs_axes(ax, h[:-1], h[1:], label, color, _marker_size(h[:-1], h[1:]))
              for h, label, color in sets]
     lo, hi = _square_limits(ax, [h for h, _, _ in sets])
     _diagonal(ax, lo, hi, "$q_{2,n} = q_{2,n+1}$")
     ax.set_xlabel("impact height $q_{2,n}$ (mm)")
     ax.set_ylabel("next impact height $q_{2,n+1}$ (mm)")
     ax.grid(True, linewidth=0.3, alpha=0.5)
-    ax.legend(loc="upper left", fontsize=8, markerscale=3 / max(1.0, _marker_size(q2.size)))
+    _uniform_legend_markers(ax.legend(loc="upper left", fontsize=8))
     return lines
 
 
@@ -405,7 +442,7 @@ def time_map(columns: Columns, ax: Axes, *, frame_interval: float | None = None,
     if interval is not None:
         seen = _column(camera_filter(columns, interval), "tof")
         sets.append((seen, _camera_label(interval, seen.size), CAMERA_COLOR))
-    lines = [_pairs_axes(ax, s[:-1], s[1:], label, color, _marker_size(s.size))
+    lines = [_pairs_axes(ax, s[:-1], s[1:], label, color, _marker_size(s[:-1], s[1:]))
              for s, label, color in sets]
     if log:
         positive = [s[s > 0] for s, _, _ in sets]
@@ -426,7 +463,7 @@ def time_map(columns: Columns, ax: Axes, *, frame_interval: float | None = None,
     ax.set_xlabel("time of flight $t_n$ (s)")
     ax.set_ylabel("next time of flight $t_{n+1}$ (s)")
     ax.grid(True, linewidth=0.3, alpha=0.5)
-    ax.legend(loc="upper right", fontsize=8, markerscale=3 / max(1.0, _marker_size(tof.size)))
+    _uniform_legend_markers(ax.legend(loc="upper right", fontsize=8))
     return lines
 
 
@@ -481,7 +518,8 @@ def phase_plot(columns: Columns, scene: Mapping[str, Any], ax: Axes, *,
         scene: the run's scene (``ball.mass``, ``run.gravity``).
         ax: the axes to draw in.
         frame_interval: if given (s), highlight the impacts a camera with this frame
-            interval would have recorded.
+            interval would have recorded (larger markers in a second colour, drawn
+            underneath the model's).
 
     Returns:
         The data lines (x = u4/u4max, y = q2/q2max): the model's, then the camera's.
@@ -493,8 +531,13 @@ def phase_plot(columns: Columns, scene: Mapping[str, Any], ax: Axes, *,
         seen = camera_filter(columns, interval)
         sx, sy = phase_coordinates(seen, scene)
         sets.append((sx, sy, _camera_label(interval, sx.size), CAMERA_COLOR))
-    lines = [_pairs_axes(ax, a, b, label, color, _marker_size(a.size))
-             for a, b, label, color in sets]
+    # The camera's impacts are a subset of the model's: draw them underneath, larger, so
+    # that they show as halos around the model's points.
+    lines = [_pairs_axes(ax, a, b, label, color,
+                         _marker_size(x, y, (2.0, 1.0)) * (1.0 if k == 0 else 2.2))
+             for k, (a, b, label, color) in enumerate(sets)]
+    for k, line in enumerate(lines):
+        line.set_zorder(2.5 - k)
     s = np.linspace(-1, 1, 201)
     ax.plot(s, 1 - s**2, color="0.35", linewidth=0.8, linestyle="--",
             label="all energy in $q_2$ and $u_4$", zorder=0)
@@ -503,15 +546,19 @@ def phase_plot(columns: Columns, scene: Mapping[str, Any], ax: Axes, *,
     ys = np.concatenate([b[np.isfinite(b)] for _, b, _, _ in sets])
     xlo, xhi = -1.0, 1.0
     ylo, yhi = 0.0, 1.0
-    if xs.size:
-        xlo, xhi = min(xlo, float(xs.min()) - 0.02), max(xhi, float(xs.max()) + 0.02)
-        ylo, yhi = min(ylo, float(ys.min()) - 0.02), max(yhi, float(ys.max()) + 0.02)
+    if xs.size:  # widen only for points outside the usual ranges
+        if xs.min() < xlo or xs.max() > xhi:
+            xlo, xhi = min(xlo, float(xs.min()) - 0.02), max(xhi, float(xs.max()) + 0.02)
+        if ys.min() < ylo or ys.max() > yhi:
+            ylo, yhi = min(ylo, float(ys.min()) - 0.02), max(yhi, float(ys.max()) + 0.02)
     ax.set_xlim(xlo, xhi)
     ax.set_ylim(ylo, yhi)
+    ax.xaxis.set_major_locator(MultipleLocator(0.5))
+    ax.yaxis.set_major_locator(MultipleLocator(0.2))
     ax.set_xlabel("normalized tangential velocity $u_4/u_{4,max}$")
     ax.set_ylabel("normalized impact height $q_2/q_{2,max}$")
     ax.grid(True, linewidth=0.3, alpha=0.5)
-    ax.legend(loc="upper right", fontsize=8, markerscale=3 / max(1.0, _marker_size(x.size)))
+    _uniform_legend_markers(ax.legend(loc="upper right", fontsize=8))
     return lines
 
 
@@ -607,8 +654,7 @@ def _view(scene: Mapping[str, Any], xs: np.ndarray,
     y = ys[np.isfinite(ys)]
     x_lo, x_hi = float(x.min()), float(x.max())
     y_hi = float(y.max()) + r
-    shift = amplitude if direction == "horizontal" else 0.0
-    margin = max(0.15 * (x_hi - x_lo), 3 * r) + shift
+    margin = max(0.15 * (x_hi - x_lo), 3 * r)
     x_lo, x_hi = x_lo - margin, x_hi + margin
     grid = np.linspace(x_lo, x_hi, 401)
     floor = np.nanmin(f(grid)) if np.any(np.isfinite(f(grid))) else float(y.min()) - r
@@ -729,6 +775,9 @@ def animate(columns: Columns, scene: Mapping[str, Any], path: str | os.PathLike[
             dpi: int = 80) -> Path:
     """Write an animated GIF of the ball inside the moving boundary.
 
+    The still parts are drawn once; each frame redraws only the moving artists, and the
+    frames are written with Pillow in one shared 64-colour palette.
+
     The ball is drawn as a circle of its true radius. Frames are spaced uniformly in time
     from the first to the last impact of the window; between impacts the centre follows
     the drag-free parabola from the previous impact's position and velocity, and the
@@ -744,13 +793,12 @@ def animate(columns: Columns, scene: Mapping[str, Any], path: str | os.PathLike[
         window: impact numbers ``(n0, n1)``, n0 <= n < n1 (default: :func:`default_window`).
         fps: playback frames per second.
         max_frames: number of frames (at most; fewer if the window has one impact).
-        dpi: pixels per inch of the 5 x 5 inch frame.
+        dpi: pixels per inch of the frame, 5 inches wide (400 px at 80 dpi), as high
+            as the view needs.
 
     Returns:
         The path written.
     """
-    from matplotlib.animation import PillowWriter
-
     rows = _window_rows(columns, scene, window)
     g = _gravity(scene)
     r = _radius(scene)
@@ -766,7 +814,9 @@ def animate(columns: Columns, scene: Mapping[str, Any], path: str | os.PathLike[
     grid, height = _boundary_positions(scene, x_lim)
     _, _, _, direction = _drive(scene)
 
-    fig = Figure(figsize=(5.0, 5.0), dpi=dpi, layout="constrained")
+    aspect = (y_lim[1] - y_lim[0]) / (x_lim[1] - x_lim[0])
+    fig = Figure(figsize=(5.0, float(np.clip(4.2 * aspect + 0.9, 2.5, 6.5))), dpi=dpi,
+                 layout="constrained")
     FigureCanvasAgg(fig)
     ax = fig.add_subplot()
     ax.plot(arc_x * MM, arc_y * MM, color="0.8", linewidth=0.7, zorder=0)
@@ -790,34 +840,77 @@ def animate(columns: Columns, scene: Mapping[str, Any], path: str | os.PathLike[
     clock = ax.text(0.02, 0.97, "", transform=ax.transAxes, va="top", fontsize=9,
                     family="monospace")
 
-    path = Path(path)
-    writer = PillowWriter(fps=fps)
-    with writer.saving(fig, str(path), dpi=dpi):
-        for tf in frame_times:
-            i = int(np.searchsorted(t[rows], tf, side="right")) - 1
-            row = int(rows[max(i, 0)])
-            x, y = _flight(columns, row, np.asarray(tf - t[row]), g)
-            ball.center = (float(x) * MM, float(y) * MM)
-            offset = float(drive_offset(scene, tf))
-            if direction == "vertical":
-                boundary.set_data(grid * MM, (height + offset) * MM)
-                if lid is not None:
-                    lid.set_ydata([(float(ceiling) + offset) * MM] * 2)
-            else:
-                boundary.set_data((grid + offset) * MM, height * MM)
-            clock.set_text(f"t = {tf:8.3f} s\nimpact {int(columns['n'][row])}")
-            writer.grab_frame()
+    moving = [boundary, ball, clock] + ([lid] if lid is not None and direction == "vertical"
+                                         else [])
+    for artist in moving:
+        artist.set_animated(True)
+    canvas = fig.canvas
+    assert isinstance(canvas, FigureCanvasAgg)
+    canvas.draw()
+    fig.set_layout_engine("none")  # freeze the layout: the frames only move artists
+    background = canvas.copy_from_bbox(fig.bbox)
+    frames: list[Image.Image] = []
+    for tf in frame_times:
+        i = int(np.searchsorted(t[rows], tf, side="right")) - 1
+        row = int(rows[max(i, 0)])
+        x, y = _flight(columns, row, np.asarray(tf - t[row]), g)
+        ball.center = (float(x) * MM, float(y) * MM)
+        offset = float(drive_offset(scene, tf))
+        if direction == "vertical":
+            boundary.set_data(grid * MM, (height + offset) * MM)
+            if lid is not None:
+                lid.set_ydata([(float(ceiling) + offset) * MM] * 2)
+        else:
+            boundary.set_data((grid + offset) * MM, height * MM)
+        clock.set_text(f"t = {tf:8.3f} s\nimpact {int(columns['n'][row])}")
+        canvas.restore_region(background)
+        for artist in moving:
+            ax.draw_artist(artist)
+        frames.append(Image.fromarray(np.asarray(canvas.buffer_rgba())[..., :3].copy()))
+    _save_gif(frames, Path(path), fps)
     fig.clear()
-    return path
+    return Path(path)
+
+
+def _save_gif(frames: Sequence[Image.Image], path: Path, fps: int) -> None:
+    """Save RGB frames as a looping GIF sharing one palette (small and fast to write;
+    Pillow stores only the changed part of each frame)."""
+    palette = frames[0].quantize(colors=64, method=Image.Quantize.MEDIANCUT)
+    indexed = [palette] + [f.quantize(palette=palette, dither=Image.Dither.NONE)
+                           for f in frames[1:]]
+    indexed[0].save(path, format="GIF", save_all=True, append_images=indexed[1:],
+                    duration=max(1, round(1000 / fps)), loop=0)
 
 
 # --- whole runs ------------------------------------------------------------------------
 
-def _single(draw: Callable[[Axes], object], title: str, path: Path) -> Path:
+def _legend_outside(fig: Figure, ax: Axes) -> None:
+    """Move the axes' legend below the axes, so that it hides no data."""
+    legend = ax.get_legend()
+    if legend is None:
+        return
+    handles, labels = ax.get_legend_handles_labels()
+    legend.remove()
+    _uniform_legend_markers(fig.legend(handles, labels, loc="outside lower center", ncol=2,
+                                       fontsize=8, frameon=False))
+
+
+def _single(draw: Callable[[Axes], object], title: str, path: Path, *,
+            fit_height: bool = False) -> Path:
+    """One-panel figure, 600 px wide, with the title on top and the legend below.
+
+    With ``fit_height``, the height follows the shape of the (equal-aspect) view.
+    """
     fig = _new_figure()
     ax = fig.add_subplot()
     draw(ax)
+    if fit_height:
+        x0, x1 = ax.get_xlim()
+        y0, y1 = ax.get_ylim()
+        aspect = abs(y1 - y0) / max(abs(x1 - x0), 1e-300)
+        fig.set_size_inches(SINGLE_SIZE[0], float(np.clip(4.6 * aspect + 2.0, 3.6, 8.0)))
     fig.suptitle(title, fontsize=9)
+    _legend_outside(fig, ax)
     return _save(fig, path)
 
 
@@ -868,7 +961,7 @@ def plot_run(run_dir: str | os.PathLike[str], out_dir: str | os.PathLike[str] | 
         _single(lambda ax: phase_plot(columns, scene, ax, frame_interval=interval), title,
                 out / "phase.png"),
         _single(lambda ax: trajectory(columns, scene, ax, chosen, frame_interval=interval),
-                title, out / "trajectory.png"),
+                title, out / "trajectory.png", fit_height=True),
     ]
     if gif:
         written.append(animate(columns, scene, out / "animation.gif", window=chosen))
@@ -877,25 +970,40 @@ def plot_run(run_dir: str | os.PathLike[str], out_dir: str | os.PathLike[str] | 
 
 def _paper_grid(run_dirs: Sequence[str | os.PathLike[str]], path: str | os.PathLike[str],
                 panels: Sequence[Callable[[Columns, Mapping[str, Any], Axes], object]],
-                title: str) -> Path:
+                title: str, frame_interval: float | None, guide: str) -> Path:
+    """Panels in rows, one column per run; one shared legend at the bottom."""
     if not run_dirs:
         raise RunDataError("no run directories given")
     runs = [load_run(d) for d in run_dirs]
     cols = len(runs)
-    fig = Figure(figsize=(3.4 * cols + 0.4, 3.5 * len(panels) + 0.6), dpi=DPI,
+    fig = Figure(figsize=(3.3 * cols + 0.4, 3.3 * len(panels) + 1.0), dpi=DPI,
                  layout="constrained")
     FigureCanvasAgg(fig)
-    axes = np.atleast_2d(fig.subplots(len(panels), cols, squeeze=False))
+    axes = fig.subplots(len(panels), cols, squeeze=False)
     for j, (columns, scene) in enumerate(runs):
         for i, draw in enumerate(panels):
             ax = axes[i, j]
             draw(columns, scene, ax)
-            if i == 0:
-                ax.set_title(_short_label(scene), fontsize=10)
             legend = ax.get_legend()
             if legend is not None:
-                for text in legend.get_texts():
-                    text.set_fontsize(6.5)
+                legend.remove()
+            ax.xaxis.label.set_fontsize(9)
+            ax.yaxis.label.set_fontsize(9)
+            ax.tick_params(labelsize=8)
+        count = f"{columns['t'].size} impacts"
+        if frame_interval is not None:
+            count += f", camera {camera_filter(columns, frame_interval)['t'].size}"
+        axes[0, j].set_title(f"{_short_label(scene)}\n{count}", fontsize=9)
+    handles = [Line2D([], [], linestyle="none", marker="o", markersize=4,
+                      color=MODEL_COLOR, label="model: every impact")]
+    if frame_interval is not None:
+        handles.append(Line2D([], [], linestyle="none", marker="o", markersize=4,
+                              color=CAMERA_COLOR,
+                              label=f"camera, frame {frame_interval * 1e3:.3g} ms"))
+    handles.append(Line2D([], [], color="0.35", linewidth=0.8, linestyle="--",
+                          label=guide))
+    fig.legend(handles=handles, loc="outside lower center", ncol=len(handles), fontsize=8,
+               frameon=False)
     fig.suptitle(title, fontsize=10)
     return _save(fig, Path(path))
 
@@ -915,7 +1023,8 @@ def paper_figure(run_dirs: Sequence[str | os.PathLike[str]], path: str | os.Path
         run_dirs, path,
         [lambda c, s, ax: return_map(c, ax, frame_interval=interval),
          lambda c, s, ax: time_map(c, ax, frame_interval=interval)],
-        "Impact heights (top) and times of flight (bottom)")
+        "Impact heights (top) and times of flight (bottom)", interval,
+        "diagonal $q_{2,n} = q_{2,n+1}$, $t_n = t_{n+1}$")
 
 
 def paper_phase_figure(run_dirs: Sequence[str | os.PathLike[str]],
@@ -931,7 +1040,8 @@ def paper_phase_figure(run_dirs: Sequence[str | os.PathLike[str]],
     return _paper_grid(
         run_dirs, path,
         [lambda c, s, ax: phase_plot(c, s, ax, frame_interval=interval)],
-        "Normalized impact height vs normalized tangential velocity after each impact")
+        "Normalized impact height vs normalized tangential velocity after each impact",
+        interval, "all energy in $q_2$ and $u_4$")
 
 
 # --- command line ----------------------------------------------------------------------
