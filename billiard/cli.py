@@ -18,9 +18,11 @@ class UserError(Exception):
 
 
 def _user_errors() -> tuple[type[BaseException], ...]:
-    """Exception classes that mean bad input or a documented stop, not a bug."""
-    import importlib
+    """Exception classes that mean bad input or a documented stop, not a bug.
 
+    Only modules already imported are consulted: one never imported cannot have raised,
+    and importing them all would load sympy and scipy on every command (half a second).
+    """
     errors: list[type[BaseException]] = [UserError]
     for module, names in (
         ("billiard.expr", ["CurveExpressionError"]),
@@ -31,11 +33,9 @@ def _user_errors() -> tuple[type[BaseException], ...]:
         ("billiard.calibrate", ["CalibrationError"]),
         ("billiard.camera", ["RunDataError"]),
     ):
-        try:
-            mod = importlib.import_module(module)
-        except ImportError:  # a part that is not installed cannot raise its errors
-            continue
-        errors += [getattr(mod, n) for n in names if hasattr(mod, n)]
+        mod = sys.modules.get(module)
+        if mod is not None:
+            errors += [getattr(mod, n) for n in names if hasattr(mod, n)]
     return tuple(errors)
 
 
@@ -131,23 +131,63 @@ class ProgressBar:
 
 
 def cmd_run(args: argparse.Namespace) -> int:
-    from .scene import load_scene, scene_to_toml
-    from .simulate import simulate
+    import shlex
+    import signal
 
-    scene = load_scene(args.scene, overrides=args.set)
-    out = Path(args.out) if args.out else Path("runs") / scene.name
-    out.mkdir(parents=True, exist_ok=True)
+    from .record import CheckpointError
+    from .simulate import CSV_NAME, SCENE_NAME, RunInterrupted, resume, simulate
+
     bar = ProgressBar()
     try:
-        result = simulate(scene, collisions=args.collisions, method=args.method, out_dir=out,
-                          progress=bar)
-    finally:
-        if bar.enabled:
-            bar.stream.write("\n")
-    resolved = result.scene
-    (out / "scene.toml").write_text(scene_to_toml(resolved))
+        try:
+            if args.resume is not None:
+                if args.scene or args.set or args.method or args.out:
+                    raise UserError("run --resume DIR continues a run as it was set up: give no "
+                                    "SCENE, --out, --set or --method with it")
+                out = Path(args.resume)
+                try:
+                    result = resume(out, collisions=args.collisions, progress=bar,
+                                    notify=lambda line: print(f"billiard: {line}", file=sys.stderr))
+                except CheckpointError as exc:
+                    raise UserError(f"cannot resume {out}: {exc}") from None
+                if result.already_finished:
+                    if result.stop_reason:
+                        print(f"billiard: {out}: the run already stopped after impact "
+                              f"{len(result)}: {result.stop_reason}", file=sys.stderr)
+                        return 3
+                    print(f"billiard: {out}: the run is already complete ({len(result)} impacts); "
+                          f"nothing to resume (--collisions N extends it)")
+                    return 0
+            else:
+                if not args.scene:
+                    raise UserError("run: give a SCENE (a built-in name or a .toml file), or "
+                                    "--resume DIR")
+                from .scene import load_scene
+
+                scene = load_scene(args.scene, overrides=args.set)
+                out = Path(args.out) if args.out else Path("runs") / scene.name
+                try:
+                    result = simulate(scene, collisions=args.collisions, method=args.method,
+                                      out_dir=out, progress=bar)
+                except CheckpointError as exc:  # another process is writing a run in DIR
+                    raise UserError(f"cannot run in {out}: {exc}") from None
+        finally:  # end the progress bar's line before anything else is printed
+            if bar.enabled:
+                bar.stream.write("\n")
+    except RunInterrupted as exc:
+        where = exc.out_dir or Path(".")
+        again = f"billiard run --resume {shlex.quote(str(where))}"
+        after = ("" if exc.checkpoint_rows == exc.rows
+                 else f" (it restarts after impact {exc.checkpoint_rows}, the last checkpoint)")
+        name = signal.Signals(exc.signum).name
+        print(f"billiard: interrupted ({name}): {exc.rows} impacts kept in "
+              f"{where / CSV_NAME}; continue with `{again}`{after}", file=sys.stderr)
+        return 128 + exc.signum
+    except OSError as exc:
+        where = f": {exc.filename}" if exc.filename else ""
+        raise UserError(f"cannot write the run: {exc.strerror or exc}{where}") from None
     print(result.summary())
-    print(f"wrote {out / 'collisions.csv'} and {out / 'scene.toml'}")
+    print(f"wrote {out / CSV_NAME} and {out / SCENE_NAME}")
     if not args.no_plot and len(result) > 1:
         from .plot import plot_run
 
@@ -210,6 +250,23 @@ def _window(text: str) -> tuple[int, int]:
         raise UserError(f"--window {text!r}: expected N0:N1, impact numbers") from None
 
 
+def cmd_lyapunov(args: argparse.Namespace) -> int:
+    from .analysis import format_lyapunov, lyapunov_exponent
+    from .scene import load_scene
+
+    scene = load_scene(args.scene, overrides=args.set)
+    result = lyapunov_exponent(scene, impacts=args.impacts, transient=args.transient,
+                               d0=args.d0, method=args.method)
+    print(format_lyapunov(result))
+    return 0
+
+
+def cmd_bench(args: argparse.Namespace) -> int:
+    from .bench import run_bench
+
+    return run_bench(args)
+
+
 def cmd_reproduce(args: argparse.Namespace) -> int:
     from .reproduce import run_reproduce
 
@@ -241,9 +298,19 @@ def build_parser() -> argparse.ArgumentParser:
     p.set_defaults(func=cmd_scenes)
 
     p = sub.add_parser("run", help="simulate a scene and write collisions.csv",
-                       description="Simulate a built-in scene or a scene file (TOML, SI units).")
-    p.add_argument("scene", help="built-in scene name (see `billiard scenes`) or a .toml file")
-    p.add_argument("--collisions", type=int, help="number of impacts (default: the scene's)")
+                       description="Simulate a built-in scene or a scene file (TOML, SI units). "
+                                   "DIR/scene.toml is written first, DIR/collisions.csv grows "
+                                   "row by row and DIR/checkpoint.json follows it every "
+                                   "second; after Ctrl-C or a kill, `billiard run --resume DIR` "
+                                   "finishes the same run.")
+    p.add_argument("scene", nargs="?",
+                   help="built-in scene name (see `billiard scenes`) or a .toml file")
+    p.add_argument("--resume", metavar="DIR",
+                   help="continue the interrupted run in DIR from its checkpoint (the result "
+                        "equals an uninterrupted run byte for byte)")
+    p.add_argument("--collisions", type=int,
+                   help="number of impacts (default: the scene's); with --resume, a larger "
+                        "total extends a finished run")
     p.add_argument("--method", choices=["event", "rk4"],
                    help="flight and impact-detection method (default: the scene's, 'event')")
     p.add_argument("--out", help="output directory (default: runs/SCENE)")
@@ -282,6 +349,27 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--no-gif", action="store_true", help="skip the animated GIF")
     p.set_defaults(func=cmd_plot)
 
+    p = sub.add_parser("lyapunov", help="largest Lyapunov exponent of a scene's trajectory",
+                       description="Largest Lyapunov exponent (per impact and per second) "
+                                   "from two nearby trajectories with renormalization.")
+    p.add_argument("scene", help="built-in scene name or a .toml file")
+    p.add_argument("--impacts", type=int, default=5000, help="impacts to average over")
+    p.add_argument("--transient", type=int, default=0, help="impacts skipped first")
+    p.add_argument("--d0", type=float, default=1e-9,
+                   help="initial separation of the two trajectories (m)")
+    p.add_argument("--method", choices=["event", "rk4"], help="default: the scene's")
+    p.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
+                   help="override a scene key first (repeatable)")
+    p.set_defaults(func=cmd_lyapunov)
+
+    from .bench import add_bench_arguments  # argparse only: cheap
+
+    p = sub.add_parser("bench", help="speed against accuracy; writes docs/performance.md",
+                       description="Work-precision, failure boundaries, model ladder and "
+                                   "throughput; writes docs/performance.md and its charts.")
+    add_bench_arguments(p)
+    p.set_defaults(func=cmd_bench)
+
     p = sub.add_parser("reproduce", help="regenerate docs/paper-reproduction.md",
                        description="Calibrate, run the four paper scenes, draw the paper's "
                                    "figures and write docs/paper-reproduction.md.")
@@ -297,10 +385,11 @@ def build_parser() -> argparse.ArgumentParser:
 def main(argv: Sequence[str] | None = None) -> int:
     parser = build_parser()
     args = parser.parse_args(argv)
-    errors = _user_errors()
     try:
         return args.func(args)
-    except errors as exc:
+    except Exception as exc:
+        if not isinstance(exc, _user_errors()):
+            raise
         message = " ".join(str(exc).split())
         print(f"billiard: error: {message}", file=sys.stderr)
         return 2

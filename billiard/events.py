@@ -61,6 +61,7 @@ flight starts at tau = 0 with the drive angle theta0 and ends at the returned ev
 from __future__ import annotations
 
 import math
+from collections.abc import Mapping
 from dataclasses import dataclass
 
 from billiard.boundary import Boundary, Surface
@@ -129,6 +130,15 @@ class EventLocator:
         self.h_bracket = self.h_first
         self._split = False
         self.theta0 = 0.0
+
+    def memory(self) -> dict[str, list[float]]:
+        """What the locator carries from one flight to the next, for a checkpoint: nothing
+        (every search starts afresh; the surfaces keep their own warm starts)."""
+        return {}
+
+    def restore_memory(self, memory: Mapping[str, list[float]]) -> None:
+        if memory:
+            raise ValueError("EventLocator carries no memory between flights")
 
     # ------------------------------------------------------------------ kinematics
 
@@ -425,6 +435,23 @@ class FixedStepLocator:
         self.drive = boundary.drive
         self._feet = [0.0] * len(self.walls)
         self.theta0 = 0.0
+
+    def memory(self) -> dict[str, list[float]]:
+        """What the locator carries from one flight to the next, for a checkpoint: the
+        Newton warm starts (feet) of the walls' nearest points."""
+        return {"feet": list(self._feet)}
+
+    def restore_memory(self, memory: Mapping[str, list[float]]) -> None:
+        feet = memory.get("feet") if set(memory) == {"feet"} else None
+        if not (
+            isinstance(feet, list)
+            and len(feet) == len(self.walls)
+            and all(isinstance(s, float) and math.isfinite(s) for s in feet)
+        ):
+            raise ValueError(
+                f"FixedStepLocator memory must be {{'feet': [s, ...]}}, got {memory!r}"
+            )
+        self._feet = list(feet)
 
     def _clearance(
         self, tau: float, y: tuple[float, float, float, float]

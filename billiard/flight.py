@@ -31,7 +31,9 @@ Models:
 from __future__ import annotations
 
 import math
+from collections.abc import Mapping
 
+from billiard.errors import SimulationError
 from billiard.generated import ball as _ball
 
 __all__ = ["AdaptiveFlight", "ExactFlight", "FlightModel", "RK4Flight", "flight_model"]
@@ -59,6 +61,16 @@ class FlightModel:
 
     def aero_bound(self, speed: float) -> float:
         return 0.0
+
+    def memory(self) -> dict[str, float]:
+        """What the model carries from one flight to the next (none here), for a
+        checkpoint: restored with :meth:`restore_memory`, a run continues bit for bit."""
+        return {}
+
+    def restore_memory(self, memory: Mapping[str, float]) -> None:
+        """Set what :meth:`memory` returned (``ValueError`` if it does not fit)."""
+        if dict(memory) != self.memory():
+            raise ValueError(f"{type(self).__name__} carries no memory between flights")
 
 
 class ExactFlight(FlightModel):
@@ -153,6 +165,16 @@ class AdaptiveFlight(FlightModel):
             (self.c_lin + self.c_quad * speed) * speed + abs(self.c_magnus * self._u3) * speed
         ) / self.m
 
+    def memory(self) -> dict[str, float]:
+        # the step proposal outlives a flight: the next flight starts with it
+        return {"step": self._h}
+
+    def restore_memory(self, memory: Mapping[str, float]) -> None:
+        step = memory.get("step") if set(memory) == {"step"} else None
+        if not (isinstance(step, float) and math.isfinite(step) and step > 0.0):
+            raise ValueError(f"AdaptiveFlight memory must be {{'step': h > 0}}, got {memory!r}")
+        self._h = step
+
     def _stages(
         self, y: State, k1: tuple[float, float], h: float, with_error: bool
     ) -> tuple[State, tuple[float, float], float]:
@@ -214,7 +236,11 @@ class AdaptiveFlight(FlightModel):
                 return self._tb
             h *= max(0.2, 0.9 * err**-0.2)
             self._h = h
-        raise RuntimeError("Dormand-Prince step size control failed")
+        # a right-hand side that turned non-finite makes every error estimate fail
+        raise SimulationError(
+            f"the flight's step-size control failed (Dormand-Prince, 200 rejected steps "
+            f"from tau = {tau_a!r} s)"
+        )
 
     def state(self, tau: float) -> State:
         if tau == self._tb:

@@ -1,0 +1,127 @@
+"""Run the measurements, save them, draw the figures and write performance.md.
+
+Results are kept in ``FIGURES/results.json``; ``--only`` re-measures some sections and
+takes the others from that file.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import platform
+import subprocess
+import time
+from pathlib import Path
+
+from bench import charts, failures, ladder, report, throughput, workprecision
+from bench.common import Config, start_scene
+
+SECTIONS = ("workprecision", "failures", "ladder", "throughput", "profile")
+
+
+class Starts(dict):
+    """Attractor start scenes, computed on first use."""
+
+    def __init__(self, cfg: Config):
+        super().__init__()
+        self.cfg = cfg
+
+    def __missing__(self, name: str):
+        self[name] = start_scene(name, self.cfg.transient)
+        return self[name]
+
+
+def measure(section: str, cfg: Config, starts: Starts) -> dict:
+    if section == "workprecision":
+        return {"scenes": [workprecision.measure_scene(n, cfg) for n in cfg.scenes]}
+    if section == "failures":
+        for name in cfg.scenes:
+            starts[name]
+        return {"rows": failures.measure(cfg), "thresholds": failures.threshold_scan(cfg, starts)}
+    if section == "ladder":
+        rows = []
+        for name in cfg.scenes:
+            rows += ladder.measure_scene(name, cfg.ladder_impacts, starts[name])
+        return {"rows": rows}
+    if section == "throughput":
+        rates = [throughput.impact_rate(n, cfg.throughput_impacts, cfg.throughput_repeats, drag)
+                 for drag in ("fowles", "none") for n in cfg.scenes]
+        return {"rates": rates, "startup": throughput.startup(cfg.startup_repeats),
+                "memory": throughput.memory("wedge-6.6hz", cfg.memory_sizes)}
+    if section == "profile":
+        return {"profiles": [throughput.profile(n, cfg.profile_impacts) for n in cfg.scenes]}
+    raise ValueError(f"unknown section {section!r}")
+
+
+def draw(results: dict, figures: Path, command: str) -> None:
+    sections = results["sections"]
+    if "workprecision" in sections:
+        for scene in sections["workprecision"]["scenes"]:
+            charts.work_precision(scene, figures / f"workprecision-{scene['scene']}.png",
+                                  f"{command} --only workprecision")
+    if "failures" in sections:
+        f = sections["failures"]
+        charts.failures(f["rows"], figures / "failures.png", f"{command} --only failures")
+        charts.low_velocity(f["thresholds"], figures / "low-velocity.png",
+                            f"{command} --only failures")
+    if "ladder" in sections:
+        charts.ladder(sections["ladder"]["rows"], figures / "ladder.png",
+                      f"{command} --only ladder")
+    if "throughput" in sections:
+        t = sections["throughput"]
+        charts.throughput(t["rates"], t["memory"], figures / "throughput.png",
+                          f"{command} --only throughput")
+
+
+def _plain(value):
+    """numpy scalars as Python numbers for json."""
+    return value.item() if hasattr(value, "item") else str(value)
+
+
+def machine() -> dict:
+    load = os.getloadavg() if hasattr(os, "getloadavg") else (0.0, 0.0, 0.0)
+    return {"python": platform.python_version(), "platform": platform.platform(),
+            "processor": platform.processor() or platform.machine(),
+            "cpus": os.cpu_count(), "load": load, "code": code_version()}
+
+
+def code_version() -> str:
+    """The git commit of the checkout, and whether the engine differs from it."""
+    root = Path(__file__).resolve().parent.parent
+    try:
+        head = subprocess.run(["git", "rev-parse", "--short", "HEAD"], cwd=root,
+                              capture_output=True, text=True, check=True).stdout.strip()
+        dirty = subprocess.run(["git", "status", "--porcelain", "billiard", "derivation",
+                                "generated", ":!billiard/bench.py"], cwd=root,
+                               capture_output=True, text=True, check=True).stdout.strip()
+    except (OSError, subprocess.CalledProcessError):
+        return "unknown"
+    return f"commit {head}" + (" with local changes to the engine" if dirty else "")
+
+
+def main(cfg: Config, out: Path, only: tuple[str, ...] = SECTIONS) -> Path:
+    """Measure the sections in ``only``, then write ``out/performance.md`` and its
+    figures in ``out/figures/performance``."""
+    figures = out / "figures" / "performance"
+    figures.mkdir(parents=True, exist_ok=True)
+    saved = figures / "results.json"
+    results = json.loads(saved.read_text()) if saved.exists() and only != SECTIONS else {}
+    results.setdefault("sections", {})
+    if only:
+        results.update(mode="quick" if cfg.quick else "full", machine=machine(),
+                       date=time.strftime("%Y-%m-%d %H:%M"))
+    starts = Starts(cfg)
+    command = "billiard bench --quick" if cfg.quick else "billiard bench"
+    for section in only:
+        began = time.perf_counter()
+        print(f"bench: {section} ...", flush=True)
+        results["sections"][section] = measure(section, cfg, starts)
+        results["sections"][section]["elapsed"] = time.perf_counter() - began
+        results["sections"][section]["mode"] = results["mode"]
+        results["sections"][section]["load"] = list(os.getloadavg())
+        print(f"bench: {section} took {time.perf_counter() - began:.0f} s", flush=True)
+        saved.write_text(json.dumps(results, indent=1, default=_plain))
+    draw(results, figures, command)
+    path = out / "performance.md"
+    path.write_text(report.render(results, command))
+    return path

@@ -1,0 +1,232 @@
+"""The prose of performance.md; the numbers and tables come from bench/report.py."""
+
+INTRO = """# Performance: speed against accuracy
+
+Everything on this page, every number, table and figure, is written by one command:
+
+```bash
+{command}            # this page: {mode} mode, {date}, {elapsed:.0f} s of measurements
+billiard bench --quick     # the same measurements, smaller (under 2 minutes), in runs/bench-quick/
+billiard bench --only workprecision,failures   # measure some sections again, keep the rest
+billiard bench --render    # redraw figures and rewrite this page from the saved results
+```
+
+The raw results are in [`figures/performance/results.json`](figures/performance/results.json).
+Machine: {machine}. The machine is shared and noisy: a time is the median of
+several runs, speed comparisons are ratios of times measured in the same run, and single
+times can be off by tens of percent. Work is CPU time of the run loop alone
+(`time.process_time`, building the simulation excluded) in sections 1 and 2, wall time
+in sections 3 and 4.
+
+Methods compared:
+
+* **event**, the default method: exact parabolic flights with drag off; with drag on an
+  error-controlled Dormand-Prince 5(4) flight (`run.rtol`); impacts located on the
+  offset-curve gap with proven no-contact intervals (`billiard/events.py`).
+* **rk4**, the paper's scheme: fixed-step classical Runge-Kutta (`run.step`), Euclidean
+  distance from Newton's method after each step, impacts refined Baraff-style.
+* **DOP853**, the peer a typical user writes: `scipy.integrate.solve_ivp(method="DOP853")`
+  per flight, one terminal event function per surface (the engine's offset-curve gap,
+  falling through zero), `atol = rtol`, then the same impact law
+  (`billiard.impact.KaneLevinsonImpact`). **DOP853 careful** adds `max_step = T/20`
+  (T the drive period) and `first_step = 1e-6 s` (`bench/peer.py`).
+"""
+
+TARGETS = """The speed-up targets compare the CPU time at which each method reaches an
+impact-time error of 1e-9 s after 50 impacts (section 1, "Cost at equal accuracy"). Where
+only the default method reaches that accuracy (the other one fails or stalls above it in
+every setting of its ladder) there is no ratio; the verdict counts the cases where both
+reach it.
+
+What limits the speed: the default method spends 30-140 us of interpreted Python per
+impact (section 5: the Dormand-Prince stages with drag, the offset-curve inversion, the
+locator's per-substep bookkeeping). Its competitors are not slow per step but need many
+steps or heavy calls: rk4 is exact for drag-free arcs at any step, so with drag off its
+cheapest accurate step (3 ms, where it does not yet fail) is only 3-10x dearer, and
+`solve_ivp` spends ~0.5 ms per call in its own set-up and event handling. Closing the
+remaining 3-10x gap needs the event method's per-impact cost to drop by that much, which
+the suggestions of section 5 do not reach in pure Python; its real advantage is in
+section 2: it is the only method without failures.
+"""
+
+WORKPRECISION = """## 1. Work against precision
+
+For each paper scene, all methods start from one state on the attractor: the full model
+is run from rest for a transient, and the ball is taken a third of the way through the
+next flight of at least 0.05 s (`bench/common.py: start_scene`). Each method and setting
+then simulates the same number of impacts, drag on (`air.drag = "fowles"`) and off
+(`"none"`). Errors are the differences of the n-th impact time and impact point from the
+reference's n-th impact:
+
+* drag off: the default method, whose flights are exact parabolas and whose impact
+  times are roots located to a few ulps: exact to rounding;
+* drag on: the default method at `run.rtol = 1e-13`. It is cross-checked against
+  DOP853 careful at rtol 1e-13 (row "reference check"); DOP853 is not the reference
+  because its event detection only sees sign changes at step ends (section 2).
+
+A chaotic scene amplifies any error: the row "start moved by 1e-15 m" (grey lines in
+the figures) is the error that rounding-sized changes of the start grow into, the floor
+below which no method can be compared at that impact. On a stable periodic orbit
+(parabola, hyperbola at 4.5 Hz) errors do not grow, and the error after n impacts is
+the per-impact error. Errors of exactly 0 are drawn at 1e-16; a run that stopped early
+(no impact found: the ball went through a wall) has an infinite error and no point in
+the figure (see the note in the table).
+"""
+
+FAILURES = """## 2. Where methods fail
+
+One flight at a time, from many real states: the post-impact states of the first
+impacts of each scene run from rest (the ball lying at the bottom, chattering, lifting
+off, then on the attractor), and, for the wedge, states of balls dropped 0.5-5 mm into
+its vertex and of their first 15 impacts ("wedge vertex drops"). From each state every
+method flies to its next impact, which is compared with the truth (`bench/failures.py`):
+
+* drag off, the truth is the default method, and it is itself checked against an
+  independent geometry: the Euclidean clearance `Boundary.clearance` (nearest point
+  from the curve's polynomial roots) of the exact parabolic arc, sampled at 24 points
+  inside the flight, must stay positive, and must be zero (to 1e-9 m) at the impact;
+* drag on, the truth is the default method at rtol 1e-13, for the default method's
+  tolerance ladder.
+
+A *missed* impact: the method's next impact comes more than 1e-6 s after the truth's
+(the ball went through the wall, or the run stopped); *spurious*: more than 1e-6 s
+before it. *Penetration*: how far the ball centre is inside the wall, by the Euclidean
+clearance, at the impact the method reports, or, for a missed impact, at the deepest
+sampled point of the true arc past the wall. *Energy error*: relative error of the
+mechanical energy just after a correctly found impact.
+"""
+
+FAILURES_AFTER = """What the failures are:
+
+* **DOP853 (typical)** misses impacts that follow an impact closely. A flight starts where
+  the previous impact was found, at G = 0 to rounding (the engine reports the first
+  representable time with G <= 0). When the next impact is near (a hop after a slow or
+  chattering impact, the ball lying on a wall), `solve_ivp`'s first step already ends
+  past it: G has the same sign at both ends of the step, no event fires, and the ball
+  flies through the wall (penetrations of centimetres) until the run ends with "no
+  impact within 10 s". The tolerance does not cure it: the drag-free or nearly
+  drag-free flight is a low-degree polynomial, so DOP853 takes large steps at any
+  tolerance. This is also why it fails in section 1 on every scene where the ball
+  chatters.
+* **DOP853 careful** (`first_step = 1e-6 s`, `max_step = T/20`) removes those misses.
+  What is left are grazing excursions: seen from the moving boundary, the ball's path
+  can dip into a wall and come back out within one step (T/20 = 7.6 ms at 6.6 Hz), and
+  a sign test at the ends of the step cannot see it (wedge, 0.5 % of the flights).
+* **rk4**: the spurious impacts are the impact just resolved, found again. When the next
+  hop is shorter than a step, the first step ends inside the wall, and the Baraff
+  search from the start of the step, where |gap| <= 1e-12 m already holds, returns a
+  flight of length ~1e-15 s, and the impact law is applied a second time to a ball
+  that is already leaving. They disappear below a step of about 1e-4 s. rk4 misses no
+  impact in these sets: its signed distance catches a ball that ends a step inside a
+  wall; only an excursion that enters and leaves a wall within one step could escape it.
+* **The default method** has no missed and no spurious impact in any set, drag on or
+  off; by the independent Euclidean clearance its impact points lie on the wall to
+  ~1e-16 m, and nowhere along the sampled arcs does the ball enter a wall. With drag
+  on its tolerance only changes the energy after an impact, by up to ~1e-7 relative
+  at rtol 1e-6 and ~3e-9 at the default 1e-10.
+* **Energy** after a correctly found impact agrees with the truth to 1e-14 (median) for
+  every method; rk4's worst cases are ~1e-8, from the 1e-12 m gap tolerance of its
+  impact search.
+
+The low-velocity rule (`contact.elastic_below`):
+
+* With 0, a ball lying at the bottom cannot take off: every impact has zero relative
+  normal speed, restitution returns zero, and every run from rest ends at once in
+  inelastic collapse (1,000 impacts with zero time of flight). Started in flight, the
+  parabola and the hyperbola at 4.5 Hz never need the rule (their orbits have no slow
+  impacts), while the wedge and the hyperbola at 5.8 Hz fall to rest and collapse
+  within a few seconds of simulated time (section 3).
+* Small thresholds (1e-4 m/s) keep the runs alive but the ball chatters at the bottom in
+  hops of 2 v/g ~ 20 us: up to ~1e5 impacts per simulated second, and 5,000 impacts
+  cover only a fraction of a second. From about 3e-3 m/s on, the impact rate of the
+  periodic scenes no longer depends on the threshold; in the chaotic scenes it keeps
+  falling as the threshold grows, because a larger share of impacts is made elastic
+  (wedge: 80 % at 1e-3, 61 % at the default 1e-2, 24 % at 0.1): the rule is part of the
+  model there, not a numerical safeguard, and its value shapes the statistics.
+* The wedge's vertex: balls dropped into the vertex make series of short hops (median
+  flight under 1 ms) between the two walls. The default method handles them (no
+  failure), rk4 adds its spurious re-impacts there as elsewhere (15 % of the flights at
+  a 1 ms step, none from 1e-4 s down), the typical DOP853 misses about three quarters
+  of them, and the careful DOP853 one in 1,344 (a grazing excursion of ~2 um).
+"""
+
+LADDER = """## 3. The model ladder
+
+Each physical term is switched off in turn in the built-in scene, run as a user runs it
+(from rest, default method); what changes is what the paper reports: the period-one
+orbit's height (parabola; the orbit is detected as in `billiard calibrate`) and
+return-map statistics over the impacts after the first 10 %: mean and standard deviation
+of the impact height q2, the fraction of return-map points above the diagonal
+(q2 of the next impact higher), the mean time of flight. The +- values are standard
+errors from 10 batch means. "near-point ball" keeps the real ball's drag
+coefficients and mass; its q2 is the centre height, about r = 1.55 mm lower at the same
+contact point. The verdict "no change" means: a locked orbit within 0.5 mm, or every
+statistic within twice the combined standard error or within 1 %.
+"""
+
+LADDER_AFTER = """Reading the ladder:
+
+* **Air drag** is the only term that changes nothing measurable in the chaotic scenes
+  (wedge 6.6 Hz, hyperbola 5.8 Hz: every statistic within its noise), and it is the only
+  term with a cost: drag off runs in about half the wall time (exact parabolic
+  flights instead of error-controlled integration). In the periodic scenes it moves
+  the period-one orbit by 0.1 to 0.5 %: below what the paper measures ("about
+  0.075 m"), but the drive amplitude of every built-in scene was calibrated on the
+  parabola with drag on, so switching drag off in the parabola means calibrating again
+  (the orbit would be 0.35 mm higher).
+* **Friction and spin** (mu = 0, or k = 0.01) change everything: the parabola's orbit
+  doubles in height, the hyperbola at 4.5 Hz loses its period-one lock, the chaotic
+  scenes' statistics move by 8 to 20 %. They cost nothing (the impact map is the same
+  few lines either way).
+* **The finite radius** changes the parabola's orbit by 7 % (5.5 mm, more than the
+  1.55 mm offset of the centre), the hyperbola's at 4.5 Hz by 3 % and the wedge's mean
+  height by 29 %; only the hyperbola at 5.8 Hz does not notice it. It costs nothing.
+* **The low-velocity rule** cannot be switched off: every scene collapses from rest.
+
+Recommendation: switch air drag off (`air.drag = "none"`) in `wedge-6.6hz` and
+`hyperbola-5.8hz`; keep it in `parabola-5.4hz` (the calibration scene) and in
+`hyperbola-4.5hz` unless the amplitude is calibrated again without drag. Keep spin,
+friction, the finite radius and the low-velocity rule everywhere.
+"""
+
+THROUGHPUT = """## 4. Throughput, start-up and memory
+
+Impacts per second of wall time of the built-in scenes, default method, from rest,
+records kept in memory; building the simulation is excluded (`Result.wall_time`).
+"""
+
+PROFILE = """## 5. Where the default method spends its time
+
+`cProfile` of one run of each built-in scene (full model, from rest). The profiler
+about triples the run time; shares are of the profiled total.
+"""
+
+PROFILE_AFTER = """Where the time goes, and what would make it shorter (in order of payoff):
+
+1. **The flight integrator with drag** (`flight.py: AdaptiveFlight._stages` and the
+   generated `flight_rhs_drag` it calls 6-7 times per step) is the largest single item
+   with drag on, and drag on costs about twice drag off (section 4). Two concrete gains:
+   (a) `AdaptiveFlight.state(tau)` re-integrates from the step start with a full
+   6-stage step for every probe of the root search (Newton iterations, grazing
+   checks); using the Dormand-Prince dense output for the probes and re-integrating
+   only for the accepted root would remove most of those stage evaluations;
+   (b) the right-hand side is a Python call per stage: inlining the drag acceleration
+   into `_stages` (it is two lines once `1/m`, `c_lin/m`, `c_quad/m` are
+   precomputed) saves a call and a tuple per stage. The tolerance hardly matters for
+   the cost (section 1: rtol 1e-6 and 1e-12 cost within about a third of each other), because the
+   substeps are set by the event locator, not by the error control.
+2. **The offset-curve inversion** (`boundary.py: OffsetWall.foot`, then `gap_rate`) runs a
+   Newton loop with two generated-function calls per iteration for every gap
+   evaluation on a curved wall, ~15 times per impact. A foot solver that returns f',
+   f'' in one generated call, and one fewer iteration from the warm start (accept the
+   step when the predicted correction is below the tolerance), would roughly halve it.
+3. **Per-substep overhead in `EventLocator.locate`** (own time 4-12 %): a list of gaps and
+   rates for every surface at every substep, including the lid, which is almost never
+   near. A cheap apex test (the flight's highest point, from the current state, below
+   the lid level minus a margin) would drop the lid from most substeps.
+4. **Start-up**: `billiard run` spends ~0.5 s importing sympy and scipy.optimize that a
+   run never uses: `cli._user_errors()` imports `billiard.derivation.curve` and
+   `billiard.calibrate` just to collect their exception classes. Looking the modules up
+   in `sys.modules` at the time of the error (a module never imported cannot have
+   raised) brings the start-up to the ~0.15 s of importing the run path.
+"""
