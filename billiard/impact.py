@@ -138,6 +138,13 @@ class KaneLevinsonImpact:
                 v1 -= math.sin(z) * shift
                 v2 += math.cos(z) * shift
                 resting = True
+        if wn >= 0.0 and not resting:
+            # The contact point is already separating (a locator can report a contact at a
+            # rounding-level gap while a ball slides along a curved wall). A contact can
+            # only push: Newton's law would need Rn < 0 here, and the slip impulse would
+            # then push *with* the slip and create energy. No impulse: the slip law with
+            # Rn = 0.
+            return ImpactResult(u1, u2, u3, 0.0, 0.0, ELASTIC if low else SLIP, wt, wn, False)
         n1, n2, n3, rt, rn = _ball.impact_stick(v1, v2, u3, z, vb1, vb2, m, r, k, e)
         regime = STICK
         if abs(rt) > self.mu_s * rn:

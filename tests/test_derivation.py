@@ -14,9 +14,9 @@ import sys
 
 import numpy as np
 import pytest
+from billiard.generated import ball
 
 from billiard.curves import load_curve
-from billiard.generated import ball
 
 M, R, K, G = 1.3028e-4, 1.55e-3, 0.4, 9.81
 
@@ -145,7 +145,7 @@ def test_impacts_never_create_energy_in_the_boundary_frame():
         u1, u2 = u1 + vb1, u2 + vb2
         post = kane_levinson(u1, u2, w, z, vb1, vb2, e, mu_s, mu_k, k=k, r=r, m=m)
 
-        def kinetic(a, b, c, k=k, r=r, m=m):
+        def kinetic(a, b, c, k=k, r=r, m=m, vb1=vb1, vb2=vb2):
             return 0.5 * m * ((a - vb1) ** 2 + (b - vb2) ** 2) + 0.5 * k * m * r * r * c * c
 
         before, after = kinetic(u1, u2, w), kinetic(*post[:3])
