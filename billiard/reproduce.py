@@ -196,6 +196,10 @@ into the flying orbit (scan in `billiard calibrate`'s output). The calibration s
 rest, which reaches the orbit at the calibrated amplitude.
 
 ![parabola phase]({_rel(fig["parabola"]["phase"], docs)})
+![parabola trajectory]({_rel(fig["parabola"]["trajectory"], docs)})
+
+![parabola return map]({_rel(fig["parabola"]["return_map"], docs)})
+![parabola time map]({_rel(fig["parabola"]["time_map"], docs)})
 
 ## Summary of the four runs
 
