@@ -178,3 +178,16 @@ def test_rk4_impact_time_error_shrinks_like_h4():
     ratios = [errors[i] / errors[i + 1] for i in range(2)]
     assert all(10.0 < ratio < 25.0 for ratio in ratios), (errors, ratios)
     assert errors[-1] < 1e-10
+
+
+@pytest.mark.parametrize("name", ["parabola-5.4hz", "wedge-6.6hz"])
+def test_run_from_written_scene_toml_reproduces_the_csv(tmp_path, name):
+    """`billiard run DIR/scene.toml` repeats `billiard run NAME` byte for byte."""
+    from billiard.cli import main
+
+    first, second = tmp_path / "first", tmp_path / "second"
+    assert main(["run", name, "--collisions", "300", "--out", str(first), "--no-plot"]) == 0
+    assert main(["run", str(first / "scene.toml"), "--out", str(second), "--no-plot"]) == 0
+    a = (first / "collisions.csv").read_bytes()
+    assert a.count(b"\n") == 301
+    assert a == (second / "collisions.csv").read_bytes()
