@@ -112,7 +112,38 @@ _E1, _E3, _E4, _E5, _E6, _E7 = (
 )
 
 
-class AdaptiveFlight(FlightModel):
+class _AirFlight(FlightModel):
+    """Set-up shared by the numerically integrated models: the generated right-hand side
+    and its trailing arguments. A force that is off is not evaluated: the Magnus version
+    of the right-hand side is used only when its coefficient is set."""
+
+    def __init__(self, gravity: float, mass: float, c_lin: float, c_quad: float,
+                 c_magnus: float = 0.0):
+        self.g = float(gravity)
+        self.m = float(mass)
+        self.c_lin, self.c_quad, self.c_magnus = float(c_lin), float(c_quad), float(c_magnus)
+        self._rhs = _ball.flight_rhs_magnus if self.c_magnus != 0.0 else _ball.flight_rhs_drag
+        self._u3 = 0.0
+        self._args: tuple[float, ...] = ()
+
+    def _bind_spin(self, u3: float) -> None:
+        """Fix the right-hand side's arguments for a flight with spin u3 (constant)."""
+        self._u3 = u3
+        if self.c_magnus != 0.0:
+            self._args = (u3, self.m, self.g, self.c_lin, self.c_quad, self.c_magnus)
+        else:
+            self._args = (self.m, self.g, self.c_lin, self.c_quad)
+
+    def acceleration(self, u1: float, u2: float) -> tuple[float, float]:
+        return self._rhs(u1, u2, *self._args)
+
+    def aero_bound(self, speed: float) -> float:
+        return (
+            (self.c_lin + self.c_quad * speed) * speed + abs(self.c_magnus * self._u3) * speed
+        ) / self.m
+
+
+class AdaptiveFlight(_AirFlight):
     """Flight with drag (and optionally the Magnus force): Dormand-Prince 5(4).
 
     The right-hand side depends on the velocity only, so the velocity stages are
@@ -131,15 +162,8 @@ class AdaptiveFlight(FlightModel):
         c_magnus: float = 0.0,
         rtol: float = 1e-10,
     ):
-        self.g = float(gravity)
-        self.m = float(mass)
-        self.c_lin, self.c_quad, self.c_magnus = float(c_lin), float(c_quad), float(c_magnus)
+        super().__init__(gravity, mass, c_lin, c_quad, c_magnus)
         self.rtol = float(rtol)
-        # the generated right-hand side and its trailing arguments (a force that is off
-        # is not evaluated: the Magnus version is used only when its coefficient is set)
-        self._rhs = _ball.flight_rhs_magnus if self.c_magnus != 0.0 else _ball.flight_rhs_drag
-        self._u3 = 0.0
-        self._args: tuple[float, ...] = ()
         self._h = 1e-3  # step proposal, carried from step to step
         self._ta = self._tb = 0.0
         self._ya: State = (0.0, 0.0, 0.0, 0.0)
@@ -147,23 +171,10 @@ class AdaptiveFlight(FlightModel):
         self._ka = self._kb = (0.0, 0.0)  # accelerations at the step's ends
 
     def begin(self, q1: float, q2: float, u1: float, u2: float, u3: float) -> None:
-        self._u3 = u3
-        g, m = self.g, self.m
-        if self.c_magnus != 0.0:
-            self._args = (u3, m, g, self.c_lin, self.c_quad, self.c_magnus)
-        else:
-            self._args = (m, g, self.c_lin, self.c_quad)
+        self._bind_spin(u3)
         self._ta = self._tb = 0.0
         self._ya = self._yb = (q1, q2, u1, u2)
         self._ka = self._kb = self._rhs(u1, u2, *self._args)
-
-    def acceleration(self, u1: float, u2: float) -> tuple[float, float]:
-        return self._rhs(u1, u2, *self._args)
-
-    def aero_bound(self, speed: float) -> float:
-        return (
-            (self.c_lin + self.c_quad * speed) * speed + abs(self.c_magnus * self._u3) * speed
-        ) / self.m
 
     def memory(self) -> dict[str, float]:
         # the step proposal outlives a flight: the next flight starts with it
@@ -250,7 +261,7 @@ class AdaptiveFlight(FlightModel):
         return self._stages(self._ya, self._ka, tau - self._ta, False)[0]
 
 
-class RK4Flight(FlightModel):
+class RK4Flight(_AirFlight):
     """Classical fourth-order Runge-Kutta with a fixed step: the paper's scheme.
 
     Used by the fixed-step locator only (``method = "rk4"``); it integrates the same
@@ -267,21 +278,12 @@ class RK4Flight(FlightModel):
         c_magnus: float = 0.0,
         step: float = 1e-4,
     ):
-        self.g = float(gravity)
-        self.m = float(mass)
-        self.c_lin, self.c_quad, self.c_magnus = float(c_lin), float(c_quad), float(c_magnus)
+        super().__init__(gravity, mass, c_lin, c_quad, c_magnus)
         self.max_step = float(step)
-        self._rhs = _ball.flight_rhs_magnus if self.c_magnus != 0.0 else _ball.flight_rhs_drag
-        self._u3 = 0.0
-        self._args: tuple[float, ...] = ()
         self.begin(0.0, 0.0, 0.0, 0.0, 0.0)
 
     def begin(self, q1: float, q2: float, u1: float, u2: float, u3: float) -> None:
-        self._u3 = u3
-        if self.c_magnus != 0.0:
-            self._args = (u3, self.m, self.g, self.c_lin, self.c_quad, self.c_magnus)
-        else:
-            self._args = (self.m, self.g, self.c_lin, self.c_quad)
+        self._bind_spin(u3)
         self._ta = self._tb = 0.0
         self._ya = self._yb = (q1, q2, u1, u2)
 
@@ -299,13 +301,6 @@ class RK4Flight(FlightModel):
             return self._yb
         return self.step(self._ya, tau - self._ta)
 
-    def acceleration(self, u1: float, u2: float) -> tuple[float, float]:
-        return self._rhs(u1, u2, *self._args)
-
-    def aero_bound(self, speed: float) -> float:
-        return (
-            (self.c_lin + self.c_quad * speed) * speed + abs(self.c_magnus * self._u3) * speed
-        ) / self.m
 
     def step(self, y: State, h: float) -> State:
         """One classical RK4 step of length h from y = (q1, q2, u1, u2)."""
