@@ -49,7 +49,8 @@ def read_collisions(path: str | os.PathLike[str]) -> dict[str, np.ndarray]:
     """Read a run's ``collisions.csv``.
 
     The first non-blank line that does not start with ``#`` is the header; blank lines
-    and ``#`` comment lines are skipped. Every column in :data:`REQUIRED_COLUMNS` must
+    and ``#`` comment lines are skipped, and so is an unterminated last row (a write cut
+    short when the run was killed). Every column in :data:`REQUIRED_COLUMNS` must
     be present; extra columns (e.g. ``wall``, ``Rt``, ``Rn``) are kept.
 
     Args:
@@ -78,6 +79,10 @@ def read_collisions(path: str | os.PathLike[str]) -> dict[str, np.ndarray]:
         raise _fail(path, f"cannot read: {exc}") from None
     if not lines:
         raise _fail(path, "empty file (no header line)")
+    if len(lines) > 1 and not lines[-1][1].endswith("\n"):
+        # an unterminated last row is a write cut short by a kill: every complete row
+        # before it is kept (the run can be resumed and completes that row)
+        lines.pop()
     rows = csv.reader(line for _, line in lines)
     try:
         header = [name.strip() for name in next(rows)]

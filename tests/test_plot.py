@@ -493,3 +493,16 @@ def test_engine_run_billiard_plot_command(engine_run, tmp_path, capsys):
     assert main(["plot", str(engine_run), "--window", "280:300", "--no-gif"]) == 0
     assert capsys.readouterr().out.count("wrote ") == 4
     assert (engine_run / "trajectory.png").exists()
+
+
+def test_read_collisions_skips_a_row_cut_short_by_a_kill(tmp_path):
+    from billiard.camera import read_collisions
+
+    header = "n,t,q1,q2,v1,v2,omega,u4,un,tof,regime,z,energy"
+    row = "{n},{t},0.0,0.01,0.1,0.2,0.0,0.1,0.2,0.1,stick,0.0,1e-5"
+    complete = "\n".join([header, row.format(n=1, t=0.1), row.format(n=2, t=0.2)]) + "\n"
+    (tmp_path / "collisions.csv").write_text(complete + "3,0.3,0.0,0.0")
+    cols = read_collisions(tmp_path / "collisions.csv")
+    assert list(cols["n"]) == [1.0, 2.0]
+    (tmp_path / "collisions.csv").write_text(complete)
+    assert list(read_collisions(tmp_path / "collisions.csv")["t"]) == [0.1, 0.2]
