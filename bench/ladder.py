@@ -18,8 +18,9 @@ import math
 
 import numpy as np
 
+from bench.common import full_model
 from billiard.calibrate import find_period_one
-from billiard.scene import Scene, load_scene, with_values
+from billiard.scene import Scene, with_values
 from billiard.simulate import simulate
 
 VARIANTS: tuple[tuple[str, dict], ...] = (
@@ -80,7 +81,7 @@ def outputs(columns: dict, scene: Scene) -> dict:
 
 def measure_scene(name: str, impacts: int, start: Scene) -> list[dict]:
     rows = []
-    cases = [(label, load_scene(name), changes) for label, changes in VARIANTS]
+    cases = [(label, full_model(name), changes) for label, changes in VARIANTS]
     cases += [(label, start, changes) for label, changes in IN_FLIGHT]
     for label, base, changes in cases:
         scene = with_values(base, changes) if changes else base
