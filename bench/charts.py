@@ -18,8 +18,7 @@ TARGET_RATE = 25000 / 2.0
 
 
 def _save(fig, path: Path, command: str, bottom: float = 0.02) -> Path:
-    fig.text(0.99, 0.005, f"reproduce: {command}", ha="right", va="bottom", fontsize=7,
-             color="0.4")
+    fig.text(0.99, 0.005, f"reproduce: {command}", ha="right", va="bottom", fontsize=7, color="0.4")
     fig.tight_layout(rect=(0, bottom, 1, 1))
     path.parent.mkdir(parents=True, exist_ok=True)
     fig.savefig(path, dpi=110)
@@ -36,25 +35,33 @@ def work_precision(scene: dict, path: Path, command: str) -> Path:
     checkpoints = list(scene["rows"][0]["errors"]["t"])
     fig, axes = plt.subplots(2, len(checkpoints), figsize=(11, 8.5), squeeze=False)
     methods = list(dict.fromkeys(r["method"] for r in scene["rows"]))
-    for row, (key, unit) in enumerate((("t", "impact-time error (s)"),
-                                      ("pos", "impact-point error (m)"))):
+    for row, (key, unit) in enumerate(
+        (("t", "impact-time error (s)"), ("pos", "impact-point error (m)"))
+    ):
         for col, k in enumerate(checkpoints):
             ax = axes[row][col]
             for drag, style in (("fowles", "-"), ("none", "--")):
                 for method in methods:
-                    pts = [r for r in scene["rows"] if r["method"] == method
-                           and r["drag"] == drag]
+                    pts = [r for r in scene["rows"] if r["method"] == method and r["drag"] == drag]
                     if not pts:
                         continue
                     x = _clip([r["errors"][key][k] for r in pts])
                     y = [r["cpu_per_1000"] for r in pts]
                     drag_label = "drag on" if drag == "fowles" else "drag off"
-                    ax.plot(x, y, style, marker="o", color=COLORS[method], ms=4,
-                            label=f"{method}, {drag_label}")
+                    ax.plot(
+                        x,
+                        y,
+                        style,
+                        marker="o",
+                        color=COLORS[method],
+                        ms=4,
+                        label=f"{method}, {drag_label}",
+                    )
                 floor = scene["floor"][drag][key][k]
                 if floor > 0:
-                    ax.axvline(max(floor, FLOOR), color="0.6", ls=":" if drag == "none" else "-.",
-                               lw=1)
+                    ax.axvline(
+                        max(floor, FLOOR), color="0.6", ls=":" if drag == "none" else "-.", lw=1
+                    )
             if key == "t":
                 ax.axvline(TARGET_ERROR, color="k", lw=0.8, alpha=0.5)
             ax.set_xscale("log")
@@ -63,11 +70,13 @@ def work_precision(scene: dict, path: Path, command: str) -> Path:
             ax.set_ylabel("CPU time per 1,000 impacts (s)")
             ax.grid(True, which="major", alpha=0.3)
     handles, labels = axes[0][0].get_legend_handles_labels()
-    fig.legend(handles, labels, loc="lower center", ncol=4, fontsize=8,
-               bbox_to_anchor=(0.5, 0.02))
+    fig.legend(handles, labels, loc="lower center", ncol=4, fontsize=8, bbox_to_anchor=(0.5, 0.02))
     fig.subplots_adjust(bottom=0.16)
-    fig.suptitle(f"{scene['scene']}: work against precision (grey lines: effect of moving the "
-                 f"start by 1e-15 m, drag on -. / off :; black: 1e-9 s)", fontsize=10)
+    fig.suptitle(
+        f"{scene['scene']}: work against precision (grey lines: effect of moving the "
+        f"start by 1e-15 m, drag on -. / off :; black: 1e-9 s)",
+        fontsize=10,
+    )
     return _save(fig, path, command, bottom=0.09)
 
 
@@ -80,19 +89,35 @@ def failures(rows: list[dict], path: Path, command: str) -> Path:
     for col, method, xlabel in panels:
         for i, name in enumerate(sets):
             for variant, style in ((method, "-"), (method + " careful", "--")):
-                pts = sorted((r["value"], r) for r in rows
-                             if r["set"] == name and r["method"] == variant
-                             and r["drag"] == "none")
+                pts = sorted(
+                    (r["value"], r)
+                    for r in rows
+                    if r["set"] == name and r["method"] == variant and r["drag"] == "none"
+                )
                 if not pts:
                     continue
                 x = [v for v, _ in pts]
                 label = name if variant == method else f"{name} (careful)"
-                axes[0][col].plot(x, [r["per_1000"] for _, r in pts], style, marker="o",
-                                  color=f"C{i}", label=label)
-                axes[1][col].plot(x, _clip([r["penetration"] for _, r in pts]), style,
-                                  marker="o", color=f"C{i}", label=label)
-        for row, ylabel in ((0, "missed + spurious impacts per 1,000 flights"),
-                            (1, "deepest penetration into the wall (m)")):
+                axes[0][col].plot(
+                    x,
+                    [r["per_1000"] for _, r in pts],
+                    style,
+                    marker="o",
+                    color=f"C{i}",
+                    label=label,
+                )
+                axes[1][col].plot(
+                    x,
+                    _clip([r["penetration"] for _, r in pts]),
+                    style,
+                    marker="o",
+                    color=f"C{i}",
+                    label=label,
+                )
+        for row, ylabel in (
+            (0, "missed + spurious impacts per 1,000 flights"),
+            (1, "deepest penetration into the wall (m)"),
+        ):
             ax = axes[row][col]
             ax.set_xscale("log")
             if row == 0:
@@ -105,10 +130,12 @@ def failures(rows: list[dict], path: Path, command: str) -> Path:
             ax.grid(True, alpha=0.3)
         axes[0][col].set_title(f"{method}: one flight from each state, drag off")
     handles, labels = axes[0][1].get_legend_handles_labels()
-    fig.legend(handles, labels, loc="lower center", ncol=5, fontsize=8,
-               bbox_to_anchor=(0.5, 0.02))
-    fig.suptitle("Where methods fail: rk4 against its step, solve_ivp (DOP853) against its "
-                 "tolerance (dashed: careful); penetrations of 0 drawn at 1e-16", fontsize=10)
+    fig.legend(handles, labels, loc="lower center", ncol=5, fontsize=8, bbox_to_anchor=(0.5, 0.02))
+    fig.suptitle(
+        "Where methods fail: rk4 against its step, solve_ivp (DOP853) against its "
+        "tolerance (dashed: careful); penetrations of 0 drawn at 1e-16",
+        fontsize=10,
+    )
     return _save(fig, path, command, bottom=0.09)
 
 
@@ -133,8 +160,10 @@ def low_velocity(rows: list[dict], path: Path, command: str) -> Path:
         ax.grid(True, alpha=0.3)
     axes[0].set_ylabel("impacts per simulated second")
     axes[0].legend(fontsize=8)
-    fig.suptitle("The low-velocity rule: impact rate (red x: the run ended in inelastic "
-                 "collapse)", fontsize=10)
+    fig.suptitle(
+        "The low-velocity rule: impact rate (red x: the run ended in inelastic collapse)",
+        fontsize=10,
+    )
     return _save(fig, path, command)
 
 
@@ -151,8 +180,9 @@ def ladder(rows: list[dict], path: Path, command: str) -> Path:
             y = j + (i - (len(scenes) - 1) / 2) * height
             label = name if j == 0 else None
             delta = 1e3 * (r.get("mean_q2", math.nan) - full.get("mean_q2", math.nan))
-            axes[0].barh(y, delta if math.isfinite(delta) else 0.0, height, color=f"C{i}",
-                         label=label)
+            axes[0].barh(
+                y, delta if math.isfinite(delta) else 0.0, height, color=f"C{i}", label=label
+            )
             if r["stop"]:
                 axes[0].text(0, y, " run stops", va="center", fontsize=6)
             axes[1].barh(y, r["wall_time"] / full["wall_time"], height, color=f"C{i}")
@@ -172,10 +202,10 @@ def throughput(rates: list[dict], memory: list[dict], path: Path, command: str) 
     """Impacts per second of wall time per scene; peak memory against run length."""
     fig, axes = plt.subplots(1, 2, figsize=(11, 4.5))
     scenes = list(dict.fromkeys(r["scene"] for r in rates))
-    for k, (drag, label) in enumerate((("fowles", "drag on (full model)"),
-                                       ("none", "drag off"))):
-        pts = [next((r for r in rates if r["scene"] == s and r["drag"] == drag), None)
-               for s in scenes]
+    for k, (drag, label) in enumerate((("fowles", "drag on (full model)"), ("none", "drag off"))):
+        pts = [
+            next((r for r in rates if r["scene"] == s and r["drag"] == drag), None) for s in scenes
+        ]
         x = [i + (k - 0.5) * 0.38 for i in range(len(scenes))]
         axes[0].bar(x, [p["rate"] if p else 0 for p in pts], 0.38, label=label)
     axes[0].axhline(TARGET_RATE, color="k", ls="--", lw=1, label="target: 25,000 in 2 s")
@@ -185,8 +215,12 @@ def throughput(rates: list[dict], memory: list[dict], path: Path, command: str) 
     axes[0].legend(fontsize=8)
     runs = [m for m in memory if m["impacts"] > 0]
     base = next((m["peak_mb"] for m in memory if m["impacts"] == 0), None)
-    axes[1].plot([m["impacts"] for m in runs], [m["peak_mb"] for m in runs], "-o",
-                 label="run streamed to collisions.csv")
+    axes[1].plot(
+        [m["impacts"] for m in runs],
+        [m["peak_mb"] for m in runs],
+        "-o",
+        label="run streamed to collisions.csv",
+    )
     if base is not None:
         axes[1].axhline(base, color="0.5", ls=":", label="modules imported, no run")
     axes[1].axhline(200, color="k", ls="--", lw=1, label="target: 200 MB")

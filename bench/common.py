@@ -165,8 +165,13 @@ def post_impact_state(c: dict, i: int, drive: Any, theta0: float | None = None) 
     t = float(c["t"][i])
     theta = drive.angle(t) if theta0 is None else (theta0 + drive.omega * t) % (2.0 * math.pi)
     return BallState(
-        0.0, theta, float(c["q1"][i]), float(c["q2"][i]),
-        float(c["v1"][i]), float(c["v2"][i]), float(c["omega"][i]),
+        0.0,
+        theta,
+        float(c["q1"][i]),
+        float(c["q2"][i]),
+        float(c["v1"][i]),
+        float(c["v2"][i]),
+        float(c["omega"][i]),
     )
 
 

@@ -118,10 +118,15 @@ def compare(sim: Simulation, states: list, truth: list, fly, check_arc: bool) ->
             continue
         dtaus.append(abs(tau - ref["tof"]))
         energy.append(abs(got["energy"] - ref["energy"]) / abs(ref["energy"]))
-    return _failure_row(len(states), missed, spurious, depth,
-                        float(np.median(dtaus)) if dtaus else math.nan,
-                        float(np.median(energy)) if energy else math.nan,
-                        float(np.max(energy)) if energy else math.nan)
+    return _failure_row(
+        len(states),
+        missed,
+        spurious,
+        depth,
+        float(np.median(dtaus)) if dtaus else math.nan,
+        float(np.median(energy)) if energy else math.nan,
+        float(np.max(energy)) if energy else math.nan,
+    )
 
 
 def check_truth(sim: Simulation, states: list, truth: list) -> dict:
@@ -141,8 +146,15 @@ def check_truth(sim: Simulation, states: list, truth: list) -> dict:
     return _failure_row(len(states), missed, spurious, depth, 0.0, 0.0, 0.0)
 
 
-def _failure_row(n: int, missed: int, spurious: int, depth: float, median_dtau: float,
-                 median_energy: float, max_energy: float) -> dict:
+def _failure_row(
+    n: int,
+    missed: int,
+    spurious: int,
+    depth: float,
+    median_dtau: float,
+    median_energy: float,
+    max_energy: float,
+) -> dict:
     """One row of the failure table: counts per 1,000 flights, deepest penetration (m),
     impact-time error (s) and relative energy error per impact."""
     return {
@@ -165,25 +177,57 @@ def measure_set(label: str, scene: Scene, states: list, cfg: Config) -> list[dic
     kept = [(s, exact(s)) for s in states]
     kept = [(s, t) for s, t in kept if t is not None]
     states, truth = [s for s, _ in kept], [t for _, t in kept]
-    rows.append({"set": label, "drag": "none", "method": "event", "setting": "exact flight",
-                 "value": 0.0, **check_truth(sim, states, truth)})
+    rows.append(
+        {
+            "set": label,
+            "drag": "none",
+            "method": "event",
+            "setting": "exact flight",
+            "value": 0.0,
+            **check_truth(sim, states, truth),
+        }
+    )
     methods = [("rk4", "rk4", h, f"step {h:g} s") for h in cfg.rk4_steps]
     methods += [("DOP853", "peer", r, f"rtol {r:g}") for r in cfg.peer_rtols]
     methods += [("DOP853 careful", "careful", r, f"rtol {r:g}") for r in cfg.peer_rtols]
     for method, kind, value, setting in methods:
         result = compare(sim, states, truth, runner(off, kind, value), check_arc=True)
-        rows.append({"set": label, "drag": "none", "method": method, "setting": setting,
-                     "value": value, **result})
-        print(f"  {label} {method} {setting}: {result['missed']} missed, "
-              f"{result['spurious']} spurious of {result['flights']}", flush=True)
+        rows.append(
+            {
+                "set": label,
+                "drag": "none",
+                "method": method,
+                "setting": setting,
+                "value": value,
+                **result,
+            }
+        )
+        print(
+            f"  {label} {method} {setting}: {result['missed']} missed, "
+            f"{result['spurious']} spurious of {result['flights']}",
+            flush=True,
+        )
     on_truth = runner(scene, "event", TRUTH_RTOL)
     truth_on = [on_truth(s) for s in states]
     pairs = [(s, t) for s, t in zip(states, truth_on, strict=True) if t is not None]
     for rtol in cfg.event_rtols:
-        result = compare(sim, [s for s, _ in pairs], [t for _, t in pairs],
-                         runner(scene, "event", rtol), check_arc=False)
-        rows.append({"set": label, "drag": "fowles", "method": "event",
-                     "setting": f"rtol {rtol:g}", "value": rtol, **result})
+        result = compare(
+            sim,
+            [s for s, _ in pairs],
+            [t for _, t in pairs],
+            runner(scene, "event", rtol),
+            check_arc=False,
+        )
+        rows.append(
+            {
+                "set": label,
+                "drag": "fowles",
+                "method": "event",
+                "setting": f"rtol {rtol:g}",
+                "value": rtol,
+                **result,
+            }
+        )
     return rows
 
 
@@ -209,17 +253,19 @@ def threshold_scan(cfg: Config, starts: dict[str, Scene]) -> list[dict]:
                 c = result.columns
                 n = len(c["t"])
                 span = float(c["t"][-1] - scene.initial.t) if n else 0.0
-                rows.append({
-                    "scene": name,
-                    "start": start,
-                    "elastic_below": value,
-                    "impacts": n,
-                    "sim_time": span,
-                    "rate": n / span if span > 0 else math.inf,
-                    "elastic": float(np.mean(c["regime"] == "elastic")) if n else math.nan,
-                    "mean_q2": float(np.mean(c["q2"])) if n else math.nan,
-                    "collapse": "collapse" in (result.stop_reason or ""),
-                    "stop": result.stop_reason or "",
-                    "wall_time": result.wall_time,
-                })
+                rows.append(
+                    {
+                        "scene": name,
+                        "start": start,
+                        "elastic_below": value,
+                        "impacts": n,
+                        "sim_time": span,
+                        "rate": n / span if span > 0 else math.inf,
+                        "elastic": float(np.mean(c["regime"] == "elastic")) if n else math.nan,
+                        "mean_q2": float(np.mean(c["q2"])) if n else math.nan,
+                        "collapse": "collapse" in (result.stop_reason or ""),
+                        "stop": result.stop_reason or "",
+                        "wall_time": result.wall_time,
+                    }
+                )
     return rows

@@ -70,10 +70,13 @@ def outputs(columns: dict, scene: Scene) -> dict:
     # points within DIAGONAL of the diagonal (a periodic orbit) are not above it
     above = (q2[1:] > q2[:-1] + DIAGONAL).astype(float)
     out.update(
-        mean_q2=float(q2.mean()), se_q2=batch_error(q2),
+        mean_q2=float(q2.mean()),
+        se_q2=batch_error(q2),
         std_q2=float(q2.std()),
-        above=float(above.mean()), se_above=batch_error(above),
-        mean_tof=float(tof.mean()), se_tof=batch_error(tof),
+        above=float(above.mean()),
+        se_above=batch_error(above),
+        mean_tof=float(tof.mean()),
+        se_tof=batch_error(tof),
         elastic=float(np.mean(columns["regime"][keep] == "elastic")),
     )
     return out
@@ -86,11 +89,19 @@ def measure_scene(name: str, impacts: int, start: Scene) -> list[dict]:
     for label, base, changes in cases:
         scene = with_values(base, changes) if changes else base
         result = simulate(scene, collisions=impacts)
-        row = {"scene": name, "variant": label, "wall_time": result.wall_time,
-               "stop": result.stop_reason or "", **outputs(result.columns, scene)}
+        row = {
+            "scene": name,
+            "variant": label,
+            "wall_time": result.wall_time,
+            "stop": result.stop_reason or "",
+            **outputs(result.columns, scene),
+        }
         rows.append(row)
-        print(f"  {name} {label}: {row['impacts']} impacts in {result.wall_time:.2f} s "
-              f"{row['stop'][:60]}", flush=True)
+        print(
+            f"  {name} {label}: {row['impacts']} impacts in {result.wall_time:.2f} s "
+            f"{row['stop'][:60]}",
+            flush=True,
+        )
     return rows
 
 

@@ -92,8 +92,14 @@ class SolveIvpPeer:
         short = 0
         while len(rows) < impacts:
             sol = solve_ivp(
-                self._rhs, (0.0, LONGEST_FLIGHT), y, method=self.method, rtol=self.rtol,
-                atol=self.rtol, events=self.events, max_step=self.max_step,
+                self._rhs,
+                (0.0, LONGEST_FLIGHT),
+                y,
+                method=self.method,
+                rtol=self.rtol,
+                atol=self.rtol,
+                events=self.events,
+                max_step=self.max_step,
                 first_step=self.first_step,
             )
             hits = [(te[0], j) for j, te in enumerate(sol.t_events) if len(te)]

@@ -49,9 +49,17 @@ def speed_ratios(wp: dict) -> list[dict]:
             event = cost_at(rows, "event", drag, int(k), TARGET_ERROR)
             for method in ("rk4", "DOP853", "DOP853 careful"):
                 other = cost_at(rows, method, drag, int(k), TARGET_ERROR)
-                out.append({"scene": scene["scene"], "drag": drag, "k": k, "method": method,
-                            "event": event, "other": other,
-                            "ratio": other["cost"] / event["cost"]})
+                out.append(
+                    {
+                        "scene": scene["scene"],
+                        "drag": drag,
+                        "k": k,
+                        "method": method,
+                        "event": event,
+                        "other": other,
+                        "ratio": other["cost"] / event["cost"],
+                    }
+                )
     return out
 
 
@@ -63,16 +71,26 @@ def targets(results: dict, command: str) -> str:
         for r in (r for r in t["rates"] if r["drag"] == "fowles"):
             ok = r["per_25000"] < 2.0
             verdict = "met" if ok else f"missed, {r['per_25000'] / 2.0:.1f}x too slow"
-            rows.append([f"25,000 impacts < 2 s wall, {r['scene']}",
-                         f"{r['per_25000']:.2f} s ({r['rate']:,.0f} impacts/s)", verdict])
+            rows.append(
+                [
+                    f"25,000 impacts < 2 s wall, {r['scene']}",
+                    f"{r['per_25000']:.2f} s ({r['rate']:,.0f} impacts/s)",
+                    verdict,
+                ]
+            )
         label = "billiard run parabola-5.4hz --collisions 1 --no-plot"
         med = t["startup"][label]["median"]
-        rows.append(["start-up < 1 s", f"{med:.2f} s",
-                     "met" if med < 1.0 else f"missed by {med - 1:.2f} s"])
+        rows.append(
+            ["start-up < 1 s", f"{med:.2f} s", "met" if med < 1.0 else f"missed by {med - 1:.2f} s"]
+        )
         big = max(t["memory"], key=lambda m: m["impacts"])
-        rows.append([f"peak memory < 200 MB ({big['impacts']:,} impacts)",
-                     f"{big['peak_mb']:.0f} MB",
-                     "met" if big["peak_mb"] < 200 else "missed"])
+        rows.append(
+            [
+                f"peak memory < 200 MB ({big['impacts']:,} impacts)",
+                f"{big['peak_mb']:.0f} MB",
+                "met" if big["peak_mb"] < 200 else "missed",
+            ]
+        )
     if "workprecision" in s:
         ratios = speed_ratios(s["workprecision"])
         for method in dict.fromkeys(r["method"] for r in ratios):
@@ -93,8 +111,10 @@ def speed_verdict(r: dict) -> str:
 
 def speed_target(method: str, ratios: list[dict]) -> list[str]:
     """A targets-table row: the ratio per scene and drag setting, and the verdict."""
-    cases = [f"{r['scene']} {'on' if r['drag'] == 'fowles' else 'off'}: {speed_verdict(r)}"
-             for r in ratios]
+    cases = [
+        f"{r['scene']} {'on' if r['drag'] == 'fowles' else 'off'}: {speed_verdict(r)}"
+        for r in ratios
+    ]
     both = [r["ratio"] for r in ratios if "x" in speed_verdict(r)]
     short = [x for x in both if x < SPEED_TARGET]
     if not both:
@@ -102,11 +122,12 @@ def speed_target(method: str, ratios: list[dict]) -> list[str]:
     elif not short:
         verdict = "met"
     else:
-        verdict = (f"missed in {len(short)} of {len(both)} comparable cases: "
-                   f"{min(short):.1f}x to {max(short):.1f}x, up to {SPEED_TARGET / min(short):.0f}x"
-                   " short")
-    return [f">= 30x faster than {method} at equal accuracy (1e-9 s)", "; ".join(cases),
-            verdict]
+        verdict = (
+            f"missed in {len(short)} of {len(both)} comparable cases: "
+            f"{min(short):.1f}x to {max(short):.1f}x, up to {SPEED_TARGET / min(short):.0f}x"
+            " short"
+        )
+    return [f">= 30x faster than {method} at equal accuracy (1e-9 s)", "; ".join(cases), verdict]
 
 
 # ---------------------------------------------------------------------------- sections
@@ -118,8 +139,13 @@ def section_workprecision(wp: dict, command: str) -> str:
     for scene in wp["scenes"]:
         name = scene["scene"]
         parts.append(f"### {name}\n")
-        parts.append(figure(f"workprecision-{name}.png", f"work-precision {name}",
-                            f"{command} --only workprecision"))
+        parts.append(
+            figure(
+                f"workprecision-{name}.png",
+                f"work-precision {name}",
+                f"{command} --only workprecision",
+            )
+        )
         header = ["drag", "method", "setting", "CPU s / 1000 impacts"]
         header += [f"time err. @{k} (s)" for k in checkpoints]
         header += [f"point err. @{k} (m)" for k in checkpoints] + ["note"]
@@ -128,37 +154,57 @@ def section_workprecision(wp: dict, command: str) -> str:
             note = r["stop"][:50] if r["stop"] else ""
             if r["method"] == "event" and r["drag"] == "none":
                 note = "the reference"
-            rows.append(["on" if r["drag"] == "fowles" else "off", r["method"], r["setting"],
-                         num(r["cpu_per_1000"], 3)]
-                        + [num(r["errors"]["t"][k]) for k in checkpoints]
-                        + [num(r["errors"]["pos"][k]) for k in checkpoints] + [note])
+            rows.append(
+                [
+                    "on" if r["drag"] == "fowles" else "off",
+                    r["method"],
+                    r["setting"],
+                    num(r["cpu_per_1000"], 3),
+                ]
+                + [num(r["errors"]["t"][k]) for k in checkpoints]
+                + [num(r["errors"]["pos"][k]) for k in checkpoints]
+                + [note]
+            )
         floor = scene["floor"]
         for drag in ("fowles", "none"):
-            rows.append(["on" if drag == "fowles" else "off", "start moved by 1e-15 m", "", ""]
-                        + [num(floor[drag]["t"][k]) for k in checkpoints]
-                        + [num(floor[drag]["pos"][k]) for k in checkpoints]
-                        + ["chaos floor"])
+            rows.append(
+                ["on" if drag == "fowles" else "off", "start moved by 1e-15 m", "", ""]
+                + [num(floor[drag]["t"][k]) for k in checkpoints]
+                + [num(floor[drag]["pos"][k]) for k in checkpoints]
+                + ["chaos floor"]
+            )
         check = scene["reference"]["fowles"].get("dop853_check")
         if check:
-            rows.append(["on", "DOP853 careful rtol 1e-13", "vs reference", ""]
-                        + [num(check["t"][k]) for k in checkpoints]
-                        + [num(check["pos"][k]) for k in checkpoints] + ["reference check"])
+            rows.append(
+                ["on", "DOP853 careful rtol 1e-13", "vs reference", ""]
+                + [num(check["t"][k]) for k in checkpoints]
+                + [num(check["pos"][k]) for k in checkpoints]
+                + ["reference check"]
+            )
         parts.append(table(header, rows) + "\n")
     ratio_rows = []
     for r in speed_ratios(wp):
-        ratio_rows.append([r["scene"], "on" if r["drag"] == "fowles" else "off", r["method"],
-                           f"{num(r['event']['cost'], 3)} ({r['event']['kind']})",
-                           f"{num(r['other']['cost'], 3)} ({r['other']['kind']})",
-                           speed_verdict(r)])
+        ratio_rows.append(
+            [
+                r["scene"],
+                "on" if r["drag"] == "fowles" else "off",
+                r["method"],
+                f"{num(r['event']['cost'], 3)} ({r['event']['kind']})",
+                f"{num(r['other']['cost'], 3)} ({r['other']['kind']})",
+                speed_verdict(r),
+            ]
+        )
     parts.append("### Cost at equal accuracy\n")
     parts.append(
         f"CPU s per 1,000 impacts at which each method reaches an impact-time error of "
         f"1e-9 s after {checkpoints[0]} impacts (log-log interpolation between the two "
-        "settings that bracket it; \"cheapest setting\" when every setting is already "
-        "better; \"not reached\" when none is, with the cost of its most accurate "
-        "setting).\n")
-    parts.append(table(["scene", "drag", "method", "default method", "method", "ratio"],
-                       ratio_rows) + "\n")
+        'settings that bracket it; "cheapest setting" when every setting is already '
+        'better; "not reached" when none is, with the cost of its most accurate '
+        "setting).\n"
+    )
+    parts.append(
+        table(["scene", "drag", "method", "default method", "method", "ratio"], ratio_rows) + "\n"
+    )
     return "\n".join(parts)
 
 
@@ -166,25 +212,75 @@ def section_failures(f: dict, command: str) -> str:
     parts = [figure("failures.png", "failures", f"{command} --only failures")]
     rows = []
     for r in f["rows"]:
-        rows.append([r["set"], "on" if r["drag"] == "fowles" else "off", r["method"],
-                     r["setting"], r["flights"], r["missed"], r["spurious"],
-                     num(r["penetration"]), num(r["median_dtau"]),
-                     num(r["median_energy"]), num(r["max_energy"])])
-    parts.append(table(["states", "drag", "method", "setting", "flights", "missed",
-                        "spurious", "deepest penetration (m)", "median abs(dt) (s)",
-                        "median rel. energy error", "max rel. energy error"], rows) + "\n")
+        rows.append(
+            [
+                r["set"],
+                "on" if r["drag"] == "fowles" else "off",
+                r["method"],
+                r["setting"],
+                r["flights"],
+                r["missed"],
+                r["spurious"],
+                num(r["penetration"]),
+                num(r["median_dtau"]),
+                num(r["median_energy"]),
+                num(r["max_energy"]),
+            ]
+        )
+    parts.append(
+        table(
+            [
+                "states",
+                "drag",
+                "method",
+                "setting",
+                "flights",
+                "missed",
+                "spurious",
+                "deepest penetration (m)",
+                "median abs(dt) (s)",
+                "median rel. energy error",
+                "max rel. energy error",
+            ],
+            rows,
+        )
+        + "\n"
+    )
     parts.append("### The low-velocity rule\n")
     parts.append(figure("low-velocity.png", "low-velocity rule", f"{command} --only failures"))
     rows = []
     for r in f["thresholds"]:
         ended = "collapse" if r["collapse"] else (r["stop"][:40] or "ran to the end")
-        rows.append([r["scene"], r["start"], num(r["elastic_below"]), r["impacts"],
-                     num(r["sim_time"], 3), num(r["rate"], 3),
-                     f"{100 * r['elastic']:.0f} %" if math.isfinite(r["elastic"]) else "-",
-                     num(r["mean_q2"], 3), ended])
-    parts.append(table(["scene", "start", "elastic_below (m/s)", "impacts",
-                        "simulated time (s)", "impacts per simulated s", "elastic impacts",
-                        "mean q2 (m)", "end"], rows) + "\n")
+        rows.append(
+            [
+                r["scene"],
+                r["start"],
+                num(r["elastic_below"]),
+                r["impacts"],
+                num(r["sim_time"], 3),
+                num(r["rate"], 3),
+                f"{100 * r['elastic']:.0f} %" if math.isfinite(r["elastic"]) else "-",
+                num(r["mean_q2"], 3),
+                ended,
+            ]
+        )
+    parts.append(
+        table(
+            [
+                "scene",
+                "start",
+                "elastic_below (m/s)",
+                "impacts",
+                "simulated time (s)",
+                "impacts per simulated s",
+                "elastic impacts",
+                "mean q2 (m)",
+                "end",
+            ],
+            rows,
+        )
+        + "\n"
+    )
     return "\n".join(parts)
 
 
@@ -204,25 +300,47 @@ def section_ladder(lad: dict, command: str) -> str:
         full = mine[0]
         body = []
         for r in mine:
-            orbit = (f"{1e3 * r['orbit_height']:.2f} mm" if r.get("orbit_height") is not None
-                     else "none")
+            orbit = (
+                f"{1e3 * r['orbit_height']:.2f} mm" if r.get("orbit_height") is not None else "none"
+            )
             verdict = "" if r is full else ladder_mod.verdict(r, full)
             if r.get("collapsed"):
                 orbit = "collapse"
             if r["variant"].endswith("started in flight"):
                 verdict = f"{verdict} (vs full from rest)" if verdict else ""
-            body.append([r["variant"], r["impacts"], orbit,
-                         _pm(r, "mean_q2", "se_q2", 1e3, 2),
-                         f"{1e3 * r['std_q2']:.2f}" if "std_q2" in r else "-",
-                         _pm(r, "above", "se_above", 1.0, 3),
-                         _pm(r, "mean_tof", "se_tof", 1e3, 2),
-                         f"{100 * r['elastic']:.0f} %" if "elastic" in r else "-",
-                         f"{r['wall_time']:.2f} s ({r['wall_time'] / full['wall_time']:.2f}x)",
-                         verdict or r["stop"][:40]])
+            body.append(
+                [
+                    r["variant"],
+                    r["impacts"],
+                    orbit,
+                    _pm(r, "mean_q2", "se_q2", 1e3, 2),
+                    f"{1e3 * r['std_q2']:.2f}" if "std_q2" in r else "-",
+                    _pm(r, "above", "se_above", 1.0, 3),
+                    _pm(r, "mean_tof", "se_tof", 1e3, 2),
+                    f"{100 * r['elastic']:.0f} %" if "elastic" in r else "-",
+                    f"{r['wall_time']:.2f} s ({r['wall_time'] / full['wall_time']:.2f}x)",
+                    verdict or r["stop"][:40],
+                ]
+            )
         parts.append(f"### {name}\n")
-        parts.append(table(["model", "impacts", "period-one orbit q2", "mean q2 (mm)",
-                            "std q2 (mm)", "fraction above diagonal", "mean time of flight (ms)",
-                            "elastic impacts", "wall time (vs full)", "verdict"], body) + "\n")
+        parts.append(
+            table(
+                [
+                    "model",
+                    "impacts",
+                    "period-one orbit q2",
+                    "mean q2 (mm)",
+                    "std q2 (mm)",
+                    "fraction above diagonal",
+                    "mean time of flight (ms)",
+                    "elastic impacts",
+                    "wall time (vs full)",
+                    "verdict",
+                ],
+                body,
+            )
+            + "\n"
+        )
     return "\n".join(parts)
 
 
@@ -233,53 +351,95 @@ def recommendations(lad: dict) -> str:
         mine = [r for r in rows if r["scene"] == name]
         full = mine[0]
         terms = [r for r in mine[1:] if not r["variant"].endswith("in flight")]
-        hits = [r for r in terms
-                if ladder_mod.verdict(r, full).startswith(("no change", "small"))]
-        items = "; ".join(f"{r['variant']}: {ladder_mod.verdict(r, full)}, wall time "
-                          f"{r['wall_time'] / full['wall_time']:.2f}x of the full model"
-                          for r in hits)
+        hits = [r for r in terms if ladder_mod.verdict(r, full).startswith(("no change", "small"))]
+        items = "; ".join(
+            f"{r['variant']}: {ladder_mod.verdict(r, full)}, wall time "
+            f"{r['wall_time'] / full['wall_time']:.2f}x of the full model"
+            for r in hits
+        )
         lines.append(f"- **{name}**: " + (items or "every term changes what is reported") + ".")
     return "\n".join(lines)
 
 
 def section_throughput(t: dict, command: str) -> str:
     parts = [figure("throughput.png", "throughput and memory", f"{command} --only throughput")]
-    rows = [[r["scene"], "on" if r["drag"] == "fowles" else "off", r["impacts"],
-             ", ".join(f"{x:.2f}" for x in r["times"]), f"{r['median']:.2f}",
-             f"{r['cpu']:.2f}" if "cpu" in r else "-",
-             f"{r['rate']:,.0f}", f"{r['per_25000']:.2f}"] for r in t["rates"]]
-    parts.append(table(["scene", "drag", "impacts per run", "wall times (s)", "median wall (s)",
-                        "median CPU (s)", "impacts / s of wall time", "s per 25,000"], rows)
-                 + "\n")
+    rows = [
+        [
+            r["scene"],
+            "on" if r["drag"] == "fowles" else "off",
+            r["impacts"],
+            ", ".join(f"{x:.2f}" for x in r["times"]),
+            f"{r['median']:.2f}",
+            f"{r['cpu']:.2f}" if "cpu" in r else "-",
+            f"{r['rate']:,.0f}",
+            f"{r['per_25000']:.2f}",
+        ]
+        for r in t["rates"]
+    ]
+    parts.append(
+        table(
+            [
+                "scene",
+                "drag",
+                "impacts per run",
+                "wall times (s)",
+                "median wall (s)",
+                "median CPU (s)",
+                "impacts / s of wall time",
+                "s per 25,000",
+            ],
+            rows,
+        )
+        + "\n"
+    )
     ratios = []
     for on in (r for r in t["rates"] if r["drag"] == "fowles"):
-        off = next((r for r in t["rates"] if r["scene"] == on["scene"] and r["drag"] == "none"),
-                   None)
+        off = next(
+            (r for r in t["rates"] if r["scene"] == on["scene"] and r["drag"] == "none"), None
+        )
         if off:
             ratios.append(f"{on['scene']} {on['median'] / off['median']:.1f}x")
     if ratios:
-        parts.append("Drag on costs, relative to drag off (same run): " + ", ".join(ratios)
-                     + ".\n")
+        parts.append("Drag on costs, relative to drag off (same run): " + ", ".join(ratios) + ".\n")
     parts.append("Start-up, wall time of a fresh process (median):\n")
-    rows = [[f"`{label}`", ", ".join(f"{x:.2f}" for x in v["times"]), f"{v['median']:.2f}"]
-            for label, v in t["startup"].items() if label != "imports"]
+    rows = [
+        [f"`{label}`", ", ".join(f"{x:.2f}" for x in v["times"]), f"{v['median']:.2f}"]
+        for label, v in t["startup"].items()
+        if label != "imports"
+    ]
     parts.append(table(["command", "runs (s)", "median (s)"], rows) + "\n")
-    parts.append("Slowest top-level imports of that `billiard run` (`python -X importtime`, "
-                 "cumulative):\n")
-    rows = [[f"`{r['module']}`", f"{r['cumulative_us'] / 1e3:.0f}"]
-            for r in t["startup"]["imports"]]
+    parts.append(
+        "Slowest top-level imports of that `billiard run` (`python -X importtime`, cumulative):\n"
+    )
+    rows = [
+        [f"`{r['module']}`", f"{r['cumulative_us'] / 1e3:.0f}"] for r in t["startup"]["imports"]
+    ]
     parts.append(table(["module", "ms"], rows) + "\n")
-    parts.append("Peak memory of a fresh process running `wedge-6.6hz` with the rows "
-                 "streamed to `collisions.csv`:\n")
-    rows = [[f"{m['impacts']:,}" if m["impacts"] else "0 (imports only)",
-             f"{m['peak_mb']:.1f}", f"{m['maxrss_mb']:.1f}", f"{m['wall']:.1f}",
-             f"{m['csv_mb']:.0f}"]
-            for m in t["memory"]]
-    parts.append(table(["impacts", "peak RSS, VmHWM (MB)", "ru_maxrss (MB)", "wall time (s)",
-                        "CSV size (MB)"], rows) + "\n")
+    parts.append(
+        "Peak memory of a fresh process running `wedge-6.6hz` with the rows "
+        "streamed to `collisions.csv`:\n"
+    )
+    rows = [
+        [
+            f"{m['impacts']:,}" if m["impacts"] else "0 (imports only)",
+            f"{m['peak_mb']:.1f}",
+            f"{m['maxrss_mb']:.1f}",
+            f"{m['wall']:.1f}",
+            f"{m['csv_mb']:.0f}",
+        ]
+        for m in t["memory"]
+    ]
+    parts.append(
+        table(
+            ["impacts", "peak RSS, VmHWM (MB)", "ru_maxrss (MB)", "wall time (s)", "CSV size (MB)"],
+            rows,
+        )
+        + "\n"
+    )
     big = max(t["memory"], key=lambda m: m["impacts"])
-    mem = next((r for r in t["rates"] if r["scene"] == "wedge-6.6hz" and r["drag"] == "fowles"),
-               None)
+    mem = next(
+        (r for r in t["rates"] if r["scene"] == "wedge-6.6hz" and r["drag"] == "fowles"), None
+    )
     if big["impacts"] and mem:
         small = min((m for m in t["memory"] if m["impacts"]), key=lambda m: m["impacts"])
         parts.append(
@@ -293,27 +453,37 @@ def section_throughput(t: dict, command: str) -> str:
             "through `csv.writer`). `ru_maxrss` (the brief's measure) is not usable here: on "
             "Linux it keeps the peak of the address space the process had before `exec`, "
             "i.e. of the benchmark process that forked it; `VmHWM` from `/proc/self/status` "
-            "is the peak of the process's own address space.\n")
+            "is the peak of the process's own address space.\n"
+        )
     return "\n".join(parts)
 
 
 def loads(results: dict) -> str:
     """Load average (1 min) at the end of each section: how busy the machine was."""
-    items = [f"{name} {v['load'][0]:.1f}" for name, v in results["sections"].items()
-             if "load" in v]
-    return ("Load average at the end of each section: " + ", ".join(items) + ".\n"
-            if items else "")
+    items = [f"{name} {v['load'][0]:.1f}" for name, v in results["sections"].items() if "load" in v]
+    return "Load average at the end of each section: " + ", ".join(items) + ".\n" if items else ""
 
 
 def section_profile(p: dict) -> str:
     parts = []
     for prof in p["profiles"]:
-        parts.append(f"**{prof['scene']}**, {prof['impacts']:,} impacts, "
-                     f"{prof['total']:.2f} s under the profiler:\n")
-        rows = [[f"`{r['function']}`", f"{r['calls']:,}", f"{r['own']:.2f}",
-                 f"{r['cumulative']:.2f}", f"{100 * r['share']:.0f} %"] for r in prof["top"]]
-        parts.append(table(["function", "calls", "own s", "cumulative s", "own share"], rows)
-                     + "\n")
+        parts.append(
+            f"**{prof['scene']}**, {prof['impacts']:,} impacts, "
+            f"{prof['total']:.2f} s under the profiler:\n"
+        )
+        rows = [
+            [
+                f"`{r['function']}`",
+                f"{r['calls']:,}",
+                f"{r['own']:.2f}",
+                f"{r['cumulative']:.2f}",
+                f"{100 * r['share']:.0f} %",
+            ]
+            for r in prof["top"]
+        ]
+        parts.append(
+            table(["function", "calls", "own s", "cumulative s", "own share"], rows) + "\n"
+        )
     return "\n".join(parts)
 
 
@@ -322,38 +492,58 @@ def render(results: dict, command: str) -> str:
     from bench import text
 
     s = results["sections"]
-    out = [text.INTRO.format(command=command, mode=results["mode"], date=results["date"],
-                             machine=_machine(results["machine"]),
-                             elapsed=sum(v.get("elapsed", 0.0) for v in s.values()))]
+    out = [
+        text.INTRO.format(
+            command=command,
+            mode=results["mode"],
+            date=results["date"],
+            machine=_machine(results["machine"]),
+            elapsed=sum(v.get("elapsed", 0.0) for v in s.values()),
+        )
+    ]
     if results["mode"] == "quick":
-        out.append("**Quick mode**: every measurement is smaller (fewer impacts, settings and "
-                   "states); the prose between the tables describes the full run's findings.\n")
+        out.append(
+            "**Quick mode**: every measurement is smaller (fewer impacts, settings and "
+            "states); the prose between the tables describes the full run's findings.\n"
+        )
     out.append(loads(results))
     out.append("## Targets\n\n" + targets(results, command) + "\n\n" + text.TARGETS)
     if "workprecision" in s:
-        out.append(text.WORKPRECISION + "\n" + section_workprecision(s["workprecision"],
-                                                                     command))
+        out.append(text.WORKPRECISION + "\n" + section_workprecision(s["workprecision"], command))
     if "failures" in s:
-        out.append(text.FAILURES + "\n" + section_failures(s["failures"], command)
-                   + "\n" + text.FAILURES_AFTER)
+        out.append(
+            text.FAILURES
+            + "\n"
+            + section_failures(s["failures"], command)
+            + "\n"
+            + text.FAILURES_AFTER
+        )
     if "ladder" in s:
-        out.append(text.LADDER + "\n" + section_ladder(s["ladder"], command)
-                   + "\n### Recommendation\n\n" + RECOMMENDATION_INTRO
-                   + recommendations(s["ladder"]) + "\n\n"
-                   + text.LADDER_AFTER)
+        out.append(
+            text.LADDER
+            + "\n"
+            + section_ladder(s["ladder"], command)
+            + "\n### Recommendation\n\n"
+            + RECOMMENDATION_INTRO
+            + recommendations(s["ladder"])
+            + "\n\n"
+            + text.LADDER_AFTER
+        )
     if "throughput" in s:
         out.append(text.THROUGHPUT + "\n" + section_throughput(s["throughput"], command))
     if "profile" in s:
-        out.append(text.PROFILE + "\n" + section_profile(s["profile"]) + "\n"
-                   + text.PROFILE_AFTER)
+        out.append(text.PROFILE + "\n" + section_profile(s["profile"]) + "\n" + text.PROFILE_AFTER)
     return "\n".join(out).rstrip() + "\n"
 
 
-RECOMMENDATION_INTRO = ("Terms whose removal changes nothing (or little) in what the paper "
-                        "reports, per scene:\n\n")
+RECOMMENDATION_INTRO = (
+    "Terms whose removal changes nothing (or little) in what the paper reports, per scene:\n\n"
+)
 
 
 def _machine(m: dict) -> str:
     load = ", ".join(f"{x:.1f}" for x in m["load"])
-    return (f"Python {m['python']} on {m['platform']} ({m['cpus']} CPUs, load average "
-            f"{load} (1, 5, 15 min) at the end); code: {m.get('code', 'unknown')}")
+    return (
+        f"Python {m['python']} on {m['platform']} ({m['cpus']} CPUs, load average "
+        f"{load} (1, 5, 15 min) at the end); code: {m.get('code', 'unknown')}"
+    )

@@ -44,10 +44,16 @@ def measure(section: str, cfg: Config, starts: Starts) -> dict:
             rows += ladder.measure_scene(name, cfg.ladder_impacts, starts[name])
         return {"rows": rows}
     if section == "throughput":
-        rates = [throughput.impact_rate(n, cfg.throughput_impacts, cfg.throughput_repeats, drag)
-                 for drag in ("fowles", "none") for n in cfg.scenes]
-        return {"rates": rates, "startup": throughput.startup(cfg.startup_repeats),
-                "memory": throughput.memory("wedge-6.6hz", cfg.memory_sizes)}
+        rates = [
+            throughput.impact_rate(n, cfg.throughput_impacts, cfg.throughput_repeats, drag)
+            for drag in ("fowles", "none")
+            for n in cfg.scenes
+        ]
+        return {
+            "rates": rates,
+            "startup": throughput.startup(cfg.startup_repeats),
+            "memory": throughput.memory("wedge-6.6hz", cfg.memory_sizes),
+        }
     if section == "profile":
         return {"profiles": [throughput.profile(n, cfg.profile_impacts) for n in cfg.scenes]}
     raise ValueError(f"unknown section {section!r}")
@@ -57,20 +63,26 @@ def draw(results: dict, figures: Path, command: str) -> None:
     sections = results["sections"]
     if "workprecision" in sections:
         for scene in sections["workprecision"]["scenes"]:
-            charts.work_precision(scene, figures / f"workprecision-{scene['scene']}.png",
-                                  f"{command} --only workprecision")
+            charts.work_precision(
+                scene,
+                figures / f"workprecision-{scene['scene']}.png",
+                f"{command} --only workprecision",
+            )
     if "failures" in sections:
         f = sections["failures"]
         charts.failures(f["rows"], figures / "failures.png", f"{command} --only failures")
-        charts.low_velocity(f["thresholds"], figures / "low-velocity.png",
-                            f"{command} --only failures")
+        charts.low_velocity(
+            f["thresholds"], figures / "low-velocity.png", f"{command} --only failures"
+        )
     if "ladder" in sections:
-        charts.ladder(sections["ladder"]["rows"], figures / "ladder.png",
-                      f"{command} --only ladder")
+        charts.ladder(
+            sections["ladder"]["rows"], figures / "ladder.png", f"{command} --only ladder"
+        )
     if "throughput" in sections:
         t = sections["throughput"]
-        charts.throughput(t["rates"], t["memory"], figures / "throughput.png",
-                          f"{command} --only throughput")
+        charts.throughput(
+            t["rates"], t["memory"], figures / "throughput.png", f"{command} --only throughput"
+        )
 
 
 def _plain(value):
@@ -80,20 +92,42 @@ def _plain(value):
 
 def machine() -> dict:
     load = os.getloadavg() if hasattr(os, "getloadavg") else (0.0, 0.0, 0.0)
-    return {"python": platform.python_version(), "platform": platform.platform(),
-            "processor": platform.processor() or platform.machine(),
-            "cpus": os.cpu_count(), "load": load, "code": code_version()}
+    return {
+        "python": platform.python_version(),
+        "platform": platform.platform(),
+        "processor": platform.processor() or platform.machine(),
+        "cpus": os.cpu_count(),
+        "load": load,
+        "code": code_version(),
+    }
 
 
 def code_version() -> str:
     """The git commit of the checkout, and whether the engine differs from it."""
     root = Path(__file__).resolve().parent.parent
     try:
-        head = subprocess.run(["git", "rev-parse", "--short", "HEAD"], cwd=root,
-                              capture_output=True, text=True, check=True).stdout.strip()
-        dirty = subprocess.run(["git", "status", "--porcelain", "billiard", "derivation",
-                                "generated", ":!billiard/bench.py"], cwd=root,
-                               capture_output=True, text=True, check=True).stdout.strip()
+        head = subprocess.run(
+            ["git", "rev-parse", "--short", "HEAD"],
+            cwd=root,
+            capture_output=True,
+            text=True,
+            check=True,
+        ).stdout.strip()
+        dirty = subprocess.run(
+            [
+                "git",
+                "status",
+                "--porcelain",
+                "billiard",
+                "derivation",
+                "generated",
+                ":!billiard/bench.py",
+            ],
+            cwd=root,
+            capture_output=True,
+            text=True,
+            check=True,
+        ).stdout.strip()
     except (OSError, subprocess.CalledProcessError):
         return "unknown"
     return f"commit {head}" + (" with local changes to the engine" if dirty else "")
@@ -108,8 +142,11 @@ def main(cfg: Config, out: Path, only: tuple[str, ...] = SECTIONS) -> Path:
     results = json.loads(saved.read_text()) if saved.exists() and only != SECTIONS else {}
     results.setdefault("sections", {})
     if only:
-        results.update(mode="quick" if cfg.quick else "full", machine=machine(),
-                       date=time.strftime("%Y-%m-%d %H:%M"))
+        results.update(
+            mode="quick" if cfg.quick else "full",
+            machine=machine(),
+            date=time.strftime("%Y-%m-%d %H:%M"),
+        )
     starts = Starts(cfg)
     command = "billiard bench --quick" if cfg.quick else "billiard bench"
     for section in only:

@@ -46,9 +46,16 @@ def impact_rate(name: str, impacts: int, repeats: int, drag: str = "fowles") -> 
         cpus.append(time.process_time() - cpu0)
         assert not stop and len(recorder) == impacts, stop
     median = statistics.median(times)
-    return {"scene": name, "drag": drag, "impacts": impacts, "times": times,
-            "median": median, "cpu": statistics.median(cpus), "rate": impacts / median,
-            "per_25000": 25000 * median / impacts}
+    return {
+        "scene": name,
+        "drag": drag,
+        "impacts": impacts,
+        "times": times,
+        "median": median,
+        "cpu": statistics.median(cpus),
+        "rate": impacts / median,
+        "per_25000": 25000 * median / impacts,
+    }
 
 
 def billiard_command() -> list[str]:
@@ -69,9 +76,8 @@ def startup(repeats: int) -> dict:
     commands = {
         "python -c pass": [py, "-c", "pass"],
         "import billiard.simulate": [py, "-c", "import billiard.simulate, billiard.scene"],
-        "billiard run parabola-5.4hz --collisions 1 --no-plot":
-            billiard_command() + ["run", "parabola-5.4hz", "--collisions", "1", "--no-plot",
-                                  "--out", "run"],
+        "billiard run parabola-5.4hz --collisions 1 --no-plot": billiard_command()
+        + ["run", "parabola-5.4hz", "--collisions", "1", "--no-plot", "--out", "run"],
     }
     out: dict = {}
     with tempfile.TemporaryDirectory() as tmp:
@@ -85,8 +91,20 @@ def startup(repeats: int) -> dict:
 def import_times(cwd: str, top: int = 8) -> list[dict]:
     """The slowest top-level imports (cumulative) of ``billiard run parabola-5.4hz
     --collisions 1 --no-plot``, from ``python -X importtime``."""
-    command = [sys.executable, "-X", "importtime", "-m", "billiard.cli", "run",
-               "parabola-5.4hz", "--collisions", "1", "--no-plot", "--out", "run"]
+    command = [
+        sys.executable,
+        "-X",
+        "importtime",
+        "-m",
+        "billiard.cli",
+        "run",
+        "parabola-5.4hz",
+        "--collisions",
+        "1",
+        "--no-plot",
+        "--out",
+        "run",
+    ]
     done = subprocess.run(command, cwd=cwd, capture_output=True, text=True, check=True)
     rows = []
     for line in done.stderr.splitlines():
@@ -110,17 +128,24 @@ def memory(name: str, sizes: tuple[int, ...]) -> list[dict]:
         try:
             done = subprocess.run(
                 [sys.executable, "-c", _MEMORY_SCRIPT, str(n), tmp, name],
-                capture_output=True, text=True, check=True,
+                capture_output=True,
+                text=True,
+                check=True,
             )
             hwm, kib, seconds = done.stdout.split()
             size = (Path(tmp) / "collisions.csv").stat().st_size if n else 0
         finally:
             shutil.rmtree(tmp, ignore_errors=True)
-        rows.append({"impacts": n, "peak_mb": int(hwm) / 1024.0,
-                     "maxrss_mb": int(kib) / 1024.0, "wall": float(seconds),
-                     "csv_mb": size / 1e6})
-        print(f"  memory {name} {n}: {int(hwm) / 1024:.1f} MB, {float(seconds):.1f} s",
-              flush=True)
+        rows.append(
+            {
+                "impacts": n,
+                "peak_mb": int(hwm) / 1024.0,
+                "maxrss_mb": int(kib) / 1024.0,
+                "wall": float(seconds),
+                "csv_mb": size / 1e6,
+            }
+        )
+        print(f"  memory {name} {n}: {int(hwm) / 1024:.1f} MB, {float(seconds):.1f} s", flush=True)
     return rows
 
 
@@ -135,7 +160,14 @@ def profile(name: str, impacts: int, top: int = 12) -> dict:
     total = stats.total_tt
     rows = []
     for (file, line, func), (_, calls, own, cumulative, _) in stats.stats.items():
-        rows.append({"function": f"{Path(file).name}:{line}({func})", "calls": calls,
-                     "own": own, "cumulative": cumulative, "share": own / total})
+        rows.append(
+            {
+                "function": f"{Path(file).name}:{line}({func})",
+                "calls": calls,
+                "own": own,
+                "cumulative": cumulative,
+                "share": own / total,
+            }
+        )
     rows.sort(key=lambda r: -r["own"])
     return {"scene": name, "impacts": len(result), "total": total, "top": rows[:top]}

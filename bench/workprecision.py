@@ -94,9 +94,12 @@ def measure_scene(name: str, cfg: Config) -> dict:
                     "errors": errors(run, ref, cfg.checkpoints),
                 }
             )
-            print(f"  {name} drag={drag} {method} {label}: {done} impacts, "
-                  f"{1000 * cpu / max(done, 1):.3g} s/1000, "
-                  f"t-err {out['rows'][-1]['errors']['t']}", flush=True)
+            print(
+                f"  {name} drag={drag} {method} {label}: {done} impacts, "
+                f"{1000 * cpu / max(done, 1):.3g} s/1000, "
+                f"t-err {out['rows'][-1]['errors']['t']}",
+                flush=True,
+            )
     return out
 
 

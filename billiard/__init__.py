@@ -40,9 +40,20 @@ _EXPORTS = {
 }
 
 __all__ = [
-    "Result", "Scene", "SceneError", "builtin_scenes", "calibrate", "camera_filter",
-    "load_curve", "load_scene", "plot_run", "read_collisions", "scene_from_dict",
-    "scene_to_toml", "simulate", "with_values",
+    "Result",
+    "Scene",
+    "SceneError",
+    "builtin_scenes",
+    "calibrate",
+    "camera_filter",
+    "load_curve",
+    "load_scene",
+    "plot_run",
+    "read_collisions",
+    "scene_from_dict",
+    "scene_to_toml",
+    "simulate",
+    "with_values",
 ]
 
 

@@ -107,9 +107,7 @@ def _next_impact(sim: Simulation, state: BallState) -> BallState:
         raise _Stopped(reason or "no impact recorded")
     row = rows.row
     t = float(row[_T])
-    return BallState(
-        t, sim.drive.angle(t), row[_Q1], row[_Q2], row[_U1], row[_U2], row[_U3], 0.0
-    )
+    return BallState(t, sim.drive.angle(t), row[_Q1], row[_Q2], row[_U1], row[_U2], row[_U3], 0.0)
 
 
 def _advance(sim: Simulation, state: BallState, collisions: int) -> BallState:
@@ -123,9 +121,7 @@ def _advance(sim: Simulation, state: BallState, collisions: int) -> BallState:
         raise _Stopped(reason or "no impact recorded")
     row = rows.row
     t = float(row[_T])
-    return BallState(
-        t, sim.drive.angle(t), row[_Q1], row[_Q2], row[_U1], row[_U2], row[_U3], 0.0
-    )
+    return BallState(t, sim.drive.angle(t), row[_Q1], row[_Q2], row[_U1], row[_U2], row[_U3], 0.0)
 
 
 def lyapunov_exponent(

@@ -17,8 +17,9 @@ _SECTIONS = ("workprecision", "failures", "ladder", "throughput", "profile")
 def _bench_package():
     root = Path(__file__).resolve().parent.parent
     if not (root / "bench" / "run.py").exists():
-        raise SystemExit("billiard bench: needs a source checkout (the bench/ folder beside "
-                         "billiard/)")
+        raise SystemExit(
+            "billiard bench: needs a source checkout (the bench/ folder beside billiard/)"
+        )
     if str(root) not in sys.path:
         sys.path.insert(0, str(root))
     import bench.run
@@ -31,22 +32,35 @@ def _sections(text: str) -> tuple[str, ...]:
     unknown = [s for s in chosen if s not in _SECTIONS]
     if unknown or not chosen:
         raise argparse.ArgumentTypeError(
-            f"unknown section {', '.join(unknown) or text!r}: choose from {', '.join(_SECTIONS)}")
+            f"unknown section {', '.join(unknown) or text!r}: choose from {', '.join(_SECTIONS)}"
+        )
     return chosen
 
 
 def add_bench_arguments(parser: argparse.ArgumentParser) -> None:
-    parser.add_argument("--quick", action="store_true",
-                        help="small sizes, under 2 minutes (default output runs/bench-quick)")
-    parser.add_argument("--only", type=_sections, metavar="SECTIONS",
-                        help=f"comma-separated sections to measure again ({', '.join(_SECTIONS)});"
-                             " the others are taken from the saved results")
-    parser.add_argument("--render", action="store_true",
-                        help="measure nothing: redraw the figures and rewrite the page from the "
-                             "saved results")
-    parser.add_argument("--out", metavar="DIR",
-                        help="where performance.md and figures/performance/ go (default docs, "
-                             "or runs/bench-quick with --quick)")
+    parser.add_argument(
+        "--quick",
+        action="store_true",
+        help="small sizes, under 2 minutes (default output runs/bench-quick)",
+    )
+    parser.add_argument(
+        "--only",
+        type=_sections,
+        metavar="SECTIONS",
+        help=f"comma-separated sections to measure again ({', '.join(_SECTIONS)});"
+        " the others are taken from the saved results",
+    )
+    parser.add_argument(
+        "--render",
+        action="store_true",
+        help="measure nothing: redraw the figures and rewrite the page from the saved results",
+    )
+    parser.add_argument(
+        "--out",
+        metavar="DIR",
+        help="where performance.md and figures/performance/ go (default docs, "
+        "or runs/bench-quick with --quick)",
+    )
 
 
 def run_bench(args: argparse.Namespace) -> int:

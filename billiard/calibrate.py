@@ -45,8 +45,14 @@ class Orbit:
     impacts_to_lock: int  # impacts before the orbit was reached
 
 
-def find_period_one(columns: dict[str, np.ndarray], mass: float, gravity: float, *,
-                    window: int = 40, tol: float = 1e-6) -> Orbit | None:
+def find_period_one(
+    columns: dict[str, np.ndarray],
+    mass: float,
+    gravity: float,
+    *,
+    window: int = 40,
+    tol: float = 1e-6,
+) -> Orbit | None:
     """The period-one orbit at the end of a run, or None if the run did not lock.
 
     Locked means the last ``window`` impacts have one height and one time of flight, to
@@ -111,9 +117,17 @@ class Calibration:
         }
 
 
-def calibrate(scene: Scene, parameter: str, target_height: float, *,
-              low: float | None = None, high: float | None = None, points: int = 9,
-              impacts: int = 1500, xtol: float = 1e-7) -> Calibration:
+def calibrate(
+    scene: Scene,
+    parameter: str,
+    target_height: float,
+    *,
+    low: float | None = None,
+    high: float | None = None,
+    points: int = 9,
+    impacts: int = 1500,
+    xtol: float = 1e-7,
+) -> Calibration:
     """Value of ``parameter`` for which the ball locks into a period-one orbit at
     ``target_height`` (m), starting from the scene's initial state.
 
@@ -144,15 +158,18 @@ def calibrate(scene: Scene, parameter: str, target_height: float, *,
         heights = ", ".join(f"{v:.4g}: {'none' if h is None else f'{h:.4f} m'}" for v, h in scan)
         raise CalibrationError(
             f"no period-one orbit at {target_height} m for {parameter} in [{low:.4g}, "
-            f"{high:.4g}] (orbit heights: {heights})")
+            f"{high:.4g}] (orbit heights: {heights})"
+        )
 
     def miss(v: float) -> float:
         nonlocal evaluations
         evaluations += 1
         orbit = orbit_for(scene, parameter, v, impacts)
         if orbit is None:
-            raise CalibrationError(f"{parameter} = {v:.6g}: the ball did not lock into a "
-                                   f"period-one orbit within {impacts} impacts")
+            raise CalibrationError(
+                f"{parameter} = {v:.6g}: the ball did not lock into a "
+                f"period-one orbit within {impacts} impacts"
+            )
         return orbit.height - target_height
 
     value = float(brentq(miss, *bracket, xtol=xtol))
@@ -168,6 +185,7 @@ def _current_value(scene: Scene, parameter: str) -> float:
     except AttributeError:
         raise CalibrationError(f"unknown scene parameter {parameter!r}") from None
     if isinstance(value, bool) or not isinstance(value, (int, float)) or value <= 0:
-        raise CalibrationError(f"scene parameter {parameter!r} = {value!r} is not a positive "
-                               "number to calibrate")
+        raise CalibrationError(
+            f"scene parameter {parameter!r} = {value!r} is not a positive number to calibrate"
+        )
     return float(value)

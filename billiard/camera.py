@@ -31,7 +31,19 @@ __all__ = [
 
 #: Columns every ``collisions.csv`` has, in this order; more may follow.
 REQUIRED_COLUMNS: tuple[str, ...] = (
-    "n", "t", "q1", "q2", "v1", "v2", "omega", "u4", "un", "tof", "regime", "z", "energy",
+    "n",
+    "t",
+    "q1",
+    "q2",
+    "v1",
+    "v2",
+    "omega",
+    "u4",
+    "un",
+    "tof",
+    "regime",
+    "z",
+    "energy",
 )
 #: Columns read as strings; every other column is read as float.
 STRING_COLUMNS: frozenset[str] = frozenset({"regime"})
@@ -71,8 +83,11 @@ def read_collisions(path: str | os.PathLike[str]) -> dict[str, np.ndarray]:
     """
     try:
         with open(path, newline="", encoding="utf-8") as handle:
-            lines = [(number, line) for number, line in enumerate(handle, start=1)
-                     if line.strip() and not line.lstrip().startswith("#")]
+            lines = [
+                (number, line)
+                for number, line in enumerate(handle, start=1)
+                if line.strip() and not line.lstrip().startswith("#")
+            ]
     except FileNotFoundError:
         raise _fail(path, "file not found") from None
     except (OSError, UnicodeDecodeError) as exc:
@@ -91,8 +106,9 @@ def read_collisions(path: str | os.PathLike[str]) -> dict[str, np.ndarray]:
         raise _fail(path, f"not valid CSV: {exc}") from None
     missing = [name for name in REQUIRED_COLUMNS if name not in header]
     if missing:
-        raise _fail(path, f"missing column(s) {', '.join(missing)} "
-                          f"(header: {','.join(header)[:120]})")
+        raise _fail(
+            path, f"missing column(s) {', '.join(missing)} (header: {','.join(header)[:120]})"
+        )
     duplicated = sorted({name for name in header if header.count(name) > 1})
     if duplicated:
         raise _fail(path, f"duplicated column(s) {', '.join(duplicated)}")
@@ -117,18 +133,22 @@ def read_collisions(path: str | os.PathLike[str]) -> dict[str, np.ndarray]:
                     try:
                         float(cell)
                     except ValueError:
-                        raise _fail(path, f"line {number}: column {name}: {cell[:40]!r} "
-                                          "is not a number") from None
+                        raise _fail(
+                            path, f"line {number}: column {name}: {cell[:40]!r} is not a number"
+                        ) from None
             columns[name] = np.array(cells, dtype=str)
     if body and columns["t"].size > 1 and np.any(np.diff(columns["t"]) < 0):
         first = int(np.argmax(np.diff(columns["t"]) < 0)) + 1
-        raise _fail(path, f"line {lines[first + 1][0]}: impact times decrease "
-                          "(column t must be non-decreasing)")
+        raise _fail(
+            path,
+            f"line {lines[first + 1][0]}: impact times decrease (column t must be non-decreasing)",
+        )
     return columns
 
 
-def camera_filter(columns: Mapping[str, np.ndarray],
-                  frame_interval: float) -> dict[str, np.ndarray]:
+def camera_filter(
+    columns: Mapping[str, np.ndarray], frame_interval: float
+) -> dict[str, np.ndarray]:
     """The impacts a camera with the given frame interval would have recorded.
 
     The camera cannot tell apart impacts that follow one another within one frame
@@ -163,8 +183,9 @@ def camera_filter(columns: Mapping[str, np.ndarray],
     """
     interval = float(frame_interval)
     if not (math.isfinite(interval) and interval > 0):
-        raise ValueError(f"camera frame interval must be a positive number of seconds, "
-                         f"got {frame_interval!r}")
+        raise ValueError(
+            f"camera frame interval must be a positive number of seconds, got {frame_interval!r}"
+        )
     if "t" not in columns:
         raise ValueError("camera_filter: the columns have no impact time 't'")
     t = np.asarray(columns["t"], dtype=float)

@@ -41,6 +41,7 @@ def _user_errors() -> tuple[type[BaseException], ...]:
 
 # --- derive ----------------------------------------------------------------------------
 
+
 def cmd_derive(args: argparse.Namespace) -> int:
     from .derivation import build
 
@@ -53,9 +54,11 @@ def cmd_derive(args: argparse.Namespace) -> int:
         directory = Path(args.dir) if args.dir else user_curve_dir()
         started = time.perf_counter()
         path = build.derive_user_curve(args.name, args.curve, params, directory)
-        print(f"curve {args.name!r}: f(x) = {args.curve} -> {path} "
-              f"({time.perf_counter() - started:.1f} s); a scene can now use "
-              f"curve = \"{args.name}\"")
+        print(
+            f"curve {args.name!r}: f(x) = {args.curve} -> {path} "
+            f"({time.perf_counter() - started:.1f} s); a scene can now use "
+            f'curve = "{args.name}"'
+        )
         return 0
     if args.check:
         problems = build.check()
@@ -86,6 +89,7 @@ def _key_value(text: str, flag: str) -> tuple[str, float]:
 
 # --- scenes ----------------------------------------------------------------------------
 
+
 def cmd_scenes(args: argparse.Namespace) -> int:
     from .scene import builtin_scenes
 
@@ -97,6 +101,7 @@ def cmd_scenes(args: argparse.Namespace) -> int:
 
 
 # --- run -------------------------------------------------------------------------------
+
 
 class ProgressBar:
     """A one-line progress bar on a terminal; silent when stderr is not a terminal."""
@@ -118,8 +123,10 @@ class ProgressBar:
         frac = done / total if total else 1.0
         filled = int(self.width * frac)
         rate = done / max(now - self.started, 1e-9)
-        self.stream.write(f"\r[{'#' * filled}{'.' * (self.width - filled)}] "
-                          f"{done}/{total} impacts, {rate:,.0f}/s ")
+        self.stream.write(
+            f"\r[{'#' * filled}{'.' * (self.width - filled)}] "
+            f"{done}/{total} impacts, {rate:,.0f}/s "
+        )
         if done >= total:
             self.stream.write("\n")
         self.stream.flush()
@@ -142,33 +149,50 @@ def cmd_run(args: argparse.Namespace) -> int:
         try:
             if args.resume is not None:
                 if args.scene or args.set or args.method or args.out:
-                    raise UserError("run --resume DIR continues a run as it was set up: give no "
-                                    "SCENE, --out, --set or --method with it")
+                    raise UserError(
+                        "run --resume DIR continues a run as it was set up: give no "
+                        "SCENE, --out, --set or --method with it"
+                    )
                 out = Path(args.resume)
                 try:
-                    result = resume(out, collisions=args.collisions, progress=bar,
-                                    notify=lambda line: print(f"billiard: {line}", file=sys.stderr))
+                    result = resume(
+                        out,
+                        collisions=args.collisions,
+                        progress=bar,
+                        notify=lambda line: print(f"billiard: {line}", file=sys.stderr),
+                    )
                 except CheckpointError as exc:
                     raise UserError(f"cannot resume {out}: {exc}") from None
                 if result.already_finished:
                     if result.stop_reason:
-                        print(f"billiard: {out}: the run already stopped after impact "
-                              f"{len(result)}: {result.stop_reason}", file=sys.stderr)
+                        print(
+                            f"billiard: {out}: the run already stopped after impact "
+                            f"{len(result)}: {result.stop_reason}",
+                            file=sys.stderr,
+                        )
                         return 3
-                    print(f"billiard: {out}: the run is already complete ({len(result)} impacts); "
-                          f"nothing to resume (--collisions N extends it)")
+                    print(
+                        f"billiard: {out}: the run is already complete ({len(result)} impacts); "
+                        f"nothing to resume (--collisions N extends it)"
+                    )
                     return 0
             else:
                 if not args.scene:
-                    raise UserError("run: give a SCENE (a built-in name or a .toml file), or "
-                                    "--resume DIR")
+                    raise UserError(
+                        "run: give a SCENE (a built-in name or a .toml file), or --resume DIR"
+                    )
                 from .scene import load_scene
 
                 scene = load_scene(args.scene, overrides=args.set)
                 out = Path(args.out) if args.out else Path("runs") / scene.name
                 try:
-                    result = simulate(scene, collisions=args.collisions, method=args.method,
-                                      out_dir=out, progress=bar)
+                    result = simulate(
+                        scene,
+                        collisions=args.collisions,
+                        method=args.method,
+                        out_dir=out,
+                        progress=bar,
+                    )
                 except CheckpointError as exc:  # another process is writing a run in DIR
                     raise UserError(f"cannot run in {out}: {exc}") from None
         finally:  # end the progress bar's line before anything else is printed
@@ -177,11 +201,17 @@ def cmd_run(args: argparse.Namespace) -> int:
     except RunInterrupted as exc:
         where = exc.out_dir or Path(".")
         again = f"billiard run --resume {shlex.quote(str(where))}"
-        after = ("" if exc.checkpoint_rows == exc.rows
-                 else f" (it restarts after impact {exc.checkpoint_rows}, the last checkpoint)")
+        after = (
+            ""
+            if exc.checkpoint_rows == exc.rows
+            else f" (it restarts after impact {exc.checkpoint_rows}, the last checkpoint)"
+        )
         name = signal.Signals(exc.signum).name
-        print(f"billiard: interrupted ({name}): {exc.rows} impacts kept in "
-              f"{where / CSV_NAME}; continue with `{again}`{after}", file=sys.stderr)
+        print(
+            f"billiard: interrupted ({name}): {exc.rows} impacts kept in "
+            f"{where / CSV_NAME}; continue with `{again}`{after}",
+            file=sys.stderr,
+        )
         return 128 + exc.signum
     except OSError as exc:
         where = f": {exc.filename}" if exc.filename else ""
@@ -201,6 +231,7 @@ def cmd_run(args: argparse.Namespace) -> int:
 
 # --- calibrate -------------------------------------------------------------------------
 
+
 def cmd_calibrate(args: argparse.Namespace) -> int:
     import json
 
@@ -209,32 +240,48 @@ def cmd_calibrate(args: argparse.Namespace) -> int:
 
     scene = load_scene(args.scene, overrides=args.set)
     started = time.perf_counter()
-    result = calibrate(scene, args.parameter, args.target_height, low=args.low, high=args.high,
-                       impacts=args.impacts)
+    result = calibrate(
+        scene,
+        args.parameter,
+        args.target_height,
+        low=args.low,
+        high=args.high,
+        impacts=args.impacts,
+    )
     if args.json:
         print(json.dumps(result.as_dict()))
         return 0
     o = result.orbit
-    print(f"{args.parameter} = {result.value:.6g}  "
-          f"(period-one orbit at q2 = {o.height:.6f} m, target {args.target_height} m)")
-    print(f"orbit: time of flight {o.time_of_flight:.6f} s, locked after {o.impacts_to_lock} "
-          f"impacts from the scene's initial state, energy {o.energy:.4e} J")
-    print(f"normalized point (q2/q2max, u4/u4max) = ({o.q2_normalized:.4f}, "
-          f"+-{abs(o.u4_normalized):.4f})   paper: (0.376, +-0.0372)")
-    print("q2max = E/(m g), u4max = sqrt(2 E/m), E the mechanical energy after the impact "
-          "(potential zero at q2 = 0, spin included)")
+    print(
+        f"{args.parameter} = {result.value:.6g}  "
+        f"(period-one orbit at q2 = {o.height:.6f} m, target {args.target_height} m)"
+    )
+    print(
+        f"orbit: time of flight {o.time_of_flight:.6f} s, locked after {o.impacts_to_lock} "
+        f"impacts from the scene's initial state, energy {o.energy:.4e} J"
+    )
+    print(
+        f"normalized point (q2/q2max, u4/u4max) = ({o.q2_normalized:.4f}, "
+        f"+-{abs(o.u4_normalized):.4f})   paper: (0.376, +-0.0372)"
+    )
+    print(
+        "q2max = E/(m g), u4max = sqrt(2 E/m), E the mechanical energy after the impact "
+        "(potential zero at q2 = 0, spin included)"
+    )
     print(f"{result.evaluations} runs, {time.perf_counter() - started:.1f} s")
     return 0
 
 
 # --- plot ------------------------------------------------------------------------------
 
+
 def cmd_plot(args: argparse.Namespace) -> int:
     from .plot import plot_run
 
     window = _window(args.window) if args.window else None
-    paths = plot_run(Path(args.dir), frame_interval=args.frame_interval, window=window,
-                     gif=not args.no_gif)
+    paths = plot_run(
+        Path(args.dir), frame_interval=args.frame_interval, window=window, gif=not args.no_gif
+    )
     for path in paths:
         print(f"wrote {path}")
     return 0
@@ -255,8 +302,9 @@ def cmd_lyapunov(args: argparse.Namespace) -> int:
     from .scene import load_scene
 
     scene = load_scene(args.scene, overrides=args.set)
-    result = lyapunov_exponent(scene, impacts=args.impacts, transient=args.transient,
-                               d0=args.d0, method=args.method)
+    result = lyapunov_exponent(
+        scene, impacts=args.impacts, transient=args.transient, d0=args.d0, method=args.method
+    )
     print(format_lyapunov(result))
     return 0
 
@@ -275,109 +323,189 @@ def cmd_reproduce(args: argparse.Namespace) -> int:
 
 # --- entry point -----------------------------------------------------------------------
 
+
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog="billiard",
-        description="Driven gravitational billiard with a spinning, rubbing ball (SI units).")
+        description="Driven gravitational billiard with a spinning, rubbing ball (SI units).",
+    )
     sub = parser.add_subparsers(dest="command", required=True)
 
-    p = sub.add_parser("derive", help="regenerate the generated code from the derivation",
-                       description="Regenerate generated/ and docs/derivation.md, check them, "
-                                   "or derive a user's curve.")
-    p.add_argument("--check", action="store_true",
-                   help="verify that generated/ equals a fresh regeneration (exit 1 if not)")
+    p = sub.add_parser(
+        "derive",
+        help="regenerate the generated code from the derivation",
+        description="Regenerate generated/ and docs/derivation.md, check them, "
+        "or derive a user's curve.",
+    )
+    p.add_argument(
+        "--check",
+        action="store_true",
+        help="verify that generated/ equals a fresh regeneration (exit 1 if not)",
+    )
     p.add_argument("--name", help="name of a user curve to derive (with --curve)")
     p.add_argument("--curve", help="curve expression in x, metres, e.g. '30*x**4 + 0.0063'")
-    p.add_argument("--param", action="append", default=[], metavar="NAME=VALUE",
-                   help="value of a named parameter of --curve (repeatable)")
-    p.add_argument("--dir", help="where to write a user curve (default: the user curve "
-                                 "directory, see `billiard.curves.user_curve_dir`)")
+    p.add_argument(
+        "--param",
+        action="append",
+        default=[],
+        metavar="NAME=VALUE",
+        help="value of a named parameter of --curve (repeatable)",
+    )
+    p.add_argument(
+        "--dir",
+        help="where to write a user curve (default: the user curve "
+        "directory, see `billiard.curves.user_curve_dir`)",
+    )
     p.set_defaults(func=cmd_derive)
 
     p = sub.add_parser("scenes", help="list the built-in scenes")
     p.set_defaults(func=cmd_scenes)
 
-    p = sub.add_parser("run", help="simulate a scene and write collisions.csv",
-                       description="Simulate a built-in scene or a scene file (TOML, SI units). "
-                                   "DIR/scene.toml is written first, DIR/collisions.csv grows "
-                                   "row by row and DIR/checkpoint.json follows it every "
-                                   "second; after Ctrl-C or a kill, `billiard run --resume DIR` "
-                                   "finishes the same run.")
-    p.add_argument("scene", nargs="?",
-                   help="built-in scene name (see `billiard scenes`) or a .toml file")
-    p.add_argument("--resume", metavar="DIR",
-                   help="continue the interrupted run in DIR from its checkpoint (the result "
-                        "equals an uninterrupted run byte for byte)")
-    p.add_argument("--collisions", type=int,
-                   help="number of impacts (default: the scene's); with --resume, a larger "
-                        "total extends a finished run")
-    p.add_argument("--method", choices=["event", "rk4"],
-                   help="flight and impact-detection method (default: the scene's, 'event')")
+    p = sub.add_parser(
+        "run",
+        help="simulate a scene and write collisions.csv",
+        description="Simulate a built-in scene or a scene file (TOML, SI units). "
+        "DIR/scene.toml is written first, DIR/collisions.csv grows "
+        "row by row and DIR/checkpoint.json follows it every "
+        "second; after Ctrl-C or a kill, `billiard run --resume DIR` "
+        "finishes the same run.",
+    )
+    p.add_argument(
+        "scene", nargs="?", help="built-in scene name (see `billiard scenes`) or a .toml file"
+    )
+    p.add_argument(
+        "--resume",
+        metavar="DIR",
+        help="continue the interrupted run in DIR from its checkpoint (the result "
+        "equals an uninterrupted run byte for byte)",
+    )
+    p.add_argument(
+        "--collisions",
+        type=int,
+        help="number of impacts (default: the scene's); with --resume, a larger "
+        "total extends a finished run",
+    )
+    p.add_argument(
+        "--method",
+        choices=["event", "rk4"],
+        help="flight and impact-detection method (default: the scene's, 'event')",
+    )
     p.add_argument("--out", help="output directory (default: runs/SCENE)")
-    p.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
-                   help="override a scene key, e.g. --set drive.frequency=6.0 (repeatable)")
+    p.add_argument(
+        "--set",
+        action="append",
+        default=[],
+        metavar="KEY=VALUE",
+        help="override a scene key, e.g. --set drive.frequency=6.0 (repeatable)",
+    )
     p.add_argument("--no-plot", action="store_true", help="do not draw the plots afterwards")
-    p.add_argument("--frame-interval", type=float, metavar="S",
-                   help="also plot what a camera with this frame interval (s) would record")
+    p.add_argument(
+        "--frame-interval",
+        type=float,
+        metavar="S",
+        help="also plot what a camera with this frame interval (s) would record",
+    )
     p.set_defaults(func=cmd_run)
 
-    p = sub.add_parser("calibrate", help="fit a parameter to a period-one orbit's height",
-                       description="Find the value of a scene parameter for which the ball "
-                                   "locks into a period-one orbit with impacts at the target "
-                                   "height (the paper's calibration).")
+    p = sub.add_parser(
+        "calibrate",
+        help="fit a parameter to a period-one orbit's height",
+        description="Find the value of a scene parameter for which the ball "
+        "locks into a period-one orbit with impacts at the target "
+        "height (the paper's calibration).",
+    )
     p.add_argument("scene", help="built-in scene name or a .toml file")
-    p.add_argument("--parameter", required=True,
-                   help="dotted scene key, e.g. drive.amplitude or contact.restitution")
-    p.add_argument("--target-height", type=float, required=True, metavar="H",
-                   help="height q2 of the ball centre at the orbit's impacts (m)")
+    p.add_argument(
+        "--parameter",
+        required=True,
+        help="dotted scene key, e.g. drive.amplitude or contact.restitution",
+    )
+    p.add_argument(
+        "--target-height",
+        type=float,
+        required=True,
+        metavar="H",
+        help="height q2 of the ball centre at the orbit's impacts (m)",
+    )
     p.add_argument("--low", type=float, help="lower end of the scan (default: value/4)")
     p.add_argument("--high", type=float, help="upper end of the scan (default: 4 x value)")
-    p.add_argument("--impacts", type=int, default=1500,
-                   help="impacts per trial run (default 1500)")
-    p.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
-                   help="override a scene key first (repeatable)")
+    p.add_argument("--impacts", type=int, default=1500, help="impacts per trial run (default 1500)")
+    p.add_argument(
+        "--set",
+        action="append",
+        default=[],
+        metavar="KEY=VALUE",
+        help="override a scene key first (repeatable)",
+    )
     p.add_argument("--json", action="store_true", help="print one JSON object")
     p.set_defaults(func=cmd_calibrate)
 
-    p = sub.add_parser("plot", help="draw the paper's plots of a run",
-                       description="Return map, time-of-flight map, phase plot, trajectory "
-                                   "and animation from DIR/collisions.csv and DIR/scene.toml.")
+    p = sub.add_parser(
+        "plot",
+        help="draw the paper's plots of a run",
+        description="Return map, time-of-flight map, phase plot, trajectory "
+        "and animation from DIR/collisions.csv and DIR/scene.toml.",
+    )
     p.add_argument("dir", help="run directory")
-    p.add_argument("--frame-interval", type=float, metavar="S",
-                   help="also show what a camera with this frame interval (s) would record")
+    p.add_argument(
+        "--frame-interval",
+        type=float,
+        metavar="S",
+        help="also show what a camera with this frame interval (s) would record",
+    )
     p.add_argument("--window", metavar="N0:N1", help="impacts drawn in the trajectory and GIF")
     p.add_argument("--no-gif", action="store_true", help="skip the animated GIF")
     p.set_defaults(func=cmd_plot)
 
-    p = sub.add_parser("lyapunov", help="largest Lyapunov exponent of a scene's trajectory",
-                       description="Largest Lyapunov exponent (per impact and per second) "
-                                   "from two nearby trajectories with renormalization.")
+    p = sub.add_parser(
+        "lyapunov",
+        help="largest Lyapunov exponent of a scene's trajectory",
+        description="Largest Lyapunov exponent (per impact and per second) "
+        "from two nearby trajectories with renormalization.",
+    )
     p.add_argument("scene", help="built-in scene name or a .toml file")
     p.add_argument("--impacts", type=int, default=5000, help="impacts to average over")
     p.add_argument("--transient", type=int, default=0, help="impacts skipped first")
-    p.add_argument("--d0", type=float, default=1e-9,
-                   help="initial separation of the two trajectories (m)")
+    p.add_argument(
+        "--d0", type=float, default=1e-9, help="initial separation of the two trajectories (m)"
+    )
     p.add_argument("--method", choices=["event", "rk4"], help="default: the scene's")
-    p.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
-                   help="override a scene key first (repeatable)")
+    p.add_argument(
+        "--set",
+        action="append",
+        default=[],
+        metavar="KEY=VALUE",
+        help="override a scene key first (repeatable)",
+    )
     p.set_defaults(func=cmd_lyapunov)
 
     from .bench import add_bench_arguments  # argparse only: cheap
 
-    p = sub.add_parser("bench", help="speed against accuracy; writes docs/performance.md",
-                       description="Work-precision, failure boundaries, model ladder and "
-                                   "throughput; writes docs/performance.md and its charts.")
+    p = sub.add_parser(
+        "bench",
+        help="speed against accuracy; writes docs/performance.md",
+        description="Work-precision, failure boundaries, model ladder and "
+        "throughput; writes docs/performance.md and its charts.",
+    )
     add_bench_arguments(p)
     p.set_defaults(func=cmd_bench)
 
-    p = sub.add_parser("reproduce", help="regenerate docs/paper-reproduction.md",
-                       description="Calibrate, run the four paper scenes, draw the paper's "
-                                   "figures and write docs/paper-reproduction.md.")
+    p = sub.add_parser(
+        "reproduce",
+        help="regenerate docs/paper-reproduction.md",
+        description="Calibrate, run the four paper scenes, draw the paper's "
+        "figures and write docs/paper-reproduction.md.",
+    )
     p.add_argument("--docs", default="docs", help="documentation folder (default docs)")
     p.add_argument("--runs", default="runs/paper", help="where the runs go")
     p.add_argument("--collisions", type=int, default=25000, help="impacts per scene")
-    p.add_argument("--lyapunov", type=int, default=2000, metavar="N",
-                   help="impacts for each Lyapunov exponent (0 to skip; default 2000)")
+    p.add_argument(
+        "--lyapunov",
+        type=int,
+        default=2000,
+        metavar="N",
+        help="impacts for each Lyapunov exponent (0 to skip; default 2000)",
+    )
     p.set_defaults(func=cmd_reproduce)
     return parser
 

@@ -89,8 +89,9 @@ def _import_path(path: Path) -> ModuleType:
     return module
 
 
-def curve_module(curve: str, parameters: dict[str, float] | None = None,
-                 *, derive_missing: bool = True) -> ModuleType:
+def curve_module(
+    curve: str, parameters: dict[str, float] | None = None, *, derive_missing: bool = True
+) -> ModuleType:
     """The generated module of a curve name or expression."""
     if curve in PAPER_CURVES:
         return importlib.import_module(f"billiard.generated.curves.{curve}")
@@ -101,7 +102,8 @@ def curve_module(curve: str, parameters: dict[str, float] | None = None,
             known = ", ".join(PAPER_CURVES + tuple(user_curve_names()))
             raise CurveNotFoundError(
                 f"unknown curve {curve!r}: not built in and not in {directory} "
-                f"(known: {known}; make one with `billiard derive --name {curve} --curve EXPR`)")
+                f"(known: {known}; make one with `billiard derive --name {curve} --curve EXPR`)"
+            )
         return _import_path(path)
     name = expression_module_name(curve, parameters)
     path = directory / f"{name}.py"
@@ -128,8 +130,10 @@ def load_curve(curve: str, parameters: dict[str, float] | None = None) -> CurveM
     values = dict(module.PARAMETERS)
     unknown = sorted(set(parameters or {}) - set(values))
     if unknown:
-        raise ValueError(f"curve {curve!r} has no parameter(s) {', '.join(unknown)}; "
-                         f"its parameters: {', '.join(sorted(values)) or 'none'}")
+        raise ValueError(
+            f"curve {curve!r} has no parameter(s) {', '.join(unknown)}; "
+            f"its parameters: {', '.join(sorted(values)) or 'none'}"
+        )
     values.update({k: float(v) for k, v in (parameters or {}).items()})
     return CurveModel(
         name=module.NAME,

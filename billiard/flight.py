@@ -117,8 +117,9 @@ class _AirFlight(FlightModel):
     and its trailing arguments. A force that is off is not evaluated: the Magnus version
     of the right-hand side is used only when its coefficient is set."""
 
-    def __init__(self, gravity: float, mass: float, c_lin: float, c_quad: float,
-                 c_magnus: float = 0.0):
+    def __init__(
+        self, gravity: float, mass: float, c_lin: float, c_quad: float, c_magnus: float = 0.0
+    ):
         self.g = float(gravity)
         self.m = float(mass)
         self.c_lin, self.c_quad, self.c_magnus = float(c_lin), float(c_quad), float(c_magnus)
@@ -300,7 +301,6 @@ class RK4Flight(_AirFlight):
         if tau == self._tb:
             return self._yb
         return self.step(self._ya, tau - self._ta)
-
 
     def step(self, y: State, h: float) -> State:
         """One classical RK4 step of length h from y = (q1, q2, u1, u2)."""

@@ -65,13 +65,17 @@ __all__ = [
 
 #: Files written by :func:`plot_run`, in order.
 FIGURE_NAMES: tuple[str, ...] = (
-    "return_map.png", "time_map.png", "phase.png", "trajectory.png", "animation.gif",
+    "return_map.png",
+    "time_map.png",
+    "phase.png",
+    "trajectory.png",
+    "animation.gif",
 )
 
-G_DEFAULT = 9.81          # m/s^2
+G_DEFAULT = 9.81  # m/s^2
 MASS_DEFAULT = 1.3028e-4  # kg, the paper's steel ball
 RADIUS_DEFAULT = 1.55e-3  # m
-MM = 1e3                  # mm per m
+MM = 1e3  # mm per m
 
 DPI = 100
 SINGLE_SIZE = (6.0, 5.6)  # inches: 600 x 560 px at DPI
@@ -85,6 +89,7 @@ Columns = Mapping[str, np.ndarray]
 
 # --- reading a run ---------------------------------------------------------------------
 
+
 def read_scene(path: str | os.PathLike[str]) -> dict[str, Any]:
     """Read a run's ``scene.toml`` into a plain dict.
 
@@ -95,8 +100,10 @@ def read_scene(path: str | os.PathLike[str]) -> dict[str, Any]:
         with open(path, "rb") as handle:
             return tomllib.load(handle)
     except FileNotFoundError:
-        raise RunDataError(f"{path}: file not found (the run's scene is needed "
-                           "for the ball's mass, the boundary and the titles)") from None
+        raise RunDataError(
+            f"{path}: file not found (the run's scene is needed "
+            "for the ball's mass, the boundary and the titles)"
+        ) from None
     except OSError as exc:
         raise RunDataError(f"{path}: cannot read: {exc}") from None
     except tomllib.TOMLDecodeError as exc:
@@ -130,8 +137,7 @@ def _number(scene: Mapping[str, Any], section: str, key: str, default: float) ->
     try:
         value = float(value)
     except (TypeError, ValueError):
-        raise RunDataError(f"scene key '{section}.{key}' must be a number, "
-                           f"got {value!r}") from None
+        raise RunDataError(f"scene key '{section}.{key}' must be a number, got {value!r}") from None
     return value
 
 
@@ -149,10 +155,12 @@ def _gravity(scene: Mapping[str, Any]) -> float:
 
 def _drive(scene: Mapping[str, Any]) -> tuple[float, float, float, str]:
     """Amplitude (m), frequency (Hz), phase (rad) and direction of the drive."""
-    return (_number(scene, "drive", "amplitude", 0.0),
-            _number(scene, "drive", "frequency", 0.0),
-            _number(scene, "drive", "phase", 0.0),
-            str(_section(scene, "drive").get("direction", "horizontal")))
+    return (
+        _number(scene, "drive", "amplitude", 0.0),
+        _number(scene, "drive", "frequency", 0.0),
+        _number(scene, "drive", "phase", 0.0),
+        str(_section(scene, "drive").get("direction", "horizontal")),
+    )
 
 
 def drive_offset(scene: Mapping[str, Any], t: np.ndarray | float) -> np.ndarray:
@@ -198,8 +206,9 @@ def _boundary_function(scene: Mapping[str, Any]) -> Callable[[np.ndarray], np.nd
         else:
             scalar = load_curve(curve, params).f
     except ValueError as exc:
-        raise RunDataError(f"boundary curve {curve!r} cannot be drawn: "
-                           f"{' '.join(str(exc).split())}") from None
+        raise RunDataError(
+            f"boundary curve {curve!r} cannot be drawn: {' '.join(str(exc).split())}"
+        ) from None
 
     def f(x: np.ndarray) -> np.ndarray:
         out = np.empty(np.shape(x))
@@ -215,12 +224,12 @@ def _boundary_function(scene: Mapping[str, Any]) -> Callable[[np.ndarray], np.nd
 
 # --- titles ----------------------------------------------------------------------------
 
+
 def _fmt(value: float) -> str:
     return f"{value:.4g}"
 
 
-def scene_title(scene: Mapping[str, Any], n_impacts: int | None = None,
-                width: int = 90) -> str:
+def scene_title(scene: Mapping[str, Any], n_impacts: int | None = None, width: int = 90) -> str:
     """A figure title: the scene's name, then curve, drive, restitution and friction.
 
     The parts are joined with "; " on lines of at most ``width`` characters, e.g.::
@@ -247,9 +256,13 @@ def scene_title(scene: Mapping[str, Any], n_impacts: int | None = None,
     contact = _section(scene, "contact")
     contact_text = ", ".join(
         f"{label} = {_fmt(float(contact[key]))}"
-        for key, label in (("restitution", "e"), ("mu_static", "$\\mu_s$"),
-                           ("mu_kinetic", "$\\mu_k$"))
-        if key in contact)
+        for key, label in (
+            ("restitution", "e"),
+            ("mu_static", "$\\mu_s$"),
+            ("mu_kinetic", "$\\mu_k$"),
+        )
+        if key in contact
+    )
     # Break between the parts where possible; wrap a part only if it is too long alone.
     # Lengths are measured on plain text, so that the mathtext of mu counts as 4 characters.
     lines: list[str] = []
@@ -285,8 +298,8 @@ def _short_label(scene: Mapping[str, Any]) -> str:
 
 # --- small helpers ---------------------------------------------------------------------
 
-def _marker_size(x: np.ndarray, y: np.ndarray,
-                 spans: tuple[float, float] | None = None) -> float:
+
+def _marker_size(x: np.ndarray, y: np.ndarray, spans: tuple[float, float] | None = None) -> float:
     """Marker size (points) that keeps a cloud of points readable.
 
     It depends on how many distinct places the points occupy (cells of a 250 x 250 grid
@@ -325,8 +338,7 @@ def _column(columns: Columns, name: str) -> np.ndarray:
 
 def _camera_label(frame_interval: float, count: int) -> str:
     fps = 1.0 / frame_interval
-    return (f"camera, frame {frame_interval * 1e3:.3g} ms ({fps:.3g} fps): "
-            f"{count} impacts")
+    return f"camera, frame {frame_interval * 1e3:.3g} ms ({fps:.3g} fps): {count} impacts"
 
 
 def _checked_interval(frame_interval: float | None) -> float | None:
@@ -334,15 +346,25 @@ def _checked_interval(frame_interval: float | None) -> float | None:
         return None
     value = float(frame_interval)
     if not (math.isfinite(value) and value > 0):
-        raise RunDataError(f"camera frame interval must be a positive number of seconds, "
-                           f"got {frame_interval!r}")
+        raise RunDataError(
+            f"camera frame interval must be a positive number of seconds, got {frame_interval!r}"
+        )
     return value
 
 
-def _pairs_axes(ax: Axes, x: np.ndarray, y: np.ndarray, label: str, color: str,
-                size: float) -> Line2D:
-    (line,) = ax.plot(x, y, linestyle="none", marker="o", markersize=size,
-                      markeredgewidth=0, color=color, label=label)
+def _pairs_axes(
+    ax: Axes, x: np.ndarray, y: np.ndarray, label: str, color: str, size: float
+) -> Line2D:
+    (line,) = ax.plot(
+        x,
+        y,
+        linestyle="none",
+        marker="o",
+        markersize=size,
+        markeredgewidth=0,
+        color=color,
+        label=label,
+    )
     return line
 
 
@@ -364,8 +386,7 @@ def _square_limits(ax: Axes, values: Sequence[np.ndarray]) -> tuple[float, float
 
 
 def _diagonal(ax: Axes, lo: float, hi: float, label: str) -> None:
-    ax.plot([lo, hi], [lo, hi], color="0.35", linewidth=0.8, linestyle="--", label=label,
-            zorder=0)
+    ax.plot([lo, hi], [lo, hi], color="0.35", linewidth=0.8, linestyle="--", label=label, zorder=0)
 
 
 def _new_figure(size: tuple[float, float] = SINGLE_SIZE) -> Figure:
@@ -382,8 +403,8 @@ def _save(fig: Figure, path: Path) -> Path:
 
 # --- the maps --------------------------------------------------------------------------
 
-def return_map(columns: Columns, ax: Axes, *,
-               frame_interval: float | None = None) -> list[Line2D]:
+
+def return_map(columns: Columns, ax: Axes, *, frame_interval: float | None = None) -> list[Line2D]:
     """Return map of impact heights: q2,n (x) against q2,n+1 (y), both in mm.
 
     Each point is a pair of consecutive impacts (the centre's height q2 at impact n and at
@@ -407,8 +428,10 @@ def return_map(columns: Columns, ax: Axes, *,
     if interval is not None:
         seen = _column(camera_filter(columns, interval), "q2") * MM
         sets.append((seen, _camera_label(interval, seen.size), CAMERA_COLOR))
-    lines = [_pairs_axes(ax, h[:-1], h[1:], label, color, _marker_size(h[:-1], h[1:]))
-             for h, label, color in sets]
+    lines = [
+        _pairs_axes(ax, h[:-1], h[1:], label, color, _marker_size(h[:-1], h[1:]))
+        for h, label, color in sets
+    ]
     lo, hi = _square_limits(ax, [h for h, _, _ in sets])
     _diagonal(ax, lo, hi, "$q_{2,n} = q_{2,n+1}$")
     ax.set_xlabel("impact height $q_{2,n}$ (mm)")
@@ -418,8 +441,9 @@ def return_map(columns: Columns, ax: Axes, *,
     return lines
 
 
-def time_map(columns: Columns, ax: Axes, *, frame_interval: float | None = None,
-             log: bool = False) -> list[Line2D]:
+def time_map(
+    columns: Columns, ax: Axes, *, frame_interval: float | None = None, log: bool = False
+) -> list[Line2D]:
     """Map of times of flight: t_n (x) against t_n+1 (y), in s.
 
     t_n is the time of flight before impact n (the ``tof`` column: time since the
@@ -442,8 +466,10 @@ def time_map(columns: Columns, ax: Axes, *, frame_interval: float | None = None,
     if interval is not None:
         seen = _column(camera_filter(columns, interval), "tof")
         sets.append((seen, _camera_label(interval, seen.size), CAMERA_COLOR))
-    lines = [_pairs_axes(ax, s[:-1], s[1:], label, color, _marker_size(s[:-1], s[1:]))
-             for s, label, color in sets]
+    lines = [
+        _pairs_axes(ax, s[:-1], s[1:], label, color, _marker_size(s[:-1], s[1:]))
+        for s, label, color in sets
+    ]
     if log:
         positive = [s[s > 0] for s, _, _ in sets]
         finite = np.concatenate(positive) if positive else np.array([])
@@ -467,8 +493,7 @@ def time_map(columns: Columns, ax: Axes, *, frame_interval: float | None = None,
     return lines
 
 
-def phase_coordinates(columns: Columns,
-                      scene: Mapping[str, Any]) -> tuple[np.ndarray, np.ndarray]:
+def phase_coordinates(columns: Columns, scene: Mapping[str, Any]) -> tuple[np.ndarray, np.ndarray]:
     """Normalized tangential velocity and height after each impact.
 
     With E the mechanical energy after the impact (the ``energy`` column, J; kinetic
@@ -500,8 +525,9 @@ def phase_coordinates(columns: Columns,
     return u4 / u4max, q2 / q2max
 
 
-def phase_plot(columns: Columns, scene: Mapping[str, Any], ax: Axes, *,
-               frame_interval: float | None = None) -> list[Line2D]:
+def phase_plot(
+    columns: Columns, scene: Mapping[str, Any], ax: Axes, *, frame_interval: float | None = None
+) -> list[Line2D]:
     """Phase plot: normalized impact height q2/q2max (y) against normalized tangential
     velocity u4/u4max (x) after each impact (both dimensionless).
 
@@ -533,14 +559,24 @@ def phase_plot(columns: Columns, scene: Mapping[str, Any], ax: Axes, *,
         sets.append((sx, sy, _camera_label(interval, sx.size), CAMERA_COLOR))
     # The camera's impacts are a subset of the model's: draw them underneath, larger, so
     # that they show as halos around the model's points.
-    lines = [_pairs_axes(ax, a, b, label, color,
-                         _marker_size(x, y, (2.0, 1.0)) * (1.0 if k == 0 else 2.2))
-             for k, (a, b, label, color) in enumerate(sets)]
+    lines = [
+        _pairs_axes(
+            ax, a, b, label, color, _marker_size(x, y, (2.0, 1.0)) * (1.0 if k == 0 else 2.2)
+        )
+        for k, (a, b, label, color) in enumerate(sets)
+    ]
     for k, line in enumerate(lines):
         line.set_zorder(2.5 - k)
     s = np.linspace(-1, 1, 201)
-    ax.plot(s, 1 - s**2, color="0.35", linewidth=0.8, linestyle="--",
-            label="all energy in $q_2$ and $u_4$", zorder=0)
+    ax.plot(
+        s,
+        1 - s**2,
+        color="0.35",
+        linewidth=0.8,
+        linestyle="--",
+        label="all energy in $q_2$ and $u_4$",
+        zorder=0,
+    )
     ax.axvline(0.0, color="0.6", linewidth=0.5, zorder=0)
     xs = np.concatenate([a[np.isfinite(a)] for a, _, _, _ in sets])
     ys = np.concatenate([b[np.isfinite(b)] for _, b, _, _ in sets])
@@ -564,6 +600,7 @@ def phase_plot(columns: Columns, scene: Mapping[str, Any], ax: Axes, *,
 
 # --- trajectory ------------------------------------------------------------------------
 
+
 def parse_window(text: str) -> Window:
     """Parse ``"N0:N1"`` (either side may be empty) into a window of impact numbers.
 
@@ -572,8 +609,9 @@ def parse_window(text: str) -> Window:
     """
     start, sep, stop = text.partition(":")
     if not sep:
-        raise ValueError(f"window {text!r}: expected N0:N1 (impact numbers, N0 included, "
-                         "N1 excluded)")
+        raise ValueError(
+            f"window {text!r}: expected N0:N1 (impact numbers, N0 included, N1 excluded)"
+        )
     try:
         n0 = int(start) if start.strip() else None
         n1 = int(stop) if stop.strip() else None
@@ -582,8 +620,9 @@ def parse_window(text: str) -> Window:
     return n0, n1
 
 
-def default_window(columns: Columns, scene: Mapping[str, Any], *,
-                   periods: float = 4.0, max_impacts: int = 400) -> tuple[int, int]:
+def default_window(
+    columns: Columns, scene: Mapping[str, Any], *, periods: float = 4.0, max_impacts: int = 400
+) -> tuple[int, int]:
     """The impacts of the last ``periods`` drive periods of the run (the last second if
     the drive has no frequency), at most ``max_impacts`` and at least two of them.
 
@@ -599,8 +638,7 @@ def default_window(columns: Columns, scene: Mapping[str, Any], *,
     return int(n[first]), int(n[-1]) + 1
 
 
-def _window_rows(columns: Columns, scene: Mapping[str, Any],
-                 window: Window | None) -> np.ndarray:
+def _window_rows(columns: Columns, scene: Mapping[str, Any], window: Window | None) -> np.ndarray:
     """Row indices of the impacts n0 <= n < n1."""
     n = _column(columns, "n")
     if window is None:
@@ -611,13 +649,14 @@ def _window_rows(columns: Columns, scene: Mapping[str, Any],
     rows = np.flatnonzero((n >= lo) & (n < hi))
     if rows.size == 0:
         shown = f"{'' if n0 is None else n0}:{'' if n1 is None else n1}"
-        raise RunDataError(f"window {shown} holds no impacts (the run has impacts "
-                           f"{int(n[0])} to {int(n[-1])}; N1 is excluded)")
+        raise RunDataError(
+            f"window {shown} holds no impacts (the run has impacts "
+            f"{int(n[0])} to {int(n[-1])}; N1 is excluded)"
+        )
     return rows
 
 
-def _flight(columns: Columns, row: int, tau: np.ndarray,
-            g: float) -> tuple[np.ndarray, np.ndarray]:
+def _flight(columns: Columns, row: int, tau: np.ndarray, g: float) -> tuple[np.ndarray, np.ndarray]:
     """Centre position (m) a time tau (s) after impact ``row``: drag-free parabola."""
     q1 = float(columns["q1"][row])
     q2 = float(columns["q2"][row])
@@ -644,8 +683,9 @@ def _arcs(columns: Columns, rows: np.ndarray, g: float) -> tuple[np.ndarray, np.
     return np.concatenate(xs), np.concatenate(ys)
 
 
-def _view(scene: Mapping[str, Any], xs: np.ndarray,
-          ys: np.ndarray) -> tuple[tuple[float, float], tuple[float, float], bool]:
+def _view(
+    scene: Mapping[str, Any], xs: np.ndarray, ys: np.ndarray
+) -> tuple[tuple[float, float], tuple[float, float], bool]:
     """Limits (m) around the ball's path, boundary included, and whether the lid shows."""
     amplitude, _, _, direction = _drive(scene)
     r = _radius(scene)
@@ -676,17 +716,23 @@ def _view(scene: Mapping[str, Any], xs: np.ndarray,
     return (x_lo, x_hi), (y_lo - pad, y_hi + pad), show_lid
 
 
-def _boundary_positions(scene: Mapping[str, Any], x_lim: tuple[float, float]
-                        ) -> tuple[np.ndarray, np.ndarray]:
+def _boundary_positions(
+    scene: Mapping[str, Any], x_lim: tuple[float, float]
+) -> tuple[np.ndarray, np.ndarray]:
     """A grid of the boundary's own x (m) wide enough for any drive offset, and f there."""
     amplitude, _, _, _ = _drive(scene)
     grid = np.linspace(x_lim[0] - amplitude, x_lim[1] + amplitude, 801)
     return grid, _boundary_function(scene)(grid)
 
 
-def trajectory(columns: Columns, scene: Mapping[str, Any], ax: Axes,
-               window: Window | None = None, *,
-               frame_interval: float | None = None) -> dict[str, Any]:
+def trajectory(
+    columns: Columns,
+    scene: Mapping[str, Any],
+    ax: Axes,
+    window: Window | None = None,
+    *,
+    frame_interval: float | None = None,
+) -> dict[str, Any]:
     """The ball's path over a window of impacts, in the lab frame, in mm (equal aspect).
 
     Drawn: the boundary y = f(x) at its mean position (solid), and at its extreme drive
@@ -722,40 +768,70 @@ def trajectory(columns: Columns, scene: Mapping[str, Any], ax: Axes,
     amplitude, _, _, direction = _drive(scene)
 
     grid, height = _boundary_positions(scene, x_lim)
-    (boundary,) = ax.plot(grid * MM, height * MM, color="black", linewidth=1.4,
-                          label="boundary, mean position")
+    (boundary,) = ax.plot(
+        grid * MM, height * MM, color="black", linewidth=1.4, label="boundary, mean position"
+    )
     if amplitude > 0:
         for sign in (-1.0, 1.0):
             if direction == "vertical":
                 bx, by = grid, height + sign * amplitude
             else:
                 bx, by = grid + sign * amplitude, height
-            ax.plot(bx * MM, by * MM, color="0.55", linewidth=0.7, linestyle=":",
-                    label=f"boundary at $\\pm A$ = $\\pm${_fmt(amplitude * MM)} mm"
-                    if sign > 0 else None)
+            ax.plot(
+                bx * MM,
+                by * MM,
+                color="0.55",
+                linewidth=0.7,
+                linestyle=":",
+                label=f"boundary at $\\pm A$ = $\\pm${_fmt(amplitude * MM)} mm"
+                if sign > 0
+                else None,
+            )
     ceiling = _section(scene, "boundary").get("ceiling")
     if ceiling is not None and show_lid:
         ax.axhline(float(ceiling) * MM, color="0.3", linewidth=1.2, label="lid")
-    (arcs,) = ax.plot(arc_x * MM, arc_y * MM, color=MODEL_COLOR, linewidth=0.8,
-                      label="flight (drag-free parabola)")
+    (arcs,) = ax.plot(
+        arc_x * MM,
+        arc_y * MM,
+        color=MODEL_COLOR,
+        linewidth=0.8,
+        label="flight (drag-free parabola)",
+    )
     regime = np.asarray(columns["regime"])[rows] if "regime" in columns else None
     impacts = []
     if regime is None:
-        impacts.append(ax.plot(q1 * MM, q2 * MM, "o", markersize=3.5, color="tab:red",
-                               label="impact (ball centre)")[0])
+        impacts.append(
+            ax.plot(
+                q1 * MM, q2 * MM, "o", markersize=3.5, color="tab:red", label="impact (ball centre)"
+            )[0]
+        )
     else:
         for name in sorted(set(regime.tolist())):
             mask = regime == name
-            impacts.append(ax.plot(q1[mask] * MM, q2[mask] * MM, "o", markersize=3.5,
-                                   color=REGIME_COLORS.get(name, "0.4"),
-                                   label=f"{name} impact ({int(mask.sum())})")[0])
+            impacts.append(
+                ax.plot(
+                    q1[mask] * MM,
+                    q2[mask] * MM,
+                    "o",
+                    markersize=3.5,
+                    color=REGIME_COLORS.get(name, "0.4"),
+                    label=f"{name} impact ({int(mask.sum())})",
+                )[0]
+            )
     if interval is not None:
         seen = camera_filter(columns, interval)
         n = _column(columns, "n")[rows]
         mask = np.isin(n, _column(seen, "n"))
-        ax.plot(q1[mask] * MM, q2[mask] * MM, "o", markersize=7, markerfacecolor="none",
-                markeredgecolor=CAMERA_COLOR, markeredgewidth=1.0,
-                label=f"seen by camera (frame {interval * 1e3:.3g} ms)")
+        ax.plot(
+            q1[mask] * MM,
+            q2[mask] * MM,
+            "o",
+            markersize=7,
+            markerfacecolor="none",
+            markeredgecolor=CAMERA_COLOR,
+            markeredgewidth=1.0,
+            label=f"seen by camera (frame {interval * 1e3:.3g} ms)",
+        )
     ax.set_xlim(x_lim[0] * MM, x_lim[1] * MM)
     ax.set_ylim(y_lim[0] * MM, y_lim[1] * MM)
     ax.set_aspect("equal", adjustable="box")
@@ -763,16 +839,26 @@ def trajectory(columns: Columns, scene: Mapping[str, Any], ax: Axes,
     ax.set_ylabel("$q_2$ (mm)")
     t = _column(columns, "t")
     n_all = _column(columns, "n")
-    ax.set_title(f"impacts {int(n_all[rows[0]])} to {int(n_all[rows[-1]])}, "
-                 f"t = {t[rows[0]]:.3f} to {t[rows[-1]]:.3f} s", fontsize=9)
+    ax.set_title(
+        f"impacts {int(n_all[rows[0]])} to {int(n_all[rows[-1]])}, "
+        f"t = {t[rows[0]]:.3f} to {t[rows[-1]]:.3f} s",
+        fontsize=9,
+    )
     ax.grid(True, linewidth=0.3, alpha=0.5)
     ax.legend(loc="upper right", fontsize=7, framealpha=0.85)
     return {"rows": rows, "impacts": impacts, "arcs": arcs, "boundary": boundary}
 
 
-def animate(columns: Columns, scene: Mapping[str, Any], path: str | os.PathLike[str],
-            window: Window | None = None, fps: int = 30, *, max_frames: int = 150,
-            dpi: int = 80) -> Path:
+def animate(
+    columns: Columns,
+    scene: Mapping[str, Any],
+    path: str | os.PathLike[str],
+    window: Window | None = None,
+    fps: int = 30,
+    *,
+    max_frames: int = 150,
+    dpi: int = 80,
+) -> Path:
     """Write an animated GIF of the ball inside the moving boundary.
 
     The still parts are drawn once; each frame redraws only the moving artists, and the
@@ -809,14 +895,14 @@ def animate(columns: Columns, scene: Mapping[str, Any], path: str | os.PathLike[
     arc_x, arc_y = _arcs(columns, rows, g)
     q1 = _column(columns, "q1")[rows]
     q2 = _column(columns, "q2")[rows]
-    x_lim, y_lim, show_lid = _view(scene, np.concatenate([q1, arc_x]),
-                                   np.concatenate([q2, arc_y]))
+    x_lim, y_lim, show_lid = _view(scene, np.concatenate([q1, arc_x]), np.concatenate([q2, arc_y]))
     grid, height = _boundary_positions(scene, x_lim)
     _, _, _, direction = _drive(scene)
 
     aspect = (y_lim[1] - y_lim[0]) / (x_lim[1] - x_lim[0])
-    fig = Figure(figsize=(5.0, float(np.clip(4.2 * aspect + 0.9, 2.5, 6.5))), dpi=dpi,
-                 layout="constrained")
+    fig = Figure(
+        figsize=(5.0, float(np.clip(4.2 * aspect + 0.9, 2.5, 6.5))), dpi=dpi, layout="constrained"
+    )
     FigureCanvasAgg(fig)
     ax = fig.add_subplot()
     ax.plot(arc_x * MM, arc_y * MM, color="0.8", linewidth=0.7, zorder=0)
@@ -824,10 +910,17 @@ def animate(columns: Columns, scene: Mapping[str, Any], path: str | os.PathLike[
     ceiling = _section(scene, "boundary").get("ceiling")
     lid = None
     if ceiling is not None and show_lid:
-        (lid,) = ax.plot(np.asarray(x_lim) * MM, [float(ceiling) * MM] * 2, color="0.3",
-                         linewidth=1.2)
-    ball = Circle((float(q1[0]) * MM, float(q2[0]) * MM), r * MM, facecolor="tab:blue",
-                  edgecolor="navy", linewidth=0.6, zorder=3)
+        (lid,) = ax.plot(
+            np.asarray(x_lim) * MM, [float(ceiling) * MM] * 2, color="0.3", linewidth=1.2
+        )
+    ball = Circle(
+        (float(q1[0]) * MM, float(q2[0]) * MM),
+        r * MM,
+        facecolor="tab:blue",
+        edgecolor="navy",
+        linewidth=0.6,
+        zorder=3,
+    )
     ax.add_patch(ball)
     ax.set_xlim(x_lim[0] * MM, x_lim[1] * MM)
     ax.set_ylim(y_lim[0] * MM, y_lim[1] * MM)
@@ -837,11 +930,13 @@ def animate(columns: Columns, scene: Mapping[str, Any], path: str | os.PathLike[
     duration = (count / fps) if count > 1 else 1.0
     speed = (t1 - t0) / duration if t1 > t0 else 1.0
     fig.suptitle(f"{scene.get('name', 'run')}: {speed:.2g}x real time", fontsize=10)
-    clock = ax.text(0.02, 0.97, "", transform=ax.transAxes, va="top", fontsize=9,
-                    family="monospace")
+    clock = ax.text(
+        0.02, 0.97, "", transform=ax.transAxes, va="top", fontsize=9, family="monospace"
+    )
 
-    moving = [boundary, ball, clock] + ([lid] if lid is not None and direction == "vertical"
-                                         else [])
+    moving = [boundary, ball, clock] + (
+        [lid] if lid is not None and direction == "vertical" else []
+    )
     for artist in moving:
         artist.set_animated(True)
     canvas = fig.canvas
@@ -876,13 +971,21 @@ def _save_gif(frames: Sequence[Image.Image], path: Path, fps: int) -> None:
     """Save RGB frames as a looping GIF sharing one palette (small and fast to write;
     Pillow stores only the changed part of each frame)."""
     palette = frames[0].quantize(colors=64, method=Image.Quantize.MEDIANCUT)
-    indexed = [palette] + [f.quantize(palette=palette, dither=Image.Dither.NONE)
-                           for f in frames[1:]]
-    indexed[0].save(path, format="GIF", save_all=True, append_images=indexed[1:],
-                    duration=max(1, round(1000 / fps)), loop=0)
+    indexed = [palette] + [
+        f.quantize(palette=palette, dither=Image.Dither.NONE) for f in frames[1:]
+    ]
+    indexed[0].save(
+        path,
+        format="GIF",
+        save_all=True,
+        append_images=indexed[1:],
+        duration=max(1, round(1000 / fps)),
+        loop=0,
+    )
 
 
 # --- whole runs ------------------------------------------------------------------------
+
 
 def _legend_outside(fig: Figure, ax: Axes) -> None:
     """Move the axes' legend below the axes, so that it hides no data."""
@@ -891,12 +994,14 @@ def _legend_outside(fig: Figure, ax: Axes) -> None:
         return
     handles, labels = ax.get_legend_handles_labels()
     legend.remove()
-    _uniform_legend_markers(fig.legend(handles, labels, loc="outside lower center", ncol=2,
-                                       fontsize=8, frameon=False))
+    _uniform_legend_markers(
+        fig.legend(handles, labels, loc="outside lower center", ncol=2, fontsize=8, frameon=False)
+    )
 
 
-def _single(draw: Callable[[Axes], object], title: str, path: Path, *,
-            fit_height: bool = False) -> Path:
+def _single(
+    draw: Callable[[Axes], object], title: str, path: Path, *, fit_height: bool = False
+) -> Path:
     """One-panel figure, 600 px wide, with the title on top and the legend below.
 
     With ``fit_height``, the height follows the shape of the (equal-aspect) view.
@@ -914,9 +1019,14 @@ def _single(draw: Callable[[Axes], object], title: str, path: Path, *,
     return _save(fig, path)
 
 
-def plot_run(run_dir: str | os.PathLike[str], out_dir: str | os.PathLike[str] | None = None,
-             *, frame_interval: float | None = None, window: Window | None = None,
-             gif: bool = True) -> list[Path]:
+def plot_run(
+    run_dir: str | os.PathLike[str],
+    out_dir: str | os.PathLike[str] | None = None,
+    *,
+    frame_interval: float | None = None,
+    window: Window | None = None,
+    gif: bool = True,
+) -> list[Path]:
     """Draw every figure of a run.
 
     Reads ``run_dir/collisions.csv`` and ``run_dir/scene.toml`` and writes into
@@ -954,30 +1064,45 @@ def plot_run(run_dir: str | os.PathLike[str], out_dir: str | os.PathLike[str] | 
     chosen = (int(columns["n"][rows[0]]), int(columns["n"][rows[-1]]) + 1)
     title = scene_title(scene, int(columns["t"].size))
     written = [
-        _single(lambda ax: return_map(columns, ax, frame_interval=interval), title,
-                out / "return_map.png"),
-        _single(lambda ax: time_map(columns, ax, frame_interval=interval), title,
-                out / "time_map.png"),
-        _single(lambda ax: phase_plot(columns, scene, ax, frame_interval=interval), title,
-                out / "phase.png"),
-        _single(lambda ax: trajectory(columns, scene, ax, chosen, frame_interval=interval),
-                title, out / "trajectory.png", fit_height=True),
+        _single(
+            lambda ax: return_map(columns, ax, frame_interval=interval),
+            title,
+            out / "return_map.png",
+        ),
+        _single(
+            lambda ax: time_map(columns, ax, frame_interval=interval), title, out / "time_map.png"
+        ),
+        _single(
+            lambda ax: phase_plot(columns, scene, ax, frame_interval=interval),
+            title,
+            out / "phase.png",
+        ),
+        _single(
+            lambda ax: trajectory(columns, scene, ax, chosen, frame_interval=interval),
+            title,
+            out / "trajectory.png",
+            fit_height=True,
+        ),
     ]
     if gif:
         written.append(animate(columns, scene, out / "animation.gif", window=chosen))
     return written
 
 
-def _paper_grid(run_dirs: Sequence[str | os.PathLike[str]], path: str | os.PathLike[str],
-                panels: Sequence[Callable[[Columns, Mapping[str, Any], Axes], object]],
-                title: str, frame_interval: float | None, guide: str) -> Path:
+def _paper_grid(
+    run_dirs: Sequence[str | os.PathLike[str]],
+    path: str | os.PathLike[str],
+    panels: Sequence[Callable[[Columns, Mapping[str, Any], Axes], object]],
+    title: str,
+    frame_interval: float | None,
+    guide: str,
+) -> Path:
     """Panels in rows, one column per run; one shared legend at the bottom."""
     if not run_dirs:
         raise RunDataError("no run directories given")
     runs = [load_run(d) for d in run_dirs]
     cols = len(runs)
-    fig = Figure(figsize=(3.3 * cols + 0.4, 3.3 * len(panels) + 1.0), dpi=DPI,
-                 layout="constrained")
+    fig = Figure(figsize=(3.3 * cols + 0.4, 3.3 * len(panels) + 1.0), dpi=DPI, layout="constrained")
     FigureCanvasAgg(fig)
     axes = fig.subplots(len(panels), cols, squeeze=False)
     for j, (columns, scene) in enumerate(runs):
@@ -994,22 +1119,43 @@ def _paper_grid(run_dirs: Sequence[str | os.PathLike[str]], path: str | os.PathL
         if frame_interval is not None:
             count += f", camera {camera_filter(columns, frame_interval)['t'].size}"
         axes[0, j].set_title(f"{_short_label(scene)}\n{count}", fontsize=9)
-    handles = [Line2D([], [], linestyle="none", marker="o", markersize=4,
-                      color=MODEL_COLOR, label="model: every impact")]
+    handles = [
+        Line2D(
+            [],
+            [],
+            linestyle="none",
+            marker="o",
+            markersize=4,
+            color=MODEL_COLOR,
+            label="model: every impact",
+        )
+    ]
     if frame_interval is not None:
-        handles.append(Line2D([], [], linestyle="none", marker="o", markersize=4,
-                              color=CAMERA_COLOR,
-                              label=f"camera, frame {frame_interval * 1e3:.3g} ms"))
-    handles.append(Line2D([], [], color="0.35", linewidth=0.8, linestyle="--",
-                          label=guide))
-    fig.legend(handles=handles, loc="outside lower center", ncol=len(handles), fontsize=8,
-               frameon=False)
+        handles.append(
+            Line2D(
+                [],
+                [],
+                linestyle="none",
+                marker="o",
+                markersize=4,
+                color=CAMERA_COLOR,
+                label=f"camera, frame {frame_interval * 1e3:.3g} ms",
+            )
+        )
+    handles.append(Line2D([], [], color="0.35", linewidth=0.8, linestyle="--", label=guide))
+    fig.legend(
+        handles=handles, loc="outside lower center", ncol=len(handles), fontsize=8, frameon=False
+    )
     fig.suptitle(title, fontsize=10)
     return _save(fig, Path(path))
 
 
-def paper_figure(run_dirs: Sequence[str | os.PathLike[str]], path: str | os.PathLike[str],
-                 *, frame_interval: float | None = None) -> Path:
+def paper_figure(
+    run_dirs: Sequence[str | os.PathLike[str]],
+    path: str | os.PathLike[str],
+    *,
+    frame_interval: float | None = None,
+) -> Path:
     """One figure in the layout of the paper's Fig. 2: one column per run, the return map
     of impact heights (q2,n vs q2,n+1, mm) on the top row and the map of times of flight
     (t_n vs t_n+1, s) on the bottom row; each column titled with its curve and drive
@@ -1020,16 +1166,24 @@ def paper_figure(run_dirs: Sequence[str | os.PathLike[str]], path: str | os.Path
     """
     interval = _checked_interval(frame_interval)
     return _paper_grid(
-        run_dirs, path,
-        [lambda c, s, ax: return_map(c, ax, frame_interval=interval),
-         lambda c, s, ax: time_map(c, ax, frame_interval=interval)],
-        "Impact heights (top) and times of flight (bottom)", interval,
-        "diagonal $q_{2,n} = q_{2,n+1}$, $t_n = t_{n+1}$")
+        run_dirs,
+        path,
+        [
+            lambda c, s, ax: return_map(c, ax, frame_interval=interval),
+            lambda c, s, ax: time_map(c, ax, frame_interval=interval),
+        ],
+        "Impact heights (top) and times of flight (bottom)",
+        interval,
+        "diagonal $q_{2,n} = q_{2,n+1}$, $t_n = t_{n+1}$",
+    )
 
 
-def paper_phase_figure(run_dirs: Sequence[str | os.PathLike[str]],
-                       path: str | os.PathLike[str], *,
-                       frame_interval: float | None = None) -> Path:
+def paper_phase_figure(
+    run_dirs: Sequence[str | os.PathLike[str]],
+    path: str | os.PathLike[str],
+    *,
+    frame_interval: float | None = None,
+) -> Path:
     """One figure in the layout of the paper's Fig. 3: the phase plots (q2/q2max vs
     u4/u4max, see :func:`phase_plot`) of the runs side by side.
 
@@ -1038,13 +1192,17 @@ def paper_phase_figure(run_dirs: Sequence[str | os.PathLike[str]],
     """
     interval = _checked_interval(frame_interval)
     return _paper_grid(
-        run_dirs, path,
+        run_dirs,
+        path,
         [lambda c, s, ax: phase_plot(c, s, ax, frame_interval=interval)],
         "Normalized impact height vs normalized tangential velocity after each impact",
-        interval, "all energy in $q_2$ and $u_4$")
+        interval,
+        "all energy in $q_2$ and $u_4$",
+    )
 
 
 # --- command line ----------------------------------------------------------------------
+
 
 def _interval_argument(text: str) -> float:
     """A frame interval in seconds: a number or a fraction such as 1/30."""
@@ -1052,7 +1210,8 @@ def _interval_argument(text: str) -> float:
         value = float(Fraction(text.strip())) if "/" in text else float(text)
     except (ValueError, ZeroDivisionError):
         raise argparse.ArgumentTypeError(
-            f"{text!r} is not a number of seconds (e.g. 0.0333 or 1/30)") from None
+            f"{text!r} is not a number of seconds (e.g. 0.0333 or 1/30)"
+        ) from None
     if not (math.isfinite(value) and value > 0):
         raise argparse.ArgumentTypeError(f"{text!r}: the frame interval must be > 0 s")
     return value
@@ -1069,14 +1228,22 @@ def add_plot_arguments(parser: argparse.ArgumentParser) -> None:
     """Add the arguments of ``billiard plot`` to ``parser`` (a subparser)."""
     parser.add_argument("run_dir", help="a run directory (with collisions.csv and scene.toml)")
     parser.add_argument("--out", help="where to write the figures (default: RUN_DIR)")
-    parser.add_argument("--frame-interval", type=_interval_argument, metavar="S",
-                        help="also show what a camera with this frame interval (s, e.g. "
-                             "1/30) would have recorded")
-    parser.add_argument("--window", type=_window_argument, metavar="N0:N1",
-                        help="impacts N0 <= n < N1 for the trajectory and the animation "
-                             "(default: the last four drive periods)")
-    parser.add_argument("--no-gif", dest="gif", action="store_false",
-                        help="do not write animation.gif")
+    parser.add_argument(
+        "--frame-interval",
+        type=_interval_argument,
+        metavar="S",
+        help="also show what a camera with this frame interval (s, e.g. 1/30) would have recorded",
+    )
+    parser.add_argument(
+        "--window",
+        type=_window_argument,
+        metavar="N0:N1",
+        help="impacts N0 <= n < N1 for the trajectory and the animation "
+        "(default: the last four drive periods)",
+    )
+    parser.add_argument(
+        "--no-gif", dest="gif", action="store_false", help="do not write animation.gif"
+    )
 
 
 def run_plot_command(args: argparse.Namespace) -> int:
@@ -1086,8 +1253,13 @@ def run_plot_command(args: argparse.Namespace) -> int:
         0 on success, 2 after printing a one-line error for bad input.
     """
     try:
-        written = plot_run(args.run_dir, args.out, frame_interval=args.frame_interval,
-                           window=args.window, gif=args.gif)
+        written = plot_run(
+            args.run_dir,
+            args.out,
+            frame_interval=args.frame_interval,
+            window=args.window,
+            gif=args.gif,
+        )
     except RunDataError as exc:
         print(f"billiard: error: {exc}", file=sys.stderr)
         return 2

@@ -284,8 +284,9 @@ class CsvRecorder:
         """
         path = Path(path)
         if not path.is_file():
-            raise CheckpointError(f"{path} is missing" if not path.exists()
-                                  else f"{path} is not a file")
+            raise CheckpointError(
+                f"{path} is missing" if not path.exists() else f"{path} is not a file"
+            )
         header = _header_line(columns).encode()
         line = mark.last_line.encode()
         fd = _open_locked(path)

@@ -102,8 +102,23 @@ STOP_AFTER_VARIABLE = "BILLIARD_STOP_AFTER"
 Progress = Callable[[int, int], None]
 
 # Floats of a row, by column name, for naming the culprit of a non-finite state.
-_ROW_FLOATS = ("t", "q1", "q2", "v1", "v2", "omega", "u4", "un", "tof", "z", "energy",
-               "Rt", "Rn", "s", "q3")
+_ROW_FLOATS = (
+    "t",
+    "q1",
+    "q2",
+    "v1",
+    "v2",
+    "omega",
+    "u4",
+    "un",
+    "tof",
+    "z",
+    "energy",
+    "Rt",
+    "Rn",
+    "s",
+    "q3",
+)
 
 
 @dataclass(slots=True)
@@ -188,9 +203,7 @@ class EngineState:
                 counts={str(k): _count(v) for k, v in data["counts"].items()},
                 walls=tuple((_finite(s), _finite(slope)) for s, slope in data["walls"]),
                 flight={str(k): _finite(v) for k, v in data["flight"].items()},
-                locator={
-                    str(k): [_finite(x) for x in v] for k, v in data["locator"].items()
-                },
+                locator={str(k): [_finite(x) for x in v] for k, v in data["locator"].items()},
             )
         except CheckpointError:
             raise
@@ -375,8 +388,7 @@ class Simulation:
         offsets = self.boundary.offsets
         if len(state.walls) != len(offsets):
             raise CheckpointError(
-                f"its engine state has {len(state.walls)} walls, the scene's curve "
-                f"{len(offsets)}"
+                f"its engine state has {len(state.walls)} walls, the scene's curve {len(offsets)}"
             )
         if set(state.counts) != set(self.counts):
             raise CheckpointError("its engine state has the wrong regime counters")
@@ -485,12 +497,45 @@ class Simulation:
                 u4, un = _ball.frame_velocity(res.u1, res.u2, ev.z)
                 energy = _ball.energy(ev.q2, res.u1, res.u2, res.u3, m, r, k, g)
                 # one row, in the order of billiard.record.COLUMNS
-                row = (n + 1, t, ev.q1, ev.q2, res.u1, res.u2, res.u3, u4, un, tau,
-                       res.regime, ev.z, energy, ev.surface.label, res.Rt, res.Rn, ev.s, q3)
+                row = (
+                    n + 1,
+                    t,
+                    ev.q1,
+                    ev.q2,
+                    res.u1,
+                    res.u2,
+                    res.u3,
+                    u4,
+                    un,
+                    tau,
+                    res.regime,
+                    ev.z,
+                    energy,
+                    ev.surface.label,
+                    res.Rt,
+                    res.Rn,
+                    ev.s,
+                    q3,
+                )
                 # a non-finite number is never recorded (the sum of finite numbers of
                 # physical size is finite, so one addition chain tests them all)
-                if not math.isfinite(t + ev.q1 + ev.q2 + res.u1 + res.u2 + res.u3 + u4 + un
-                                     + tau + ev.z + energy + res.Rt + res.Rn + ev.s + q3):
+                if not math.isfinite(
+                    t
+                    + ev.q1
+                    + ev.q2
+                    + res.u1
+                    + res.u2
+                    + res.u3
+                    + u4
+                    + un
+                    + tau
+                    + ev.z
+                    + energy
+                    + res.Rt
+                    + res.Rn
+                    + ev.s
+                    + q3
+                ):
                     _check_finite(row, n + 1, t)
                 recorder.append(row)
                 # commit: from here to the end of the iteration nothing can fail, so the
@@ -787,8 +832,14 @@ def resume(
             last = EngineState.from_dict(engine)
             sim.counts, final_time = dict(last.counts), last.ball.t
         return Result(
-            scene, _CsvFile(out / CSV_NAME, rows), stop_reason, 0.0, sim.counts, final_time,
-            resumed_from=rows, already_finished=True,
+            scene,
+            _CsvFile(out / CSV_NAME, rows),
+            stop_reason,
+            0.0,
+            sim.counts,
+            final_time,
+            resumed_from=rows,
+            already_finished=True,
         )
     if total < rows:
         raise CheckpointError(f"the run in {out} already has {rows} impacts, more than {total}")
@@ -820,8 +871,9 @@ def resume(
         notify(f"resuming {out} after impact {rows} of {total}{note}")
     if total != scene.run.collisions:
         write_text_atomic(out / SCENE_NAME, scene_to_toml(sim.resolved_scene(total)))
-    return _run_streamed(sim, total, out, stream, state, progress, resumed_from=rows,
-                         truncation=cut)
+    return _run_streamed(
+        sim, total, out, stream, state, progress, resumed_from=rows, truncation=cut
+    )
 
 
 def _fingerprint(sim: Simulation) -> str:
@@ -835,8 +887,12 @@ def _stop_after_hook() -> tuple[int, int]:
     if not text:
         return -1, 0
     count, _, name = text.partition(":")
-    signals = {"": signal.SIGINT, "INT": signal.SIGINT, "TERM": signal.SIGTERM,
-               "KILL": signal.SIGKILL}
+    signals = {
+        "": signal.SIGINT,
+        "INT": signal.SIGINT,
+        "TERM": signal.SIGTERM,
+        "KILL": signal.SIGKILL,
+    }
     try:
         impact = int(count)
         signum = signals[name.strip().upper()]
@@ -924,8 +980,12 @@ def _run_streamed(
         with _signals_deferred(request):
             try:
                 reason = sim.run(
-                    total, stream, progress, start=start,
-                    checkpoint=lambda state: save(state, "running"), stop=request,
+                    total,
+                    stream,
+                    progress,
+                    start=start,
+                    checkpoint=lambda state: save(state, "running"),
+                    stop=request,
                 )
             except RunInterrupted as exc:
                 save(sim.state, "interrupted")
@@ -945,8 +1005,14 @@ def _run_streamed(
         signal.raise_signal(request.signum)
     wall_time = time.perf_counter() - began
     return Result(
-        sim.resolved_scene(total), stream, reason, wall_time, sim.counts, sim.final_time,
-        resumed_from=resumed_from, truncation=truncation,
+        sim.resolved_scene(total),
+        stream,
+        reason,
+        wall_time,
+        sim.counts,
+        sim.final_time,
+        resumed_from=resumed_from,
+        truncation=truncation,
     )
 
 

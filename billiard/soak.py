@@ -392,8 +392,7 @@ def run_job(job: Job) -> dict[str, Any]:
             report["resume_checked"] = 1
             os.environ[STOP_AFTER_VARIABLE] = f"{job.resume_at}:TERM"
             try:
-                simulate(scene, collisions=job.impacts, method=job.method,
-                         out_dir=Path(tmp) / "b")
+                simulate(scene, collisions=job.impacts, method=job.method, out_dir=Path(tmp) / "b")
                 interrupted = False
             except RunInterrupted:
                 interrupted = True
@@ -401,8 +400,11 @@ def run_job(job: Job) -> dict[str, Any]:
                 del os.environ[STOP_AFTER_VARIABLE]
             if interrupted:
                 resume(Path(tmp) / "b")
-            same = filecmp.cmp(Path(tmp) / "a" / "collisions.csv",
-                               Path(tmp) / "b" / "collisions.csv", shallow=False)
+            same = filecmp.cmp(
+                Path(tmp) / "a" / "collisions.csv",
+                Path(tmp) / "b" / "collisions.csv",
+                shallow=False,
+            )
             report["resume_mismatches"] = 0 if same else 1
             report["resume_interrupted"] = int(interrupted)
     report["cpu"] = time.process_time() - started
@@ -434,8 +436,9 @@ def random_jobs(rng: random.Random, impacts: int, quick: bool, start: int) -> li
     return jobs
 
 
-def soak(total: int, *, seed: int = 2024, workers: int = 2, quick: bool = False,
-         echo: Any = print) -> dict[str, Any]:
+def soak(
+    total: int, *, seed: int = 2024, workers: int = 2, quick: bool = False, echo: Any = print
+) -> dict[str, Any]:
     """Run the soak and return the aggregated report (see the module docstring)."""
     started = time.perf_counter()
     for curve in CURVES:  # derive the expressions once, before the workers need them
@@ -457,7 +460,9 @@ def soak(total: int, *, seed: int = 2024, workers: int = 2, quick: bool = False,
             made += len(pending)
     summary = _aggregate(reports)
     summary.update(
-        requested=total, seed=seed, workers=workers,
+        requested=total,
+        seed=seed,
+        workers=workers,
         wall_time=time.perf_counter() - started,
     )
     return summary
@@ -498,12 +503,15 @@ def _aggregate(reports: list[dict[str, Any]]) -> dict[str, Any]:
         "energy_created": total("energy_created"),
         "lifts": total("lifts"),
         "separating": total("separating"),
-        "separating_rule_on": int(sum(r.get("separating", 0) for r in reports
-                                      if r.get("elastic_below", 0.0) > 0.0)),
-        "energy_created_rule_off": int(sum(r.get("energy_created", 0) for r in reports
-                                           if r.get("elastic_below") == 0.0)),
-        "energy_created_rk4": int(sum(r.get("energy_created", 0) for r in reports
-                                      if r["method"] == "rk4")),
+        "separating_rule_on": int(
+            sum(r.get("separating", 0) for r in reports if r.get("elastic_below", 0.0) > 0.0)
+        ),
+        "energy_created_rule_off": int(
+            sum(r.get("energy_created", 0) for r in reports if r.get("elastic_below") == 0.0)
+        ),
+        "energy_created_rk4": int(
+            sum(r.get("energy_created", 0) for r in reports if r["method"] == "rk4")
+        ),
         "resume_checks": total("resume_checked"),
         "resume_interrupted": total("resume_interrupted"),
         "resume_mismatches": total("resume_mismatches"),
@@ -519,14 +527,22 @@ def _aggregate(reports: list[dict[str, Any]]) -> dict[str, Any]:
             for e in r.get("examples", []) + r.get("energy_examples", [])
         ][:20],
         "stop_reasons": sorted(
-            {f"{r['stop']}: {r['reason']}" for r in random_runs
-             if r.get("stop") not in ("complete", "escape")}
+            {
+                f"{r['stop']}: {r['reason']}"
+                for r in random_runs
+                if r.get("stop") not in ("complete", "escape")
+            }
         )[:20],
     }
 
 
-MUST_BE_ZERO = ("penetrations", "detached", "non_finite_rows", "energy_created",
-                "resume_mismatches")
+MUST_BE_ZERO = (
+    "penetrations",
+    "detached",
+    "non_finite_rows",
+    "energy_created",
+    "resume_mismatches",
+)
 
 
 def format_summary(s: dict[str, Any]) -> str:
@@ -548,8 +564,7 @@ def format_summary(s: dict[str, Any]) -> str:
         f"({s['separating_rule_on']:,} with elastic_below > 0)",
         f"  energy created with elastic_below = 0: {s['energy_created_rule_off']}, "
         f"with rk4: {s['energy_created_rk4']}",
-        f"  resume checks: {s['resume_checks']} ({s['resume_interrupted']} interrupted "
-        f"mid-run)",
+        f"  resume checks: {s['resume_checks']} ({s['resume_interrupted']} interrupted mid-run)",
         f"  random-scene outcomes: {s['stops']}",
     ]
     lines += [f"  violation: {v}" for v in s["violations"]]
@@ -561,13 +576,18 @@ def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(
         prog="python -m billiard.soak",
         description="Soak test: impacts on the paper scenes and random valid scenes, "
-                    "each audited for penetration, non-finite values, energy creation "
-                    "and resume equality.")
+        "each audited for penetration, non-finite values, energy creation "
+        "and resume equality.",
+    )
     parser.add_argument("--impacts", type=int, default=1_000_000, help="total impacts")
     parser.add_argument("--quick", action="store_true", help="20,000 impacts, small jobs")
     parser.add_argument("--seed", type=int, default=2024, help="random seed (default 2024)")
-    parser.add_argument("--workers", type=int, default=os.cpu_count() or 1,
-                        help="worker processes (default: all cores)")
+    parser.add_argument(
+        "--workers",
+        type=int,
+        default=os.cpu_count() or 1,
+        help="worker processes (default: all cores)",
+    )
     parser.add_argument("--json", metavar="PATH", help="also write the report as JSON")
     parser.add_argument("--verbose", action="store_true", help="one line per run")
     args = parser.parse_args(argv)

@@ -126,11 +126,17 @@ def derive_ball() -> BallDerivation:
             "The partial velocity of a point with respect to u_r is the coefficient of u_r in "
             "the point's velocity. The contact point P = C - r c2 moves with the ball, so its "
             "partial velocity with respect to the spin is r c1.",
-            [(rf"\mathbf{{v}}^{{C}}_{{{i + 1}}}", v.to_matrix(N).T) for i, v in
-             enumerate(partial_C)]
-            + [(rf"\mathbf{{v}}^{{P}}_{{{i + 1}}}\ \text{{(in }}\hat c\text{{)}}",
-                v.to_matrix(c).T.applyfunc(sm.simplify))
-               for i, v in enumerate(partial_P)],
+            [
+                (rf"\mathbf{{v}}^{{C}}_{{{i + 1}}}", v.to_matrix(N).T)
+                for i, v in enumerate(partial_C)
+            ]
+            + [
+                (
+                    rf"\mathbf{{v}}^{{P}}_{{{i + 1}}}\ \text{{(in }}\hat c\text{{)}}",
+                    v.to_matrix(c).T.applyfunc(sm.simplify),
+                )
+                for i, v in enumerate(partial_P)
+            ],
         )
     )
 

@@ -48,38 +48,67 @@ def ball_module(d: BallDerivation) -> str:
         "Symbols and conventions: see docs/design.md and docs/derivation.md. SI units.\n"
         '"""\n\nimport math\n\n',
         codegen.function_source(
-            "mass_matrix", [m, r, k], [tuple(mm.row(i)) for i in range(3)],
-            "Kane's mass matrix for u = (u1, u2, u3), rows as tuples (kg, kg m^2)."),
+            "mass_matrix",
+            [m, r, k],
+            [tuple(mm.row(i)) for i in range(3)],
+            "Kane's mass matrix for u = (u1, u2, u3), rows as tuples (kg, kg m^2).",
+        ),
         codegen.function_source(
-            "forcing_drag", [u1, u2, u3, m, g, c_lin, c_quad], list(p(d.forcing_drag)),
-            "Kane's forcing vector with gravity and Fowles drag (N, N, N m)."),
+            "forcing_drag",
+            [u1, u2, u3, m, g, c_lin, c_quad],
+            list(p(d.forcing_drag)),
+            "Kane's forcing vector with gravity and Fowles drag (N, N, N m).",
+        ),
         codegen.function_source(
-            "flight_rhs_drag", [u1, u2, m, g, c_lin, c_quad], list(p(d.rhs_drag))[:2],
-            "Accelerations (du1/dt, du2/dt) in flight with gravity and drag (m/s^2)."),
+            "flight_rhs_drag",
+            [u1, u2, m, g, c_lin, c_quad],
+            list(p(d.rhs_drag))[:2],
+            "Accelerations (du1/dt, du2/dt) in flight with gravity and drag (m/s^2).",
+        ),
         codegen.function_source(
-            "flight_rhs_magnus", [u1, u2, u3, m, g, c_lin, c_quad, c_magnus],
+            "flight_rhs_magnus",
+            [u1, u2, u3, m, g, c_lin, c_quad, c_magnus],
             list(p(d.rhs_magnus))[:2],
-            "Accelerations (du1/dt, du2/dt) with gravity, drag and the Magnus force (m/s^2)."),
+            "Accelerations (du1/dt, du2/dt) with gravity, drag and the Magnus force (m/s^2).",
+        ),
         codegen.function_source(
-            "flight_exact", [t, q1, q2, u1, u2, g], list(p(d.flight_exact)),
-            "State (q1, q2, u1, u2) after a drag-free flight of duration t (m, m/s)."),
+            "flight_exact",
+            [t, q1, q2, u1, u2, g],
+            list(p(d.flight_exact)),
+            "State (q1, q2, u1, u2) after a drag-free flight of duration t (m, m/s).",
+        ),
         codegen.function_source(
-            "contact_velocity", [u1, u2, u3, z, vb1, vb2, r], list(p(d.contact_velocity)),
+            "contact_velocity",
+            [u1, u2, u3, z, vb1, vb2, r],
+            list(p(d.contact_velocity)),
             "Velocity (wt, wn) of the ball's contact point relative to the boundary, "
-            "along c1 and c2 (m/s)."),
+            "along c1 and c2 (m/s).",
+        ),
         codegen.function_source(
-            "frame_velocity", [u1, u2, z], list(p(d.frame_velocity)),
-            "Velocity (u4, un) of the centre along c1 and c2 (m/s); u4 is the paper's u4."),
+            "frame_velocity",
+            [u1, u2, z],
+            list(p(d.frame_velocity)),
+            "Velocity (u4, un) of the centre along c1 and c2 (m/s); u4 is the paper's u4.",
+        ),
         codegen.function_source(
-            "impact_stick", [u1, u2, u3, z, vb1, vb2, m, r, k, e], list(p(d.stick)),
-            "No-slip impact: post-impact (u1, u2, u3) and impulse (Rt, Rn) in N s."),
+            "impact_stick",
+            [u1, u2, u3, z, vb1, vb2, m, r, k, e],
+            list(p(d.stick)),
+            "No-slip impact: post-impact (u1, u2, u3) and impulse (Rt, Rn) in N s.",
+        ),
         codegen.function_source(
-            "impact_slip", [u1, u2, u3, z, vb1, vb2, m, r, k, e, mu_k, sgn], list(p(d.slip)),
+            "impact_slip",
+            [u1, u2, u3, z, vb1, vb2, m, r, k, e, mu_k, sgn],
+            list(p(d.slip)),
             "Slipping impact: post-impact (u1, u2, u3) and impulse (Rt, Rn) in N s; "
-            "sgn is the sign of wt before the impact."),
+            "sgn is the sign of wt before the impact.",
+        ),
         codegen.function_source(
-            "energy", [q2, u1, u2, u3, m, r, k, g], p(d.energy),
-            "Mechanical energy (J): translation + rotation + gravity, zero at q2 = 0."),
+            "energy",
+            [q2, u1, u2, u3, m, r, k, g],
+            p(d.energy),
+            "Mechanical energy (J): translation + rotation + gravity, zero at q2 = 0.",
+        ),
     ]
     # Symbols the derivation treats as loads must all be arguments somewhere.
     assert {C_LIN.name, C_QUAD.name, C_MAGNUS.name} <= {"c_lin", "c_quad", "c_magnus"}
@@ -96,11 +125,13 @@ def curve_from_text(name: str, text: str, parameters: dict[str, str]) -> curve.C
     missing = sorted(set(parsed.parameters) - set(parameters))
     if missing:
         raise curve.CurveDerivationError(
-            f"curve parameter(s) without a value: {', '.join(missing)}")
+            f"curve parameter(s) without a value: {', '.join(missing)}"
+        )
     unused = sorted(set(parameters) - set(parsed.parameters))
     if unused:
-        raise curve.CurveDerivationError(f"curve parameter(s) not in the expression: "
-                                         f"{', '.join(unused)}")
+        raise curve.CurveDerivationError(
+            f"curve parameter(s) not in the expression: {', '.join(unused)}"
+        )
     psyms = [sm.Symbol(n, real=True) for n in sorted(parameters)]
     expr = parsed.to_sympy(x_symbol=curve.x, parameter_symbols={p.name: p for p in psyms})
     return curve.derive_curve(name, text, expr, parameters, psyms)
@@ -121,8 +152,9 @@ def curve_module(cd: curve.CurveDerivation) -> str:
         "",
         f"NAME = {cd.name!r}",
         f"EXPRESSION = {cd.text!r}",
-        "PARAMETERS = {" + ", ".join(f"{n!r}: {float(sm.Rational(v))!r}"
-                                    for n, v in sorted(cd.parameters.items())) + "}",
+        "PARAMETERS = {"
+        + ", ".join(f"{n!r}: {float(sm.Rational(v))!r}" for n, v in sorted(cd.parameters.items()))
+        + "}",
         "",
         "",
         f"def make({params}):",
@@ -131,22 +163,44 @@ def curve_module(cd: curve.CurveDerivation) -> str:
     walls = []
     for i, w in enumerate(cd.walls):
         fx = {curve.s: curve.x}
-        lines.append(codegen.function_source(f"f_{i}", [x], p(w.f.subs(fx)),
-                                             "Height of the wall (m).", "    "))
-        lines.append(codegen.function_source(f"df_{i}", [x], p(w.df.subs(fx)),
-                                             "Slope f'(x).", "    "))
-        lines.append(codegen.function_source(f"d2f_{i}", [x], p(w.d2f.subs(fx)),
-                                             "Second derivative f''(x) (1/m).", "    "))
-        lines.append(codegen.function_source(
-            f"near_{i}", [s, px, py], p(w.near),
-            "Nearest-point condition g(s) = (s - px) + (f(s) - py) f'(s) (m).", "    "))
-        lines.append(codegen.function_source(
-            f"dnear_{i}", [s, px, py], p(w.dnear), "Derivative dg/ds.", "    "))
+        lines.append(
+            codegen.function_source(
+                f"f_{i}", [x], p(w.f.subs(fx)), "Height of the wall (m).", "    "
+            )
+        )
+        lines.append(
+            codegen.function_source(f"df_{i}", [x], p(w.df.subs(fx)), "Slope f'(x).", "    ")
+        )
+        lines.append(
+            codegen.function_source(
+                f"d2f_{i}", [x], p(w.d2f.subs(fx)), "Second derivative f''(x) (1/m).", "    "
+            )
+        )
+        lines.append(
+            codegen.function_source(
+                f"near_{i}",
+                [s, px, py],
+                p(w.near),
+                "Nearest-point condition g(s) = (s - px) + (f(s) - py) f'(s) (m).",
+                "    ",
+            )
+        )
+        lines.append(
+            codegen.function_source(
+                f"dnear_{i}", [s, px, py], p(w.dnear), "Derivative dg/ds.", "    "
+            )
+        )
         if w.poly is not None:
-            lines.append(codegen.function_source(
-                f"poly_{i}", [px, py], [p(c) for c in w.poly],
-                f"Coefficients (highest power first) of the degree-{len(w.poly) - 1} "
-                "polynomial whose real roots are the candidate nearest points.", "    "))
+            lines.append(
+                codegen.function_source(
+                    f"poly_{i}",
+                    [px, py],
+                    [p(c) for c in w.poly],
+                    f"Coefficients (highest power first) of the degree-{len(w.poly) - 1} "
+                    "polynomial whose real roots are the candidate nearest points.",
+                    "    ",
+                )
+            )
         lo = "-math.inf" if w.lo == -sm.oo else f"float({codegen.pyexpr(p(w.lo))})"
         hi = "math.inf" if w.hi == sm.oo else f"float({codegen.pyexpr(p(w.hi))})"
         poly = f"poly_{i}" if w.poly is not None else "None"
@@ -156,14 +210,19 @@ def curve_module(cd: curve.CurveDerivation) -> str:
         )
     lines.append("    return (\n" + "\n".join(walls) + "\n    )")
     bps = ", ".join(f"float({codegen.pyexpr(p(b))})" for b in cd.breakpoints)
-    lines += ["", "", f"def breakpoints({params}):",
-              '    """x positions of the kinks (m)."""',
-              f"    return ({bps}{',' if len(cd.breakpoints) == 1 else ''})", ""]
+    lines += [
+        "",
+        "",
+        f"def breakpoints({params}):",
+        '    """x positions of the kinks (m)."""',
+        f"    return ({bps}{',' if len(cd.breakpoints) == 1 else ''})",
+        "",
+    ]
     body = "\n".join(lines)
     header = codegen.generated_notice("derivation/curve.py") + [
         f"Curve {cd.name!r}: f(x) = {cd.text}",
-        "Parameters: " + (", ".join(f"{n} = {v}" for n, v in sorted(cd.parameters.items()))
-                          or "none"),
+        "Parameters: "
+        + (", ".join(f"{n} = {v}" for n, v in sorted(cd.parameters.items())) or "none"),
         f"Walls: {len(cd.walls)}; nearest-point polynomial degree: "
         + ", ".join(str(len(w.poly) - 1) if w.poly else "none" for w in cd.walls),
     ]
@@ -222,8 +281,11 @@ def check(generated_dir: Path = GENERATED) -> list[str]:
             problems.append(f"{path}: missing")
         elif path.read_text() != text:
             current = path.read_text()
-            why = "" if path.suffix != ".py" or codegen.hash_matches(current) else \
-                " (its content hash does not match: edited by hand?)"
+            why = (
+                ""
+                if path.suffix != ".py" or codegen.hash_matches(current)
+                else " (its content hash does not match: edited by hand?)"
+            )
             problems.append(f"{path}: differs from a fresh regeneration{why}")
     for path in sorted((generated_dir / "curves").glob("*.py")):
         if path.name != "__init__.py" and path not in expected:
@@ -231,12 +293,14 @@ def check(generated_dir: Path = GENERATED) -> list[str]:
     return problems
 
 
-def derive_user_curve(name: str, text: str, parameters: dict[str, float | str] | None,
-                      directory: Path) -> Path:
+def derive_user_curve(
+    name: str, text: str, parameters: dict[str, float | str] | None, directory: Path
+) -> Path:
     """Derive a user's curve into ``directory/<name>.py`` and return the path."""
     if not _NAME.match(name):
         raise curve.CurveDerivationError(
-            f"curve name {name!r} must start with a letter and use letters, digits and _")
+            f"curve name {name!r} must start with a letter and use letters, digits and _"
+        )
     params = {k: _exact(v) for k, v in (parameters or {}).items()}
     cd = curve_from_text(name, text, params)
     directory.mkdir(parents=True, exist_ok=True)

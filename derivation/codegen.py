@@ -36,8 +36,7 @@ def pyexpr(expr: sm.Basic) -> str:
     return _printer.doprint(expr)
 
 
-def function_source(name: str, args: list[sm.Symbol], outputs, doc: str,
-                    indent: str = "") -> str:
+def function_source(name: str, args: list[sm.Symbol], outputs, doc: str, indent: str = "") -> str:
     """Source of ``def name(args): ... return outputs`` with common subexpressions."""
     single = not isinstance(outputs, (list, tuple, sm.MatrixBase))
     exprs = [outputs] if single else list(outputs)

@@ -135,8 +135,13 @@ def nearest_polynomial(near: sm.Basic) -> list[sm.Basic] | None:
     return coeffs
 
 
-def derive_curve(name: str, text: str, expression: sm.Basic, parameters: dict[str, str],
-                 parameter_symbols: list[sm.Symbol]) -> CurveDerivation:
+def derive_curve(
+    name: str,
+    text: str,
+    expression: sm.Basic,
+    parameters: dict[str, str],
+    parameter_symbols: list[sm.Symbol],
+) -> CurveDerivation:
     defaults = {p: sm.Rational(parameters[p.name]) for p in parameter_symbols}
     breakpoints, pieces = split_walls(expression, defaults)
     walls = []
@@ -147,8 +152,9 @@ def derive_curve(name: str, text: str, expression: sm.Basic, parameters: dict[st
         near = (s - px) + (fs - py) * df
         dnear = sm.diff(near, s)
         walls.append(Wall(lo, hi, fs, df, d2f, near, dnear, nearest_polynomial(near)))
-    return CurveDerivation(name, text, expression, parameters, parameter_symbols,
-                           breakpoints, walls)
+    return CurveDerivation(
+        name, text, expression, parameters, parameter_symbols, breakpoints, walls
+    )
 
 
 # The paper's boundaries (Hartl, Miller and Mazzoleni, eqs. 1-3), in metres:
@@ -156,9 +162,20 @@ def derive_curve(name: str, text: str, expression: sm.Basic, parameters: dict[st
 PAPER_CURVES: dict[str, tuple[str, dict[str, str]]] = {
     "parabola": ("a*x**2 + c", {"a": "26", "c": "0.0063"}),
     "wedge": ("b*abs(x) + c", {"b": "1.85", "c": "0.0063"}),
-    "hyperbola": ("sqrt(alpha*(1 + beta*x**2)) - delta",
-                  {"alpha": "0.00403", "beta": "800", "delta": "0.0445"}),
+    "hyperbola": (
+        "sqrt(alpha*(1 + beta*x**2)) - delta",
+        {"alpha": "0.00403", "beta": "800", "delta": "0.0445"},
+    ),
 }
 
-__all__ = ["derive_curve", "split_walls", "nearest_polynomial", "PAPER_CURVES", "x", "s",
-           "px", "py", "CurveDerivationError"]
+__all__ = [
+    "derive_curve",
+    "split_walls",
+    "nearest_polynomial",
+    "PAPER_CURVES",
+    "x",
+    "s",
+    "px",
+    "py",
+    "CurveDerivationError",
+]

@@ -52,11 +52,27 @@ def derivation_markdown(d: BallDerivation, curves: list[CurveDerivation]) -> str
         for j, w in enumerate(cd.walls):
             if len(cd.walls) > 1:
                 out += [f"Wall {j}, on ${sm.latex(w.lo)} < x < {sm.latex(w.hi)}$:", ""]
-            out += ["$$", f"f'(s) = {sm.latex(w.df)},\\qquad f''(s) = {sm.latex(w.d2f)}", "$$",
-                    "", "$$", f"g(s) = {sm.latex(w.near)}", "$$", ""]
+            out += [
+                "$$",
+                f"f'(s) = {sm.latex(w.df)},\\qquad f''(s) = {sm.latex(w.d2f)}",
+                "$$",
+                "",
+                "$$",
+                f"g(s) = {sm.latex(w.near)}",
+                "$$",
+                "",
+            ]
             if w.poly is not None:
-                poly = sm.Add(*[c * sm.Symbol("s") ** (len(w.poly) - 1 - i)
-                                for i, c in enumerate(w.poly)])
-                out += [f"Candidate nearest points: real roots of this degree-{len(w.poly) - 1} "
-                        "polynomial:", "", "$$", f"{sm.latex(poly)} = 0", "$$", ""]
+                poly = sm.Add(
+                    *[c * sm.Symbol("s") ** (len(w.poly) - 1 - i) for i, c in enumerate(w.poly)]
+                )
+                out += [
+                    f"Candidate nearest points: real roots of this degree-{len(w.poly) - 1} "
+                    "polynomial:",
+                    "",
+                    "$$",
+                    f"{sm.latex(poly)} = 0",
+                    "$$",
+                    "",
+                ]
     return "\n".join(out).rstrip() + "\n"

@@ -30,8 +30,7 @@ def test_calibrated_amplitude_is_the_scenes_default(parabola_calibration):
     o = cal.orbit
     m, g = scene.ball.mass, scene.run.gravity
     assert o.q2_normalized == pytest.approx(m * g * o.height / o.energy, rel=1e-12)
-    assert abs(o.u4_normalized) == pytest.approx(abs(o.u4) / math.sqrt(2 * o.energy / m),
-                                                 rel=1e-12)
+    assert abs(o.u4_normalized) == pytest.approx(abs(o.u4) / math.sqrt(2 * o.energy / m), rel=1e-12)
     assert 0 < o.q2_normalized < 1 and abs(o.u4_normalized) < 0.2
 
 
@@ -44,17 +43,28 @@ def test_low_energy_state_is_not_a_period_one_orbit():
 def test_calibration_without_an_orbit_in_range_fails_in_one_line():
     scene = load_scene("parabola-5.4hz")
     with pytest.raises(CalibrationError) as info:
-        calibrate(scene, "drive.amplitude", 0.075, low=0.005, high=0.008, points=2,
-                  impacts=300)
+        calibrate(scene, "drive.amplitude", 0.075, low=0.005, high=0.008, points=2, impacts=300)
     assert "\n" not in str(info.value) and "no period-one orbit" in str(info.value)
     with pytest.raises(CalibrationError):
         calibrate(scene, "drive.colour", 0.075)
 
 
 def test_calibrate_command_prints_json(capsys):
-    code = main(["calibrate", "parabola-5.4hz", "--parameter", "drive.amplitude",
-                 "--target-height", "0.075", "--low", "0.024", "--high", "0.027",
-                 "--json"])
+    code = main(
+        [
+            "calibrate",
+            "parabola-5.4hz",
+            "--parameter",
+            "drive.amplitude",
+            "--target-height",
+            "0.075",
+            "--low",
+            "0.024",
+            "--high",
+            "0.027",
+            "--json",
+        ]
+    )
     assert code == 0
     data = json.loads(capsys.readouterr().out)
     assert data["parameter"] == "drive.amplitude"

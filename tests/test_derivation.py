@@ -54,8 +54,9 @@ def kane_levinson(u1, u2, u3, z, vb1, vb2, e, mu_s, mu_k, k=K, r=R, m=M):
     if abs(out[3]) <= mu_s * out[4]:
         return out + ("stick",)
     wt, _ = ball.contact_velocity(u1, u2, u3, z, vb1, vb2, r)
-    return ball.impact_slip(u1, u2, u3, z, vb1, vb2, m, r, k, e, mu_k, math.copysign(1.0, wt)) \
-        + ("slip",)
+    return ball.impact_slip(u1, u2, u3, z, vb1, vb2, m, r, k, e, mu_k, math.copysign(1.0, wt)) + (
+        "slip",
+    )
 
 
 def random_impacts(n, seed):
@@ -79,7 +80,8 @@ def test_impact_maps_match_sphere_on_rough_plane(seed):
         u1, u2 = unrotate(vt, vn, z)
         *post, rt, rn, regime = kane_levinson(u1, u2, w, z, 0.0, 0.0, e, mu_s, mu_k)
         vt_ref, vn_ref, w_ref, rt_ref, rn_ref, regime_ref = sphere_on_plane(
-            vt, vn, w, e, K, R, M, mu_s, mu_k)
+            vt, vn, w, e, K, R, M, mu_s, mu_k
+        )
         assert regime == regime_ref
         regimes.add(regime)
         vt_new, vn_new = rotate(post[0], post[1], z)
@@ -164,18 +166,21 @@ def test_kane_flight_equations_match_newton_euler():
         drag = c_lin + c_quad * speed
         a1 = (-drag * u1 - c_mag * u3 * u2) / m
         a2 = (-m * g - drag * u2 + c_mag * u3 * u1) / m
-        assert ball.flight_rhs_magnus(u1, u2, u3, m, g, c_lin, c_quad, c_mag) == \
-            pytest.approx((a1, a2), rel=1e-12, abs=1e-12)
+        assert ball.flight_rhs_magnus(u1, u2, u3, m, g, c_lin, c_quad, c_mag) == pytest.approx(
+            (a1, a2), rel=1e-12, abs=1e-12
+        )
         assert ball.flight_rhs_drag(u1, u2, m, g, c_lin, c_quad) == pytest.approx(
-            ((-drag * u1) / m, (-m * g - drag * u2) / m), rel=1e-12, abs=1e-12)
+            ((-drag * u1) / m, (-m * g - drag * u2) / m), rel=1e-12, abs=1e-12
+        )
         # Euler: I dw/dt = 0, no aerodynamic torque; forcing carries no moment.
         assert ball.forcing_drag(u1, u2, u3, m, g, c_lin, c_quad)[2] == 0
     mm = ball.mass_matrix(M, R, K)
     assert mm == ((M, 0, 0), (0, M, 0), (0, 0, K * M * R * R))
     # Exact drag-free flight: the textbook parabola.
     q1, q2, v1, v2 = ball.flight_exact(0.3, 0.1, 0.2, 1.5, 2.0, G)
-    assert (q1, q2, v1, v2) == pytest.approx((0.1 + 0.45, 0.2 + 0.6 - 0.5 * G * 0.09, 1.5,
-                                              2.0 - G * 0.3), rel=1e-15)
+    assert (q1, q2, v1, v2) == pytest.approx(
+        (0.1 + 0.45, 0.2 + 0.6 - 0.5 * G * 0.09, 1.5, 2.0 - G * 0.3), rel=1e-15
+    )
 
 
 @pytest.mark.parametrize("name", ["parabola", "wedge", "hyperbola"])
@@ -223,7 +228,7 @@ def test_check_detects_a_one_character_edit(tmp_path):
     for path in targets:
         original = path.read_text()
         i = original.index("return") + 2  # inside the code, not the header
-        path.write_text(original[:i] + ("X" if original[i] != "X" else "Y") + original[i + 1:])
+        path.write_text(original[:i] + ("X" if original[i] != "X" else "Y") + original[i + 1 :])
         problems = build.check(copy)
         assert len(problems) == 1 and str(path) in problems[0]
         path.write_text(original)
@@ -244,20 +249,26 @@ def test_derive_user_curve_and_use_it(tmp_path, monkeypatch):
     assert len(wall["poly"](0.01, 0.05)) == 8  # degree 7: (s - px) + (f - py) f'
 
 
-@pytest.mark.parametrize("text", [
-    "__import__('os').system('echo hacked')",
-    "x.__class__",
-    "lambda: 1",
-    "x**10**10",
-    "open('/etc/passwd')",
-    "-abs(x) + x**2",  # concave kink: the ball could touch the corner
-])
+@pytest.mark.parametrize(
+    "text",
+    [
+        "__import__('os').system('echo hacked')",
+        "x.__class__",
+        "lambda: 1",
+        "x**10**10",
+        "open('/etc/passwd')",
+        "-abs(x) + x**2",  # concave kink: the ball could touch the corner
+    ],
+)
 def test_derive_refuses_bad_curves_in_one_line(text, tmp_path):
     env_home = str(tmp_path)
     proc = subprocess.run(
         [sys.executable, "-m", "billiard.cli", "derive", "--name", "bad", "--curve", text],
-        capture_output=True, text=True, env={"BILLIARD_HOME": env_home, "PATH": ""},
-        timeout=120)
+        capture_output=True,
+        text=True,
+        env={"BILLIARD_HOME": env_home, "PATH": ""},
+        timeout=120,
+    )
     assert proc.returncode == 2
     lines = proc.stderr.strip().splitlines()
     assert len(lines) == 1 and lines[0].startswith("billiard: error:"), proc.stderr

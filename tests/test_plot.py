@@ -33,16 +33,22 @@ from billiard.camera import (
 
 matplotlib.use("Agg")
 
-A_CURVE, C_CURVE = 26.0, 0.0063      # parabola a (1/m), c (m)
+A_CURVE, C_CURVE = 26.0, 0.0063  # parabola a (1/m), c (m)
 RADIUS, MASS, K = 1.55e-3, 1.3028e-4, 0.4
 G = 9.81
 COLUMN_NAMES = list(REQUIRED_COLUMNS) + ["wall", "Rt", "Rn"]
 
 
-def scene_toml(*, curve: str = "parabola", amplitude: float = 1e-3, frequency: float = 25.0,
-               direction: str = "vertical", restitution: float = 0.5,
-               name: str = "bounce") -> str:
-    params = ('[boundary.parameters]\na = 26.0\nc = 0.0063\n' if curve == "parabola" else "")
+def scene_toml(
+    *,
+    curve: str = "parabola",
+    amplitude: float = 1e-3,
+    frequency: float = 25.0,
+    direction: str = "vertical",
+    restitution: float = 0.5,
+    name: str = "bounce",
+) -> str:
+    params = "[boundary.parameters]\na = 26.0\nc = 0.0063\n" if curve == "parabola" else ""
     return f"""name = "{name}"
 description = "synthetic run for the plotting tests"
 
@@ -77,8 +83,15 @@ gravity = {G}
 """
 
 
-def bouncing_ball(impacts: int, *, amplitude: float, frequency: float, e: float,
-                  elastic_below: float = 0.01, drop: float = 0.004) -> dict[str, np.ndarray]:
+def bouncing_ball(
+    impacts: int,
+    *,
+    amplitude: float,
+    frequency: float,
+    e: float,
+    elastic_below: float = 0.01,
+    drop: float = 0.004,
+) -> dict[str, np.ndarray]:
     """Impacts of a ball dropped from rest, `drop` m above contact, onto the vertex of the
     vertically shaken parabola (drag off, no spin: the tangential velocity stays 0)."""
     w = 2 * math.pi * frequency
@@ -110,12 +123,28 @@ def bouncing_ball(impacts: int, *, amplitude: float, frequency: float, e: float,
         elastic = abs(relative) < elastic_below
         v2 = vb - (1.0 if elastic else e) * relative
         energy = 0.5 * MASS * v2**2 + MASS * G * q2
-        rows.append((n, t, 0.0, q2, 0.0, v2, 0.0, 0.0, v2, t - t_prev,
-                     "elastic" if elastic else "stick", 0.0, energy, 0, 0.0,
-                     MASS * (v2 - (relative + vb))))
+        rows.append(
+            (
+                n,
+                t,
+                0.0,
+                q2,
+                0.0,
+                v2,
+                0.0,
+                0.0,
+                v2,
+                t - t_prev,
+                "elastic" if elastic else "stick",
+                0.0,
+                energy,
+                0,
+                0.0,
+                MASS * (v2 - (relative + vb)),
+            )
+        )
         t_prev = t
-    return {name: np.array([row[i] for row in rows])
-            for i, name in enumerate(COLUMN_NAMES)}
+    return {name: np.array([row[i] for row in rows]) for i, name in enumerate(COLUMN_NAMES)}
 
 
 def make_run(directory: Path, columns: dict[str, np.ndarray], toml: str) -> Path:
@@ -140,8 +169,14 @@ def static_run(tmp_path: Path) -> Path:
     """A horizontally driven scene with zero amplitude (a still boundary), its curve given
     as an expression: the ball bounces on the vertex at the constant height c + r."""
     columns = bouncing_ball(40, amplitude=0.0, frequency=5.4, e=0.8, drop=0.02)
-    toml = scene_toml(curve="26*x**2 + 0.0063", amplitude=0.0, frequency=5.4,
-                      direction="horizontal", restitution=0.8, name="still")
+    toml = scene_toml(
+        curve="26*x**2 + 0.0063",
+        amplitude=0.0,
+        frequency=5.4,
+        direction="horizontal",
+        restitution=0.8,
+        name="still",
+    )
     return make_run(tmp_path / "still", columns, toml)
 
 
@@ -151,6 +186,7 @@ def single_axes() -> tuple[Figure, object]:
 
 
 # --- the fixture itself ------------------------------------------------------------------
+
 
 def test_fixture_is_consistent(bounce_columns):
     c = bounce_columns
@@ -165,11 +201,17 @@ def test_fixture_is_consistent(bounce_columns):
 
 # --- camera ------------------------------------------------------------------------------
 
+
 def hand_columns(times):
     t = np.asarray(times, dtype=float)
     tof = np.diff(t, prepend=-0.05)
-    return {"n": np.arange(1.0, t.size + 1), "t": t, "q2": 0.01 + t, "tof": tof,
-            "regime": np.array(["stick"] * t.size)}
+    return {
+        "n": np.arange(1.0, t.size + 1),
+        "t": t,
+        "q2": 0.01 + t,
+        "tof": tof,
+        "regime": np.array(["stick"] * t.size),
+    }
 
 
 def test_camera_filter_keeps_first_and_drops_rapid_impacts():
@@ -223,6 +265,7 @@ def test_read_collisions_round_trip(tmp_path, bounce_columns):
 
 # --- figure data ---------------------------------------------------------------------------
 
+
 def test_return_map_plots_consecutive_heights(bounce_columns):
     fig, ax = single_axes()
     (line,) = plot.return_map(bounce_columns, ax)
@@ -256,8 +299,9 @@ def test_phase_normalization_known_rows():
     columns = {
         "q2": np.array([h, 0.0, h, h]),
         "u4": np.array([0.0, -v, v, 0.0]),
-        "energy": np.array([MASS * G * h, 0.5 * MASS * v**2,
-                            MASS * G * h + 0.5 * MASS * v**2 + spin, 0.0]),
+        "energy": np.array(
+            [MASS * G * h, 0.5 * MASS * v**2, MASS * G * h + 0.5 * MASS * v**2 + spin, 0.0]
+        ),
     }
     x, y = plot.phase_coordinates(columns, scene)
     # At rest at height h: all energy potential.
@@ -318,12 +362,21 @@ def test_default_window_and_parse_window(bounce_columns):
 
 def test_scene_title_names_the_parameters(bounce_run):
     title = plot.scene_title(plot.read_scene(bounce_run / "scene.toml"), 160)
-    for text in ("bounce", "160 impacts", "parabola", "25 Hz", "A = 1 mm", "e = 0.5",
-                 "0.61", "0.47"):
+    for text in (
+        "bounce",
+        "160 impacts",
+        "parabola",
+        "25 Hz",
+        "A = 1 mm",
+        "e = 0.5",
+        "0.61",
+        "0.47",
+    ):
         assert text in title
 
 
 # --- whole runs ----------------------------------------------------------------------------
+
 
 def check_png(path: Path, min_width: int = 500) -> None:
     image = mpimg.imread(path)
@@ -372,8 +425,9 @@ def test_animation_of_a_still_boundary(static_run, tmp_path):
 
 
 def test_paper_figures(bounce_run, static_run, tmp_path):
-    path = plot.paper_figure([bounce_run, static_run, bounce_run], tmp_path / "fig2.png",
-                             frame_interval=1 / 30)
+    path = plot.paper_figure(
+        [bounce_run, static_run, bounce_run], tmp_path / "fig2.png", frame_interval=1 / 30
+    )
     check_png(path, min_width=900)
     path = plot.paper_phase_figure([bounce_run, static_run], tmp_path / "fig3.png")
     check_png(path, min_width=600)
@@ -382,8 +436,18 @@ def test_paper_figures(bounce_run, static_run, tmp_path):
 def test_command_line(bounce_run, tmp_path, capsys):
     parser = argparse.ArgumentParser()
     plot.add_plot_arguments(parser)
-    args = parser.parse_args([str(bounce_run), "--out", str(tmp_path / "o"),
-                              "--frame-interval", "1/30", "--window", "2:12", "--no-gif"])
+    args = parser.parse_args(
+        [
+            str(bounce_run),
+            "--out",
+            str(tmp_path / "o"),
+            "--frame-interval",
+            "1/30",
+            "--window",
+            "2:12",
+            "--no-gif",
+        ]
+    )
     assert args.frame_interval == pytest.approx(1 / 30) and args.window == (2, 12)
     assert plot.run_plot_command(args) == 0
     assert capsys.readouterr().out.count("wrote ") == 4
@@ -400,15 +464,18 @@ HEADER = ",".join(COLUMN_NAMES)
 ROW = "1,0.1,0,0.008,0,0.1,0,0,0.1,0.1,stick,0,1e-5,0,0,0"
 
 
-@pytest.mark.parametrize(("text", "problem"), [
-    (None, "file not found"),
-    ("", "empty file"),
-    (HEADER + "\n", "no impacts to plot"),
-    ("n,t,q1\n1,0,0\n", "missing column(s) q2"),
-    (HEADER + "\n" + ROW + "\n1,0.2,0\n", "line 3: expected 16 fields, got 3"),
-    (HEADER + "\n" + ROW.replace("0.008", "high") + "\n", "column q2: 'high'"),
-    (HEADER + "\n" + ROW + "\n" + ROW.replace("1,0.1", "2,0.05", 1) + "\n", "decrease"),
-])
+@pytest.mark.parametrize(
+    ("text", "problem"),
+    [
+        (None, "file not found"),
+        ("", "empty file"),
+        (HEADER + "\n", "no impacts to plot"),
+        ("n,t,q1\n1,0,0\n", "missing column(s) q2"),
+        (HEADER + "\n" + ROW + "\n1,0.2,0\n", "line 3: expected 16 fields, got 3"),
+        (HEADER + "\n" + ROW.replace("0.008", "high") + "\n", "column q2: 'high'"),
+        (HEADER + "\n" + ROW + "\n" + ROW.replace("1,0.1", "2,0.05", 1) + "\n", "decrease"),
+    ],
+)
 def test_bad_collisions_file(tmp_path, text, problem):
     run = tmp_path / "run"
     run.mkdir()
@@ -425,10 +492,13 @@ def test_bad_collisions_file(tmp_path, text, problem):
     assert problem in message
 
 
-@pytest.mark.parametrize(("toml", "problem"), [
-    (None, "scene.toml: file not found"),
-    ("name = [unclosed\n", "scene.toml: not valid TOML"),
-])
+@pytest.mark.parametrize(
+    ("toml", "problem"),
+    [
+        (None, "scene.toml: file not found"),
+        ("name = [unclosed\n", "scene.toml: not valid TOML"),
+    ],
+)
 def test_bad_scene_file(tmp_path, bounce_columns, toml, problem):
     run = tmp_path / "run"
     run.mkdir()
@@ -450,9 +520,13 @@ def test_bad_window_and_interval(bounce_run):
 
 
 def test_unknown_curve_is_reported(tmp_path, bounce_columns):
-    run = make_run(tmp_path / "run", bounce_columns,
-                   scene_toml().replace('curve = "parabola"', 'curve = "no_such_curve"')
-                   .replace("[boundary.parameters]\na = 26.0\nc = 0.0063\n", ""))
+    run = make_run(
+        tmp_path / "run",
+        bounce_columns,
+        scene_toml()
+        .replace('curve = "parabola"', 'curve = "no_such_curve"')
+        .replace("[boundary.parameters]\na = 26.0\nc = 0.0063\n", ""),
+    )
     with pytest.raises(RunDataError, match="no_such_curve") as info:
         plot.plot_run(run, gif=False)
     assert "\n" not in str(info.value)
@@ -460,13 +534,15 @@ def test_unknown_curve_is_reported(tmp_path, bounce_columns):
 
 # --- a real run of the engine --------------------------------------------------------------
 
+
 @pytest.fixture(scope="module")
 def engine_run(tmp_path_factory) -> Path:
     from billiard.cli import main
 
     out = tmp_path_factory.mktemp("engine")
-    assert main(["run", "parabola-5.4hz", "--collisions", "300", "--out", str(out),
-                 "--no-plot"]) == 0
+    assert (
+        main(["run", "parabola-5.4hz", "--collisions", "300", "--out", str(out), "--no-plot"]) == 0
+    )
     return out
 
 

@@ -16,29 +16,51 @@ BAD_TOML = 'name = "x"\n[drive\namplitude = 1\n'
 
 # case -> (arguments after `billiard run`, a fragment of the message)
 CASES: dict[str, tuple[list[str], str]] = {
-    "misspelt key": (["--set", "drive.frequncy=5"],
-                     "unknown scene key 'drive.frequncy'; did you mean 'drive.frequency'?"),
-    "unknown section": (["--set", "drvie.amplitude=0.01"],
-                        "unknown scene section 'drvie'; did you mean 'drive'?"),
-    "hostile curve": (["--set", "boundary.curve=__import__('os').system('true')"],
-                      "is not a valid curve expression: attribute access '.system' is not"),
-    "unknown curve parameter": (["--set", "boundary.parameters.zz=1"],
-                                "curve 'parabola' has no parameter(s) zz"),
-    "curve without a bottom": (["--set", "boundary.parameters.a=-26"],
-                               "the boundary curve has no bottom to rest on"),
-    "radius too big": (["--set", "ball.radius=0.02"],
-                       "ball radius 0.02 m exceeds the boundary's radius of curvature"),
-    "start inside the wall": (["--set", "initial.q1=0.01", "--set", "initial.q2=0.005"],
-                              "puts the ball 0.00506 m into the wall"),
-    "start inside the lid": (["--set", "initial.q1=0", "--set", "initial.q2=0.5"],
-                             "into the lid (ceiling = 0.2 m)"),
-    "mu_k above mu_s": (["--set", "contact.mu_kinetic=0.8"],
-                        "'contact.mu_kinetic' = 0.8 must not exceed contact.mu_static = 0.61"),
-    "restitution above 1": (["--set", "contact.restitution=1.5"],
-                            "'contact.restitution' = 1.5 is out of range [0, 1]"),
+    "misspelt key": (
+        ["--set", "drive.frequncy=5"],
+        "unknown scene key 'drive.frequncy'; did you mean 'drive.frequency'?",
+    ),
+    "unknown section": (
+        ["--set", "drvie.amplitude=0.01"],
+        "unknown scene section 'drvie'; did you mean 'drive'?",
+    ),
+    "hostile curve": (
+        ["--set", "boundary.curve=__import__('os').system('true')"],
+        "is not a valid curve expression: attribute access '.system' is not",
+    ),
+    "unknown curve parameter": (
+        ["--set", "boundary.parameters.zz=1"],
+        "curve 'parabola' has no parameter(s) zz",
+    ),
+    "curve without a bottom": (
+        ["--set", "boundary.parameters.a=-26"],
+        "the boundary curve has no bottom to rest on",
+    ),
+    "radius too big": (
+        ["--set", "ball.radius=0.02"],
+        "ball radius 0.02 m exceeds the boundary's radius of curvature",
+    ),
+    "start inside the wall": (
+        ["--set", "initial.q1=0.01", "--set", "initial.q2=0.005"],
+        "puts the ball 0.00506 m into the wall",
+    ),
+    "start inside the lid": (
+        ["--set", "initial.q1=0", "--set", "initial.q2=0.5"],
+        "into the lid (ceiling = 0.2 m)",
+    ),
+    "mu_k above mu_s": (
+        ["--set", "contact.mu_kinetic=0.8"],
+        "'contact.mu_kinetic' = 0.8 must not exceed contact.mu_static = 0.61",
+    ),
+    "restitution above 1": (
+        ["--set", "contact.restitution=1.5"],
+        "'contact.restitution' = 1.5 is out of range [0, 1]",
+    ),
     "zero mass": (["--set", "ball.mass=0"], "'ball.mass' = 0.0 is out of range (0, inf)"),
-    "amplitude without frequency": (["--set", "drive.frequency=0"],
-                                    "'drive.frequency' = 0.0 must be > 0 when drive.amplitude"),
+    "amplitude without frequency": (
+        ["--set", "drive.frequency=0"],
+        "'drive.frequency' = 0.0 must be > 0 when drive.amplitude",
+    ),
     "zero impacts": (["--collisions", "0"], "'run.collisions' must be an integer >= 1, got 0"),
     "no such scene": (["SCENE=paraboloid"], "scene 'paraboloid' is neither a built-in scene"),
     "invalid TOML": (["SCENE=bad.toml"], "invalid TOML"),
@@ -62,9 +84,24 @@ def _run(case: str, root: Path) -> tuple[subprocess.CompletedProcess, Path]:
         else:
             rest.append(arg)
     proc = subprocess.run(
-        [sys.executable, "-m", "billiard.cli", "run", scene, "--out", out, "--no-plot",
-         "--collisions", "20", *rest],
-        cwd=work, capture_output=True, text=True, timeout=120, env=dict(os.environ),
+        [
+            sys.executable,
+            "-m",
+            "billiard.cli",
+            "run",
+            scene,
+            "--out",
+            out,
+            "--no-plot",
+            "--collisions",
+            "20",
+            *rest,
+        ],
+        cwd=work,
+        capture_output=True,
+        text=True,
+        timeout=120,
+        env=dict(os.environ),
     )
     return proc, work
 

@@ -49,9 +49,13 @@ def nan_after(function, calls: int):
 
 def patched_ball(monkeypatch, module, name: str, calls: int) -> None:
     """Replace one generated function, as seen from ``module``, by ``nan_after``."""
-    fake = types.SimpleNamespace(**{
-        key: getattr(generated_ball, key) for key in dir(generated_ball) if not key.startswith("__")
-    })
+    fake = types.SimpleNamespace(
+        **{
+            key: getattr(generated_ball, key)
+            for key in dir(generated_ball)
+            if not key.startswith("__")
+        }
+    )
     setattr(fake, name, nan_after(getattr(generated_ball, name), calls))
     monkeypatch.setattr(module, "_ball", fake)
 
@@ -108,7 +112,9 @@ def test_root_solver_failure_in_the_offset_inversion(tmp_path):
     reason = sim.run(300, recorder, progress)
     assert re.fullmatch(
         rf"offset-curve inversion did not converge at x = \S+ m after impact 100 "
-        rf"\(t = {re.escape(when)} s\)", reason), reason
+        rf"\(t = {re.escape(when)} s\)",
+        reason,
+    ), reason
     assert len(recorder) == 100
 
 
@@ -130,8 +136,8 @@ def test_root_solver_failure_in_the_impact_time(monkeypatch):
     done = len(result)
     assert done >= 1
     assert result.stop_reason == (
-        f"the impact time did not converge after impact {done} "
-        f"(t = {times[done - 1]:.9g} s)")
+        f"the impact time did not converge after impact {done} (t = {times[done - 1]:.9g} s)"
+    )
 
 
 def test_flight_integrator_failure(tmp_path, monkeypatch):
@@ -151,8 +157,9 @@ def test_flight_integrator_failure(tmp_path, monkeypatch):
 
     rows = Rows()
     reason = sim.run(200, rows)
-    assert reason.startswith("the flight's step-size control failed (Dormand-Prince, 200 "
-                             "rejected steps from tau = ")
+    assert reason.startswith(
+        "the flight's step-size control failed (Dormand-Prince, 200 rejected steps from tau = "
+    )
     assert reason.endswith(f"after impact {K - 1} (t = {when} s)")
     assert len(rows) == K - 1
 
@@ -171,7 +178,8 @@ def test_unresolvable_collapse_keeps_rows_on_disk(tmp_path):
     result = simulate(scene, collisions=5000, out_dir=tmp_path)
     assert result.stop_reason == (
         "inelastic collapse: 1000 consecutive impacts with zero time of flight, at impact "
-        "1000 (t = 0 s)")
+        "1000 (t = 0 s)"
+    )
     assert_kept(result, tmp_path, 1000)
 
 
@@ -198,7 +206,8 @@ def test_collapse_in_time_is_detected_and_survives_a_checkpoint(tmp_path, monkey
     whole = simulate(scene, collisions=20000, out_dir=tmp_path / "whole")
     assert whole.stop_reason.startswith(
         f"inelastic collapse: {COLLAPSE_COUNT} impacts within 1e-06 s of simulated time, "
-        f"at impact {COLLAPSE_COUNT + 1} (t = ")
+        f"at impact {COLLAPSE_COUNT + 1} (t = "
+    )
     monkeypatch.setenv(STOP_AFTER_VARIABLE, "6000")
     with pytest.raises(RunInterrupted):
         simulate(scene, collisions=20000, out_dir=tmp_path / "parts")
@@ -208,7 +217,8 @@ def test_collapse_in_time_is_detected_and_survives_a_checkpoint(tmp_path, monkey
     parts = resume(tmp_path / "parts")
     assert parts.stop_reason == whole.stop_reason
     assert (tmp_path / "parts" / CSV_NAME).read_bytes() == (
-        tmp_path / "whole" / CSV_NAME).read_bytes()
+        tmp_path / "whole" / CSV_NAME
+    ).read_bytes()
 
 
 def test_command_line_reports_a_fault_in_one_line(tmp_path, monkeypatch, capsys):
@@ -219,6 +229,7 @@ def test_command_line_reports_a_fault_in_one_line(tmp_path, monkeypatch, capsys)
     captured = capsys.readouterr()
     assert code == 3
     assert captured.err == (
-        f"billiard: stopped: non-finite state at impact {K} (t = {when} s): v1 = nan\n")
+        f"billiard: stopped: non-finite state at impact {K} (t = {when} s): v1 = nan\n"
+    )
     assert f"{K - 1} impacts" in captured.out
     assert len(read_collisions(out / CSV_NAME)["n"]) == K - 1

@@ -58,32 +58,35 @@ def draws(elastic_below=(0.0, 1e-3, 1e-2, 3e-2), amplitude=None):
     """The primitive choices of :func:`billiard.soak.scene_from_draw`."""
     two_pi = 2.0 * math.pi
     unit = st.floats(0.0, 1.0)
-    return st.fixed_dictionaries({
-        "curve": st.sampled_from(CURVES),
-        "lid": st.booleans(),
-        "top": unit,
-        "amplitude": amplitude if amplitude is not None
-        else st.one_of(st.just(0.0), st.floats(0.0, 0.03)),
-        "frequency": st.floats(1.0, 12.0),
-        "direction": st.sampled_from(("horizontal", "vertical")),
-        "phase": st.floats(0.0, two_pi),
-        "restitution": unit,
-        "mu_static": st.floats(0.0, 1.2),
-        "mu_kinetic_fraction": unit,
-        "elastic_below": st.sampled_from(elastic_below),
-        "radius_fraction": st.floats(0.05, 0.97),
-        "log_mass": st.floats(-5.0, -2.0),
-        "inertia_factor": st.floats(0.1, 1.0),
-        "drag": st.sampled_from(("fowles", "none")),
-        "magnus": st.one_of(st.just(0.0), st.floats(0.0, 1e-8)),
-        "start": st.sampled_from(("rest", "inside")),
-        "x_fraction": unit,
-        "y_fraction": st.one_of(st.just(0.0), st.floats(0.0, 0.95)),
-        "v1": st.floats(-2.0, 2.0),
-        "v2": st.floats(-2.0, 2.0),
-        "omega": st.floats(-300.0, 300.0),
-        "t0": st.floats(0.0, 50.0),
-    })
+    return st.fixed_dictionaries(
+        {
+            "curve": st.sampled_from(CURVES),
+            "lid": st.booleans(),
+            "top": unit,
+            "amplitude": amplitude
+            if amplitude is not None
+            else st.one_of(st.just(0.0), st.floats(0.0, 0.03)),
+            "frequency": st.floats(1.0, 12.0),
+            "direction": st.sampled_from(("horizontal", "vertical")),
+            "phase": st.floats(0.0, two_pi),
+            "restitution": unit,
+            "mu_static": st.floats(0.0, 1.2),
+            "mu_kinetic_fraction": unit,
+            "elastic_below": st.sampled_from(elastic_below),
+            "radius_fraction": st.floats(0.05, 0.97),
+            "log_mass": st.floats(-5.0, -2.0),
+            "inertia_factor": st.floats(0.1, 1.0),
+            "drag": st.sampled_from(("fowles", "none")),
+            "magnus": st.one_of(st.just(0.0), st.floats(0.0, 1e-8)),
+            "start": st.sampled_from(("rest", "inside")),
+            "x_fraction": unit,
+            "y_fraction": st.one_of(st.just(0.0), st.floats(0.0, 0.95)),
+            "v1": st.floats(-2.0, 2.0),
+            "v2": st.floats(-2.0, 2.0),
+            "omega": st.floats(-300.0, 300.0),
+            "t0": st.floats(0.0, 50.0),
+        }
+    )
 
 
 methods = st.sampled_from(("event",) * 7 + ("rk4",))
@@ -156,22 +159,25 @@ def check_energy(draw: dict, method: str, impacts: int) -> None:
     assert np.all(growth <= 1e-11 * scale), float(np.max(growth / scale))
 
 
-@settings(max_examples=300, deadline=None, derandomize=True,
-          suppress_health_check=[HealthCheck.too_slow])
+@settings(
+    max_examples=300, deadline=None, derandomize=True, suppress_health_check=[HealthCheck.too_slow]
+)
 @given(draw=draws(), method=methods)
 def test_every_run_completes_or_stops_with_a_documented_reason(draw, method):
     check_run(draw, method, 250)
 
 
-@settings(max_examples=200, deadline=None, derandomize=True,
-          suppress_health_check=[HealthCheck.too_slow])
+@settings(
+    max_examples=200, deadline=None, derandomize=True, suppress_health_check=[HealthCheck.too_slow]
+)
 @given(draw=draws(elastic_below=(1e-3, 1e-2, 3e-2), amplitude=st.just(0.0)))
 def test_impacts_never_create_energy_with_the_drive_off(draw):
     check_energy(draw, "event", 300)
 
 
-@settings(max_examples=200, deadline=None, derandomize=True,
-          suppress_health_check=[HealthCheck.too_slow])
+@settings(
+    max_examples=200, deadline=None, derandomize=True, suppress_health_check=[HealthCheck.too_slow]
+)
 @given(draw=draws(elastic_below=(1e-3, 1e-2, 3e-2)))
 def test_impacts_never_create_energy_in_the_boundary_frame(draw):
     """With the drive on too: energy relative to the moving boundary never grows."""
@@ -197,26 +203,54 @@ def test_long_runs_never_create_energy_in_the_boundary_frame(draw):
 # They fail today; ``strict`` makes them pass loudly once the engine is fixed.
 
 RULE_OFF = {  # a drive-off scene with the low-velocity rule disabled
-    "curve": "sqrt(0.0001 + 2*x**2) + 0.005", "lid": True, "top": 0.42226583358982994,
-    "amplitude": 0.0, "frequency": 1.5884622345274966, "direction": "horizontal",
-    "phase": 2.0634997170978937, "restitution": 0.04414612813616248,
-    "mu_static": 0.42346847853307096, "mu_kinetic_fraction": 0.2678715311135216,
-    "elastic_below": 0.0, "radius_fraction": 0.8027116114451683,
-    "log_mass": -3.616924509598804, "inertia_factor": 0.6091231859581618, "drag": "none",
-    "magnus": 0.0, "start": "inside", "x_fraction": 0.4977144959203087,
-    "y_fraction": 0.6905718713945812, "v1": 1.1855213919540915, "v2": 0.722504758897192,
-    "omega": 211.17248570827564, "t0": 6.962526447157391,
+    "curve": "sqrt(0.0001 + 2*x**2) + 0.005",
+    "lid": True,
+    "top": 0.42226583358982994,
+    "amplitude": 0.0,
+    "frequency": 1.5884622345274966,
+    "direction": "horizontal",
+    "phase": 2.0634997170978937,
+    "restitution": 0.04414612813616248,
+    "mu_static": 0.42346847853307096,
+    "mu_kinetic_fraction": 0.2678715311135216,
+    "elastic_below": 0.0,
+    "radius_fraction": 0.8027116114451683,
+    "log_mass": -3.616924509598804,
+    "inertia_factor": 0.6091231859581618,
+    "drag": "none",
+    "magnus": 0.0,
+    "start": "inside",
+    "x_fraction": 0.4977144959203087,
+    "y_fraction": 0.6905718713945812,
+    "v1": 1.1855213919540915,
+    "v2": 0.722504758897192,
+    "omega": 211.17248570827564,
+    "t0": 6.962526447157391,
 }
 RK4_DEPARTURE = {  # rk4, rule on, a vertical drive
-    "curve": "parabola", "lid": True, "top": 0.22518805726362923,
-    "amplitude": 0.028420677422063466, "frequency": 3.3097703785990813,
-    "direction": "vertical", "phase": 1.0027275733945002, "restitution": 0.7304149789132263,
-    "mu_static": 0.991380672214931, "mu_kinetic_fraction": 0.740545706433447,
-    "elastic_below": 0.001, "radius_fraction": 0.7530364263874791,
-    "log_mass": -4.925663690877611, "inertia_factor": 0.18324132659104758, "drag": "none",
-    "magnus": 0.0, "start": "rest", "x_fraction": 0.5137986111086027,
-    "y_fraction": 0.3025691418725813, "v1": 0.5190159349944121, "v2": 0.15216389256099339,
-    "omega": -177.07670539813535, "t0": 40.78181529175555,
+    "curve": "parabola",
+    "lid": True,
+    "top": 0.22518805726362923,
+    "amplitude": 0.028420677422063466,
+    "frequency": 3.3097703785990813,
+    "direction": "vertical",
+    "phase": 1.0027275733945002,
+    "restitution": 0.7304149789132263,
+    "mu_static": 0.991380672214931,
+    "mu_kinetic_fraction": 0.740545706433447,
+    "elastic_below": 0.001,
+    "radius_fraction": 0.7530364263874791,
+    "log_mass": -4.925663690877611,
+    "inertia_factor": 0.18324132659104758,
+    "drag": "none",
+    "magnus": 0.0,
+    "start": "rest",
+    "x_fraction": 0.5137986111086027,
+    "y_fraction": 0.3025691418725813,
+    "v1": 0.5190159349944121,
+    "v2": 0.15216389256099339,
+    "omega": -177.07670539813535,
+    "t0": 40.78181529175555,
 }
 
 

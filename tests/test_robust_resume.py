@@ -80,7 +80,10 @@ def cli(*args: str, cwd: Path, env: dict | None = None, timeout: float = 120.0):
     """``billiard ARGS`` in a fresh interpreter."""
     return subprocess.run(
         [sys.executable, "-m", "billiard.cli", *args],
-        cwd=cwd, capture_output=True, text=True, timeout=timeout,
+        cwd=cwd,
+        capture_output=True,
+        text=True,
+        timeout=timeout,
         env={**os.environ, **(env or {})},
     )
 
@@ -88,7 +91,10 @@ def cli(*args: str, cwd: Path, env: dict | None = None, timeout: float = 120.0):
 def start_cli(*args: str, cwd: Path, env: dict | None = None) -> subprocess.Popen:
     return subprocess.Popen(
         [sys.executable, "-m", "billiard.cli", *args],
-        cwd=cwd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+        cwd=cwd,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
         env={**os.environ, **(env or {})},
     )
 
@@ -121,7 +127,11 @@ def test_interrupt_and_resume_is_byte_identical(case, tmp_path, monkeypatch):
         out = tmp_path / f"stopped-{k}"
         stop = interrupted(scene, method, impacts, out, str(k), monkeypatch)
         assert (stop.signum, stop.rows, stop.checkpoint_rows, stop.out_dir) == (
-            signal.SIGINT, k, k, out)
+            signal.SIGINT,
+            k,
+            k,
+            out,
+        )
         # what an interruption leaves: every completed impact, whole lines, a checkpoint
         text = (out / CSV_NAME).read_bytes()
         assert text.endswith(b"\r\n")
@@ -211,14 +221,21 @@ LONG = 25000  # impacts of the parabola scene: a few seconds of running
 
 @pytest.fixture(scope="module")
 def long_reference(tmp_path_factory) -> Path:
-    return reference(tmp_path_factory.mktemp("long"), load_scene("parabola-5.4hz"), "event",
-                     LONG)
+    return reference(tmp_path_factory.mktemp("long"), load_scene("parabola-5.4hz"), "event", LONG)
 
 
 def test_sigint_mid_run_keeps_rows_and_says_how_to_resume(tmp_path, long_reference):
     out = tmp_path / "run"
-    proc = start_cli("run", "parabola-5.4hz", "--collisions", str(LONG), "--out", str(out),
-                     "--no-plot", cwd=tmp_path)
+    proc = start_cli(
+        "run",
+        "parabola-5.4hz",
+        "--collisions",
+        str(LONG),
+        "--out",
+        str(out),
+        "--no-plot",
+        cwd=tmp_path,
+    )
     wait_for_rows(out, proc)
     proc.send_signal(signal.SIGINT)
     stdout, stderr = proc.communicate(timeout=60)
@@ -231,7 +248,9 @@ def test_sigint_mid_run_keeps_rows_and_says_how_to_resume(tmp_path, long_referen
     assert len(lines) == 1 and "Traceback" not in stderr
     match = re.fullmatch(
         r"billiard: interrupted \(SIGINT\): (\d+) impacts kept in (.+); continue with "
-        r"`billiard run --resume (.+)`", lines[0])
+        r"`billiard run --resume (.+)`",
+        lines[0],
+    )
     assert match, lines[0]
     kept = int(match.group(1))
     assert match.group(2) == str(out / CSV_NAME) and match.group(3) == str(out)
@@ -248,8 +267,16 @@ def test_sigkill_mid_run_then_resume(tmp_path, long_reference):
     """A kill leaves the last checkpoint and whatever rows reached the disk; a half
     written last line is dropped on resume; the result equals an uninterrupted run."""
     out = tmp_path / "run"
-    proc = start_cli("run", "parabola-5.4hz", "--collisions", str(LONG), "--out", str(out),
-                     "--no-plot", cwd=tmp_path)
+    proc = start_cli(
+        "run",
+        "parabola-5.4hz",
+        "--collisions",
+        str(LONG),
+        "--out",
+        str(out),
+        "--no-plot",
+        cwd=tmp_path,
+    )
     wait_for_rows(out, proc)
     proc.kill()
     proc.communicate(timeout=60)
@@ -271,8 +298,17 @@ def test_kill_before_the_first_flush_keeps_the_scene_and_a_checkpoint(tmp_path):
     """The run kills itself after impact 5, long before the first flush: scene.toml and a
     checkpoint at impact 0 were written at the start, so the run can be resumed."""
     out = tmp_path / "run"
-    proc = cli("run", "wedge-6.6hz", "--collisions", "600", "--out", str(out), "--no-plot",
-               cwd=tmp_path, env={STOP_AFTER_VARIABLE: "5:KILL"})
+    proc = cli(
+        "run",
+        "wedge-6.6hz",
+        "--collisions",
+        "600",
+        "--out",
+        str(out),
+        "--no-plot",
+        cwd=tmp_path,
+        env={STOP_AFTER_VARIABLE: "5:KILL"},
+    )
     assert proc.returncode == -signal.SIGKILL
     checkpoint = read_checkpoint(out / CHECKPOINT_NAME)
     assert checkpoint["status"] == "running" and checkpoint["csv"]["rows"] == 0
@@ -285,8 +321,17 @@ def test_kill_before_the_first_flush_keeps_the_scene_and_a_checkpoint(tmp_path):
 
 def test_sigterm_stops_cleanly(tmp_path):
     out = tmp_path / "run"
-    proc = cli("run", "wedge-6.6hz", "--collisions", "600", "--out", str(out), "--no-plot",
-               cwd=tmp_path, env={STOP_AFTER_VARIABLE: "250:TERM"})
+    proc = cli(
+        "run",
+        "wedge-6.6hz",
+        "--collisions",
+        "600",
+        "--out",
+        str(out),
+        "--no-plot",
+        cwd=tmp_path,
+        env={STOP_AFTER_VARIABLE: "250:TERM"},
+    )
     assert proc.returncode == 128 + signal.SIGTERM
     assert proc.stderr.startswith("billiard: interrupted (SIGTERM): 250 impacts kept in ")
     assert len(proc.stderr.strip().splitlines()) == 1
@@ -338,9 +383,10 @@ def test_resume_of_a_finished_run_says_so(tmp_path, capsys):
 
 
 def test_resume_of_a_stopped_run_says_so(tmp_path, capsys):
-    scene = with_values(load_scene("parabola-5.4hz"),
-                        {"boundary.ceiling": None, "boundary.escape_height": 0.2,
-                         "air.drag": "none"})
+    scene = with_values(
+        load_scene("parabola-5.4hz"),
+        {"boundary.ceiling": None, "boundary.escape_height": 0.2, "air.drag": "none"},
+    )
     scene = replace(scene, initial=Initial(q1=0.0, q2=0.05, v2=2.5))
     out = tmp_path / "run"
     first = simulate(scene, collisions=50, out_dir=out)
@@ -395,18 +441,27 @@ def _replace_csv(path: Path) -> None:
 
 
 BREAKAGES = {
-    "missing checkpoint": (lambda d: (d / CHECKPOINT_NAME).unlink(),
-                           "checkpoint.json is missing"),
-    "truncated checkpoint": (lambda d: (d / CHECKPOINT_NAME).write_text(
-        (d / CHECKPOINT_NAME).read_text()[:200]), "is corrupt (not valid JSON"),
-    "empty checkpoint": (lambda d: (d / CHECKPOINT_NAME).write_text(""),
-                         "is corrupt (not valid JSON"),
-    "edited checkpoint": (lambda d: _edit_checkpoint_number(d / CHECKPOINT_NAME),
-                          "is corrupt (its checksum does not match its content)"),
-    "not a checkpoint": (lambda d: (d / CHECKPOINT_NAME).write_text("[1, 2]"),
-                         "is not a billiard checkpoint"),
-    "edited scene": (lambda d: _edit_scene(d / SCENE_NAME),
-                     "is not the scene the checkpoint was written for"),
+    "missing checkpoint": (lambda d: (d / CHECKPOINT_NAME).unlink(), "checkpoint.json is missing"),
+    "truncated checkpoint": (
+        lambda d: (d / CHECKPOINT_NAME).write_text((d / CHECKPOINT_NAME).read_text()[:200]),
+        "is corrupt (not valid JSON",
+    ),
+    "empty checkpoint": (
+        lambda d: (d / CHECKPOINT_NAME).write_text(""),
+        "is corrupt (not valid JSON",
+    ),
+    "edited checkpoint": (
+        lambda d: _edit_checkpoint_number(d / CHECKPOINT_NAME),
+        "is corrupt (its checksum does not match its content)",
+    ),
+    "not a checkpoint": (
+        lambda d: (d / CHECKPOINT_NAME).write_text("[1, 2]"),
+        "is not a billiard checkpoint",
+    ),
+    "edited scene": (
+        lambda d: _edit_scene(d / SCENE_NAME),
+        "is not the scene the checkpoint was written for",
+    ),
     "missing scene": (lambda d: (d / SCENE_NAME).unlink(), "scene.toml is missing"),
     "shortened csv": (lambda d: _shorten_csv(d / CSV_NAME), "fewer than the"),
     "replaced csv": (lambda d: _replace_csv(d / CSV_NAME), "does not match the checkpoint"),
@@ -456,8 +511,9 @@ def test_one_run_directory_one_writer(tmp_path, monkeypatch):
     touches it."""
     out = finished_run(tmp_path, monkeypatch)
     files = {p.name: p.read_bytes() for p in out.iterdir()}
-    holder = record.CsvRecorder.reopen(out / CSV_NAME, record.CsvMark.from_dict(
-        read_checkpoint(out / CHECKPOINT_NAME)["csv"]))[0]
+    holder = record.CsvRecorder.reopen(
+        out / CSV_NAME, record.CsvMark.from_dict(read_checkpoint(out / CHECKPOINT_NAME)["csv"])
+    )[0]
     try:
         with pytest.raises(record.RunBusyError, match="being written by another process"):
             simulate(load_scene("wedge-6.6hz"), collisions=10, out_dir=out)
@@ -475,8 +531,26 @@ def test_recorder_writes_whole_rows_at_least_once_a_second(tmp_path, monkeypatch
     recorder = record.CsvRecorder(path)  # the header is on disk at once
     header = path.read_bytes()
     assert header == b",".join(name.encode() for name in record.COLUMNS) + b"\r\n"
-    row = (1, 0.5, 0.0, 0.1, 1.0, -1.0, 3.0, 0.2, 0.3, 0.5, "stick", 0.1, 1e-3, "0",
-           1e-6, 2e-6, 0.01, 1.5)
+    row = (
+        1,
+        0.5,
+        0.0,
+        0.1,
+        1.0,
+        -1.0,
+        3.0,
+        0.2,
+        0.3,
+        0.5,
+        "stick",
+        0.1,
+        1e-3,
+        "0",
+        1e-6,
+        2e-6,
+        0.01,
+        1.5,
+    )
     monkeypatch.setattr(record, "FLUSH_INTERVAL", 3600.0)
     recorder.append(row)
     assert path.read_bytes() == header  # collected, not yet due

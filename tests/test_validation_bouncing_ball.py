@@ -186,8 +186,10 @@ CASES = [(0.5, 1), (0.8, 2), (0.3, 1)]
 def check_onset(e: float, n: int) -> None:
     gamma_n = onset(e, n)
     measured = bisect(lambda g: settles_on_period_n(g, e, n), 0.9 * gamma_n, 1.1 * gamma_n, 24)
-    print(f"[validation] e = {e}, n = {n}: onset Gamma measured {measured:.9f}, "
-          f"closed form {gamma_n:.9f}, relative difference {measured / gamma_n - 1:+.1e}")
+    print(
+        f"[validation] e = {e}, n = {n}: onset Gamma measured {measured:.9f}, "
+        f"closed form {gamma_n:.9f}, relative difference {measured / gamma_n - 1:+.1e}"
+    )
     # the bisection brackets the threshold to 0.2 / 2^24 ~ 1e-8 relative; a run of 2000
     # impacts settles within ~1e-6 of the saddle-node
     assert measured == pytest.approx(gamma_n, rel=1e-6)
@@ -215,9 +217,11 @@ def check_orbit_and_period_doubling(e: float, n: int) -> None:
 
     measured = brentq(flip, gamma, 1.05 * gamma_pd, xtol=1e-12)
     high_bounce = period_doubling_high_bounce(e, n)
-    print(f"[validation] e = {e}, n = {n}: period doubling Gamma measured {measured:.9f}, "
-          f"exact-model closed form {gamma_pd:.9f} ({measured / gamma_pd - 1:+.1e}); "
-          f"high-bounce approximation {high_bounce:.6f}")
+    print(
+        f"[validation] e = {e}, n = {n}: period doubling Gamma measured {measured:.9f}, "
+        f"exact-model closed form {gamma_pd:.9f} ({measured / gamma_pd - 1:+.1e}); "
+        f"high-bounce approximation {high_bounce:.6f}"
+    )
     assert measured == pytest.approx(gamma_pd, rel=1e-6)
     assert abs(high_bounce / gamma_pd - 1) > 100 * abs(measured / gamma_pd - 1)
     # and the long runs agree: started 1e-6 off the orbit, period n just below the
@@ -243,4 +247,3 @@ def test_period_n_onset(e, n):
 @pytest.mark.parametrize("e, n", CASES)
 def test_period_n_orbit_and_period_doubling(e, n):
     check_orbit_and_period_doubling(e, n)
-

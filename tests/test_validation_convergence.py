@@ -43,14 +43,20 @@ def billiard_home(tmp_path, monkeypatch):
 
 
 def linear_drag_scene(c_lin: float, method: str, step: float = 1e-4):
-    return scene_from_dict({
-        "boundary": {"curve": "0.001", "escape_height": 1.0},
-        "contact": {"restitution": 0.7, "mu_static": 0.5, "mu_kinetic": 0.35,
-                    "elastic_below": 0.0},
-        "air": {"drag": "fowles", "c_lin": c_lin, "c_quad": 0.0},
-        "initial": {"q1": 0.0, "q2": 0.05, "v1": 1.2, "v2": 0.6},
-        "run": {"method": method, "step": step},
-    })
+    return scene_from_dict(
+        {
+            "boundary": {"curve": "0.001", "escape_height": 1.0},
+            "contact": {
+                "restitution": 0.7,
+                "mu_static": 0.5,
+                "mu_kinetic": 0.35,
+                "elastic_below": 0.0,
+            },
+            "air": {"drag": "fowles", "c_lin": c_lin, "c_quad": 0.0},
+            "initial": {"q1": 0.0, "q2": 0.05, "v1": 1.2, "v2": 0.6},
+            "run": {"method": method, "step": step},
+        }
+    )
 
 
 def exact_first_impact(c_lin: float) -> mpmath.mpf:
@@ -76,8 +82,10 @@ def test_rk4_impact_time_converges_at_fourth_order():
     errors = np.array(errors)
     order = float(np.polyfit(np.log(steps), np.log(errors), 1)[0])
     ratios = errors[:-1] / errors[1:]
-    print(f"[validation] rk4 impact-time errors {', '.join(f'{e:.2e}' for e in errors)} s "
-          f"for h = {', '.join(f'{h:g}' for h in steps)} s: observed order {order:.4f}")
+    print(
+        f"[validation] rk4 impact-time errors {', '.join(f'{e:.2e}' for e in errors)} s "
+        f"for h = {', '.join(f'{h:g}' for h in steps)} s: observed order {order:.4f}"
+    )
     assert order == pytest.approx(4.0, abs=0.1)
     assert np.all((ratios > 14.0) & (ratios < 18.0))  # 2^4 = 16 per halving
     # and the event method, error-controlled, is far more precise than the finest step
@@ -92,14 +100,17 @@ def parabola_gap(px, py, mp=False):
     """Signed distance (m) from a point to y = a x^2 + c, minus r."""
     if mp:
         a, c, r = mpmath.mpf(A_PARABOLA), mpmath.mpf(C), mpmath.mpf(R)
-        roots = mpmath.polyroots([2 * a * a, 0, 1 + 2 * a * (c - py), -px],
-                                 maxsteps=200, extraprec=100)
+        roots = mpmath.polyroots(
+            [2 * a * a, 0, 1 + 2 * a * (c - py), -px], maxsteps=200, extraprec=100
+        )
         real = [mpmath.re(s) for s in roots if abs(mpmath.im(s)) < mpmath.mpf(10) ** -30]
         d = min(mpmath.sqrt((px - s) ** 2 + (py - (a * s * s + c)) ** 2) for s in real)
         return (d if py >= a * px * px + c else -d) - r
     roots = np.roots([2 * A_PARABOLA**2, 0.0, 1 + 2 * A_PARABOLA * (C - py), -px])
-    d = min(math.hypot(px - s, py - (A_PARABOLA * s * s + C))
-            for s in roots[np.abs(roots.imag) < 1e-9].real)
+    d = min(
+        math.hypot(px - s, py - (A_PARABOLA * s * s + C))
+        for s in roots[np.abs(roots.imag) < 1e-9].real
+    )
     return (d if py >= A_PARABOLA * px * px + C else -d) - R
 
 
@@ -141,13 +152,19 @@ def exact_contact_time(gap, q1, q2, v1, v2) -> mpmath.mpf:
 @pytest.mark.parametrize("curve", list(GAPS))
 def test_event_impact_times_are_exact_to_rounding(curve):
     start = {"q1": 0.01, "q2": 0.05, "v1": 0.4, "v2": 0.3, "omega": 10.0}
-    scene = scene_from_dict({
-        "boundary": {"curve": curve, "escape_height": 1.0},
-        "contact": {"restitution": 0.8, "mu_static": 0.3, "mu_kinetic": 0.2,
-                    "elastic_below": 0.0},
-        "air": {"drag": "none"},
-        "initial": start,
-    })
+    scene = scene_from_dict(
+        {
+            "boundary": {"curve": curve, "escape_height": 1.0},
+            "contact": {
+                "restitution": 0.8,
+                "mu_static": 0.3,
+                "mu_kinetic": 0.2,
+                "elastic_below": 0.0,
+            },
+            "air": {"drag": "none"},
+            "initial": start,
+        }
+    )
     c = simulate(scene, collisions=12).columns
     state = (start["q1"], start["q2"], start["v1"], start["v2"])
     worst_time, worst_gap = 0.0, 0.0
@@ -161,6 +178,8 @@ def test_event_impact_times_are_exact_to_rounding(curve):
         worst_time = max(worst_time, abs(dt))
         worst_gap = max(worst_gap, abs(dt * vn))
         state = (c["q1"][n], c["q2"][n], c["v1"][n], c["v2"][n])
-    print(f"[validation] {curve}: event impact times within {worst_time:.1e} s of the exact "
-          f"contact; the ball within {worst_gap:.1e} m of it")
+    print(
+        f"[validation] {curve}: event impact times within {worst_time:.1e} s of the exact "
+        f"contact; the ball within {worst_gap:.1e} m of it"
+    )
     assert worst_gap <= 16 * math.ulp(0.1)

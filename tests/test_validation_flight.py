@@ -45,8 +45,9 @@ def newton_rhs(c_lin: float, c_quad: float):
 
 
 def dop853(y0, t: float, c_lin: float = C_LIN, c_quad: float = C_QUAD) -> np.ndarray:
-    sol = solve_ivp(newton_rhs(c_lin, c_quad), (0.0, t), y0, method="DOP853",
-                    rtol=1e-13, atol=1e-15)
+    sol = solve_ivp(
+        newton_rhs(c_lin, c_quad), (0.0, t), y0, method="DOP853", rtol=1e-13, atol=1e-15
+    )
     return sol.y[:, -1]
 
 
@@ -58,12 +59,14 @@ def linear_drag(y0, t, c_lin: float) -> np.ndarray:
         g = mpmath.mpf(G)
         t = mpmath.mpf(t)
         decay = mpmath.exp(-k * t)
-        return np.array([
-            float(x0 + vx * (1 - decay) / k),
-            float(z0 + (vz + g / k) * (1 - decay) / k - g * t / k),
-            float(vx * decay),
-            float((vz + g / k) * decay - g / k),
-        ])
+        return np.array(
+            [
+                float(x0 + vx * (1 - decay) / k),
+                float(z0 + (vz + g / k) * (1 - decay) / k - g * t / k),
+                float(vx * decay),
+                float((vz + g / k) * decay - g / k),
+            ]
+        )
 
 
 def fly(model, y0, t_end: float) -> np.ndarray:
@@ -148,8 +151,16 @@ def independent_run(y0, w0: float, impacts: int) -> np.ndarray:
     rows = []
     t0, y, w = 0.0, list(y0), w0
     for _ in range(impacts):
-        sol = solve_ivp(newton_rhs(C_LIN, C_QUAD), (0.0, 5.0), y, method="DOP853",
-                        rtol=1e-13, atol=1e-15, events=gap, max_step=1e-3)
+        sol = solve_ivp(
+            newton_rhs(C_LIN, C_QUAD),
+            (0.0, 5.0),
+            y,
+            method="DOP853",
+            rtol=1e-13,
+            atol=1e-15,
+            events=gap,
+            max_step=1e-3,
+        )
         (tau,), (ye,) = sol.t_events[0], sol.y_events[0]
         z = math.atan(2 * A_PARABOLA * parabola_gap(ye[0], ye[1])[1])
         u1, u2, w, regime = rough_impact(ye[2], ye[3], w, z, 0.393, 0.61, 0.47)
@@ -179,9 +190,11 @@ def test_first_impacts_of_a_run_with_drag():
             float(np.max(np.abs(got[:, 1:3] - reference[:, 1:3]))),
             float(max(np.max(np.abs(got[:, 3:] - reference[:, 3:5])), spin.max())),
         )
-        print(f"[validation] first 6 impacts with drag, rtol = {rtol:g}: largest error "
-              f"in t {errors[rtol][0]:.1e} s, position {errors[rtol][1]:.1e} m, "
-              f"speed {errors[rtol][2]:.1e} m/s")
+        print(
+            f"[validation] first 6 impacts with drag, rtol = {rtol:g}: largest error "
+            f"in t {errors[rtol][0]:.1e} s, position {errors[rtol][1]:.1e} m, "
+            f"speed {errors[rtol][2]:.1e} m/s"
+        )
     t_err, q_err, v_err = errors[1e-10]
     assert t_err < 1e-10 and q_err < 1e-10 and v_err < 1e-9
     # tightening the engine's tolerance brings it closer to the reference, in proportion
@@ -226,14 +239,20 @@ def test_bounces_with_linear_drag_match_the_closed_form(tmp_path, monkeypatch):
     approach = min(abs(row[7]) for row in rows)
     errors = {}
     for rtol in (1e-10, 1e-12):
-        scene = scene_from_dict({
-            "boundary": {"curve": "0.001", "escape_height": 1.0},
-            "contact": {"restitution": e, "mu_static": mu_s, "mu_kinetic": mu_k,
-                        "elastic_below": 0.0},
-            "air": {"drag": "fowles", "c_lin": c_lin, "c_quad": 0.0},
-            "initial": {"q1": 0.0, "q2": 0.05, "v1": 1.2, "v2": 0.6, "omega": 500.0},
-            "run": {"rtol": rtol},
-        })
+        scene = scene_from_dict(
+            {
+                "boundary": {"curve": "0.001", "escape_height": 1.0},
+                "contact": {
+                    "restitution": e,
+                    "mu_static": mu_s,
+                    "mu_kinetic": mu_k,
+                    "elastic_below": 0.0,
+                },
+                "air": {"drag": "fowles", "c_lin": c_lin, "c_quad": 0.0},
+                "initial": {"q1": 0.0, "q2": 0.05, "v1": 1.2, "v2": 0.6, "omega": 500.0},
+                "run": {"rtol": rtol},
+            }
+        )
         c = simulate(scene, collisions=5).columns
         assert list(c["regime"]) == [row[6] for row in rows]
         got = np.column_stack([c[k] for k in ("t", "q1", "q2", "v1", "v2", "omega")])
@@ -243,9 +262,11 @@ def test_bounces_with_linear_drag_match_the_closed_form(tmp_path, monkeypatch):
             float(diff[:, 1:3].max()),
             float(max(diff[:, 3:5].max(), R * diff[:, 5].max())),
         )
-        print(f"[validation] 5 bounces with linear drag, rtol = {rtol:g}: largest error in "
-              f"t {errors[rtol][0]:.1e} s, position {errors[rtol][1]:.1e} m, "
-              f"speed {errors[rtol][2]:.1e} m/s")
+        print(
+            f"[validation] 5 bounces with linear drag, rtol = {rtol:g}: largest error in "
+            f"t {errors[rtol][0]:.1e} s, position {errors[rtol][1]:.1e} m, "
+            f"speed {errors[rtol][2]:.1e} m/s"
+        )
     t_err, q_err, v_err = errors[1e-10]
     assert t_err < 10 * 1e-10 / approach and q_err < 10 * 1e-10 and v_err < 10 * 1e-10
     assert all(a > 20 * b for a, b in zip(errors[1e-10], errors[1e-12], strict=True))

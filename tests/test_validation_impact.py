@@ -89,8 +89,10 @@ def test_impact_law_matches_the_closed_form_on_random_impacts():
         # the reported pre-impact contact velocity
         assert out.wt == pytest.approx(vt + R * w, abs=1e-13 * (scale + abs(R * w)))
         assert out.wn == pytest.approx(vn, abs=1e-13 * scale)
-    print(f"[validation] impact law vs closed form, 2000 random impacts: largest error "
-          f"{worst:.1e} of the speed scale")
+    print(
+        f"[validation] impact law vs closed form, 2000 random impacts: largest error "
+        f"{worst:.1e} of the speed scale"
+    )
     assert regimes == {"stick", "slip"}
 
 
@@ -153,8 +155,7 @@ def test_spin_after_the_impact_has_the_physical_sign():
 def thrown_scene(curve: str, q2: float, v1: float, v2: float, omega: float, **extra):
     data = {
         "boundary": {"curve": curve, "escape_height": 1.0},
-        "contact": {"restitution": 0.6, "mu_static": 0.5, "mu_kinetic": 0.35,
-                    "elastic_below": 0.0},
+        "contact": {"restitution": 0.6, "mu_static": 0.5, "mu_kinetic": 0.35, "elastic_below": 0.0},
         "air": {"drag": "none"},
         "initial": {"q1": 0.0, "q2": q2, "v1": v1, "v2": v2, "omega": omega},
     }
@@ -197,8 +198,12 @@ def test_ball_thrown_onto_a_plane(case, tmp_path, monkeypatch):
     extra = {}
     if drive is not None:
         amplitude, frequency, phase = drive
-        extra = {"drive__amplitude": amplitude, "drive__frequency": frequency,
-                 "drive__phase": phase, "drive__direction": "horizontal"}
+        extra = {
+            "drive__amplitude": amplitude,
+            "drive__frequency": frequency,
+            "drive__phase": phase,
+            "drive__direction": "horizontal",
+        }
     scene = thrown_scene(curve, q2_0, v1, v2, omega, **extra)
     row = {k: v[0] for k, v in simulate(scene, collisions=1).columns.items()}
     t, q1, q2 = first_contact_on_line(slope, q2_0, v1, v2)

@@ -78,9 +78,7 @@ def wall_energies(c: dict, vertex_height: float) -> tuple[np.ndarray, np.ndarray
 
 def test_right_angle_wedge_separates_into_two_conserved_energies():
     impacts = 25_000
-    scene = elastic_scene(
-        "wedge", 1.55e-3, {"b": 1.0, "c": C}, q1=0.01, q2=0.05, v1=0.3, v2=0.1
-    )
+    scene = elastic_scene("wedge", 1.55e-3, {"b": 1.0, "c": C}, q1=0.01, q2=0.05, v1=0.3, v2=0.1)
     c = simulate(scene, collisions=impacts).columns
     e_r, e_l = wall_energies(c, C)
     # the reference values, from the initial state alone
@@ -102,9 +100,7 @@ def test_right_angle_wedge_separates_into_two_conserved_energies():
 def test_other_wedge_angles_mix_the_two_energies():
     """Control: with b = 1.85 (the paper's wedge, half-angle 28 degrees) the normals are
     not orthogonal and the same two quantities are far from conserved."""
-    scene = elastic_scene(
-        "wedge", 1.55e-3, {"b": 1.85, "c": C}, q1=0.01, q2=0.05, v1=0.3, v2=0.1
-    )
+    scene = elastic_scene("wedge", 1.55e-3, {"b": 1.85, "c": C}, q1=0.01, q2=0.05, v1=0.3, v2=0.1)
     c = simulate(scene, collisions=2000).columns
     e_r, e_l = wall_energies(c, C)
     total = e_r[0] + e_l[0]
@@ -149,8 +145,10 @@ def test_parabola_integral_is_preserved_by_every_impact_at_the_contact_point():
         before = focal_integral(xs, ys, v1_before, v2_before)
         after = focal_integral(xs, ys, c["v1"], c["v2"])
         jump = float(np.max(np.abs(after - before)) / integral_scale())
-        print(f"[validation] parabola r = {radius:g} m: largest jump of I at the contact "
-              f"point {jump:.2e}")
+        print(
+            f"[validation] parabola r = {radius:g} m: largest jump of I at the contact "
+            f"point {jump:.2e}"
+        )
         assert jump < 1e-13
 
 
@@ -162,12 +160,16 @@ def test_parabola_integral_of_the_centre_drifts_linearly_in_the_radius():
     impacts = 3000
     drifts = {r: centre_drift(r, impacts) for r in (1e-8, 1e-7, 1e-6)}
     for r, d in drifts.items():
-        print(f"[validation] parabola r = {r:g} m: drift of I over {impacts} impacts "
-              f"{d:.3e} (relative to (E/m) p)")
+        print(
+            f"[validation] parabola r = {r:g} m: drift of I over {impacts} impacts "
+            f"{d:.3e} (relative to (E/m) p)"
+        )
     slope = (drifts[1e-7] - drifts[1e-8]) / (1e-7 - 1e-8)
     at_zero = drifts[1e-8] - slope * 1e-8
-    print(f"[validation] parabola: drift per unit radius {slope:.4g} /m, "
-          f"extrapolated to r = 0: {at_zero:.2e}")
+    print(
+        f"[validation] parabola: drift per unit radius {slope:.4g} /m, "
+        f"extrapolated to r = 0: {at_zero:.2e}"
+    )
     assert abs(at_zero) < 0.05 * drifts[1e-8]
     assert drifts[1e-7] / drifts[1e-8] == pytest.approx(10.0, rel=0.05)
     assert drifts[1e-6] / drifts[1e-7] == pytest.approx(10.0, rel=0.05)
@@ -179,7 +181,9 @@ def test_parabola_integral_drift_for_the_paper_ball():
     I of the centre is not a constant of its motion (the drift is of order one)."""
     drift_point = centre_drift(1e-7, 25_000)
     drift_ball = centre_drift(1.55e-3, 25_000)
-    print(f"[validation] parabola over 25000 impacts: drift of I {drift_point:.3e} at "
-          f"r = 1e-7 m, {drift_ball:.3e} at r = 1.55e-3 m")
+    print(
+        f"[validation] parabola over 25000 impacts: drift of I {drift_point:.3e} at "
+        f"r = 1e-7 m, {drift_ball:.3e} at r = 1.55e-3 m"
+    )
     assert drift_point < 1e-4
     assert drift_ball > 1e3 * drift_point

@@ -41,16 +41,19 @@ G = 9.81
 def assert_settled(result: LyapunovResult, sign: float) -> None:
     """The running estimate has the expected sign over the whole second half."""
     running = result.running[:, 2] / result.running[:, 0]
-    half = running[len(running) // 2:]
+    half = running[len(running) // 2 :]
     assert np.all(np.sign(half) == sign), half
 
 
-@pytest.mark.parametrize("name, regular", [
-    ("parabola-5.4hz", True),
-    ("hyperbola-4.5hz", True),
-    ("wedge-6.6hz", False),
-    ("hyperbola-5.8hz", False),
-])
+@pytest.mark.parametrize(
+    "name, regular",
+    [
+        ("parabola-5.4hz", True),
+        ("hyperbola-4.5hz", True),
+        ("wedge-6.6hz", False),
+        ("hyperbola-5.8hz", False),
+    ],
+)
 def test_paper_scenes_regular_or_chaotic(name, regular):
     result = lyapunov_exponent(load_scene(name), impacts=3000, transient=1000)
     print(f"[validation] {name}: {format_lyapunov(result)}")
@@ -59,12 +62,15 @@ def test_paper_scenes_regular_or_chaotic(name, regular):
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("name, regular", [
-    ("parabola-5.4hz", True),
-    ("hyperbola-4.5hz", True),
-    ("wedge-6.6hz", False),
-    ("hyperbola-5.8hz", False),
-])
+@pytest.mark.parametrize(
+    "name, regular",
+    [
+        ("parabola-5.4hz", True),
+        ("hyperbola-4.5hz", True),
+        ("wedge-6.6hz", False),
+        ("hyperbola-5.8hz", False),
+    ],
+)
 def test_paper_scenes_over_the_paper_run_length(name, regular):
     """25,000 impacts, the length of the paper's runs."""
     result = lyapunov_exponent(load_scene(name), impacts=25_000, transient=1000)
@@ -122,8 +128,15 @@ def test_exponent_of_the_locked_parabola_orbit_matches_its_monodromy_matrix():
     sim = Simulation(scene)
     c = simulate(scene, collisions=2000).columns
     n = 1990
-    post = BallState(c["t"][n], sim.drive.angle(c["t"][n]), c["q1"][n], c["q2"][n],
-                     c["v1"][n], c["v2"][n], c["omega"][n])
+    post = BallState(
+        c["t"][n],
+        sim.drive.angle(c["t"][n]),
+        c["q1"][n],
+        c["q2"][n],
+        c["v1"][n],
+        c["v2"][n],
+        c["omega"][n],
+    )
     start = flown(sim, post, 0.5 * c["tof"][n + 1])
     x0 = np.array([start.q1, start.q2, start.u1, start.u2, start.u3])
     scale = np.array([1.0, 1.0, 0.03, 0.03, 0.03 * scene.ball.radius])  # m, like the metric
@@ -139,9 +152,11 @@ def test_exponent_of_the_locked_parabola_orbit_matches_its_monodromy_matrix():
     rho = float(np.max(np.abs(np.linalg.eigvals(jac))))
     expected = math.log(rho) / per_period
     result = lyapunov_exponent(scene, impacts=3000, transient=1000)
-    print(f"[validation] parabola-5.4hz: exponent {result.per_impact:.5f} per impact; from "
-          f"the monodromy matrix (rho = {rho:.5f}, {per_period} impacts per period) "
-          f"{expected:.5f}")
+    print(
+        f"[validation] parabola-5.4hz: exponent {result.per_impact:.5f} per impact; from "
+        f"the monodromy matrix (rho = {rho:.5f}, {per_period} impacts per period) "
+        f"{expected:.5f}"
+    )
     assert result.per_impact == pytest.approx(expected, rel=0.01)
 
 
@@ -152,15 +167,20 @@ def elastic_wedge(b: float):
     """Lehtihet and Miller's billiard: e = 1, no friction, no air, no drive, a
     point-like ball (r = 1e-7 m; a finite ball in a wedge is exactly a point in the
     wedge of the offset lines), walls y = +-b x."""
-    return scene_from_dict({
-        "boundary": {"curve": "wedge", "parameters": {"b": b, "c": 0.0},
-                     "escape_height": 10.0},
-        "ball": {"radius": 1e-7},
-        "contact": {"restitution": 1.0, "mu_static": 0.0, "mu_kinetic": 0.0,
-                    "elastic_below": 0.0},
-        "air": {"drag": "none"},
-        "initial": {"q1": 0.01, "q2": 0.05, "v1": 0.3, "v2": 0.0},
-    })
+    return scene_from_dict(
+        {
+            "boundary": {"curve": "wedge", "parameters": {"b": b, "c": 0.0}, "escape_height": 10.0},
+            "ball": {"radius": 1e-7},
+            "contact": {
+                "restitution": 1.0,
+                "mu_static": 0.0,
+                "mu_kinetic": 0.0,
+                "elastic_below": 0.0,
+            },
+            "air": {"drag": "none"},
+            "initial": {"q1": 0.01, "q2": 0.05, "v1": 0.3, "v2": 0.0},
+        }
+    )
 
 
 def wedge_collision(state: np.ndarray, b: float) -> np.ndarray:
@@ -191,7 +211,7 @@ def wedge_exponent(b: float, collisions: int) -> float:
     total, h = 0.0, 1e-8
     for _ in range(collisions):
         step = h * tangent / weights
-        image = (wedge_collision(state + step, b) - wedge_collision(state - step, b))
+        image = wedge_collision(state + step, b) - wedge_collision(state - step, b)
         image = image * weights / (2.0 * h)
         norm = float(np.linalg.norm(image))
         total += math.log(norm)
@@ -205,8 +225,10 @@ def test_wedge_wider_than_90_degrees_is_chaotic_as_the_independent_map(b):
     half_angle = math.degrees(math.atan(1.0 / b))
     result = lyapunov_exponent(elastic_wedge(b), impacts=10_000)
     reference = wedge_exponent(b, 20_000)
-    print(f"[validation] elastic wedge, half-angle {half_angle:.1f} deg: "
-          f"{result.per_impact:.4f} per impact; independent map {reference:.4f}")
+    print(
+        f"[validation] elastic wedge, half-angle {half_angle:.1f} deg: "
+        f"{result.per_impact:.4f} per impact; independent map {reference:.4f}"
+    )
     assert reference > 0.1
     assert result.per_impact == pytest.approx(reference, rel=0.03)
 
@@ -217,8 +239,10 @@ def test_right_angle_wedge_has_zero_exponent():
     result = lyapunov_exponent(elastic_wedge(1.0), impacts=10_000)
     reference = wedge_exponent(1.0, 10_000)
     running = result.running[:, 2] / result.running[:, 0]
-    print(f"[validation] elastic wedge, half-angle 45 deg: {result.per_impact:.5f} per "
-          f"impact (independent map {reference:.5f})")
+    print(
+        f"[validation] elastic wedge, half-angle 45 deg: {result.per_impact:.5f} per "
+        f"impact (independent map {reference:.5f})"
+    )
     assert abs(result.per_impact) < 0.01 and abs(reference) < 0.01
     # decaying: the estimate at the end is well below the one at a quarter of the run
     assert abs(running[-1]) < 0.5 * abs(running[len(running) // 4])
@@ -230,8 +254,10 @@ def test_wedge_exponents_over_long_runs(b):
     half_angle = math.degrees(math.atan(1.0 / b))
     result = lyapunov_exponent(elastic_wedge(b), impacts=50_000)
     reference = wedge_exponent(b, 50_000)
-    print(f"[validation] elastic wedge, half-angle {half_angle:.1f} deg, 50000 impacts: "
-          f"{result.per_impact:.4f} per impact; independent map {reference:.4f}")
+    print(
+        f"[validation] elastic wedge, half-angle {half_angle:.1f} deg, 50000 impacts: "
+        f"{result.per_impact:.4f} per impact; independent map {reference:.4f}"
+    )
     assert result.per_impact == pytest.approx(reference, rel=0.03, abs=0.005)
 
 

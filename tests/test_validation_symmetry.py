@@ -62,28 +62,39 @@ def one_impact(sim: Simulation, t, q1, q2, v1, v2, omega) -> tuple:
 
 def mirror_distance(a: dict, b: dict) -> np.ndarray:
     """Scaled distance between a record and the mirror of another, row by row."""
-    return np.max([
-        np.abs(a["t"] - b["t"]),
-        np.abs(a["q1"] + b["q1"]),
-        np.abs(a["q2"] - b["q2"]),
-        T_SCALE * np.abs(a["v1"] + b["v1"]),
-        T_SCALE * np.abs(a["v2"] - b["v2"]),
-        T_SCALE * R * np.abs(a["omega"] + b["omega"]),
-    ], axis=0)
+    return np.max(
+        [
+            np.abs(a["t"] - b["t"]),
+            np.abs(a["q1"] + b["q1"]),
+            np.abs(a["q2"] - b["q2"]),
+            T_SCALE * np.abs(a["v1"] + b["v1"]),
+            T_SCALE * np.abs(a["v2"] - b["v2"]),
+            T_SCALE * R * np.abs(a["omega"] + b["omega"]),
+        ],
+        axis=0,
+    )
 
 
 def mirrored(scene, changes: dict | None = None):
     """The mirrored scene: drive phase + pi and the mirrored initial state."""
     i = scene.initial
-    values = {"drive.phase": scene.drive.phase + math.pi, "initial.v1": -i.v1,
-              "initial.omega": -i.omega}
+    values = {
+        "drive.phase": scene.drive.phase + math.pi,
+        "initial.v1": -i.v1,
+        "initial.omega": -i.omega,
+    }
     if i.q1 is not None:
         values["initial.q1"] = -i.q1
     return with_values(scene, values | (changes or {}))
 
 
-DROPPED = {"initial.q1": 0.004, "initial.q2": 0.05, "initial.v1": 0.1, "initial.v2": 0.0,
-           "initial.omega": 20.0}
+DROPPED = {
+    "initial.q1": 0.004,
+    "initial.q2": 0.05,
+    "initial.v1": 0.1,
+    "initial.v2": 0.0,
+    "initial.omega": 20.0,
+}
 
 
 @pytest.mark.parametrize("drag", ["none", "fowles"])
@@ -96,8 +107,9 @@ def test_mirror_and_restart_impact_by_impact(name, drag):
     c = result.columns
     sim, sim_mirror = Simulation(scene), Simulation(mirrored(scene))
     # the wedge's two walls trade places; the smooth curves have a single wall
-    swap = {"0": "1", "1": "0", "lid": "lid"} if name.startswith("wedge") else {
-        "0": "0", "lid": "lid"}
+    swap = (
+        {"0": "1", "1": "0", "lid": "lid"} if name.startswith("wedge") else {"0": "0", "lid": "lid"}
+    )
     worst_mirror = worst_restart = 0.0
     for n in range(impacts - 1):
         state = (c["t"][n], c["q1"][n], c["q2"][n], c["v1"][n], c["v2"][n], c["omega"][n])
@@ -106,19 +118,31 @@ def test_mirror_and_restart_impact_by_impact(name, drag):
         image = one_impact(sim_mirror, t, -q1, q2, -v1, v2, -omega)
         # record rows: n, t, q1, q2, v1, v2, omega, u4, un, tof, regime, z, energy, wall
         assert image[10] == row[10] and image[13] == swap[row[13]]
-        worst_mirror = max(worst_mirror, abs(row[1] - image[1]), abs(row[2] + image[2]),
-                           abs(row[3] - image[3]), T_SCALE * abs(row[4] + image[4]),
-                           T_SCALE * abs(row[5] - image[5]), T_SCALE * abs(row[7] + image[7]),
-                           T_SCALE * R * abs(row[6] + image[6]))
+        worst_mirror = max(
+            worst_mirror,
+            abs(row[1] - image[1]),
+            abs(row[2] + image[2]),
+            abs(row[3] - image[3]),
+            T_SCALE * abs(row[4] + image[4]),
+            T_SCALE * abs(row[5] - image[5]),
+            T_SCALE * abs(row[7] + image[7]),
+            T_SCALE * R * abs(row[6] + image[6]),
+        )
         # the restart reproduces the next row of the continuous run
         assert row[10] == c["regime"][n + 1] and row[13] == c["wall"][n + 1]
-        worst_restart = max(worst_restart, abs(row[1] - c["t"][n + 1]),
-                            abs(row[2] - c["q1"][n + 1]), abs(row[3] - c["q2"][n + 1]),
-                            T_SCALE * abs(row[4] - c["v1"][n + 1]),
-                            T_SCALE * abs(row[5] - c["v2"][n + 1]),
-                            T_SCALE * R * abs(row[6] - c["omega"][n + 1]))
-    print(f"[validation] {name}, drag {drag}: one-impact mirror error {worst_mirror:.1e}, "
-          f"restart error {worst_restart:.1e} (scaled m)")
+        worst_restart = max(
+            worst_restart,
+            abs(row[1] - c["t"][n + 1]),
+            abs(row[2] - c["q1"][n + 1]),
+            abs(row[3] - c["q2"][n + 1]),
+            T_SCALE * abs(row[4] - c["v1"][n + 1]),
+            T_SCALE * abs(row[5] - c["v2"][n + 1]),
+            T_SCALE * R * abs(row[6] - c["omega"][n + 1]),
+        )
+    print(
+        f"[validation] {name}, drag {drag}: one-impact mirror error {worst_mirror:.1e}, "
+        f"restart error {worst_restart:.1e} (scaled m)"
+    )
     assert worst_mirror < TOLERANCE[drag] and worst_restart < TOLERANCE[drag]
 
 
@@ -139,8 +163,10 @@ def test_mirrored_runs(name, start):
     distance = mirror_distance(a, b)
     apart = np.flatnonzero(distance > 1e-9)
     first = int(apart[0]) + 1 if apart.size else None
-    print(f"[validation] {name}, {start}: mirrored runs agree to 1e-9 up to impact "
-          f"{first - 1 if first else impacts}")
+    print(
+        f"[validation] {name}, {start}: mirrored runs agree to 1e-9 up to impact "
+        f"{first - 1 if first else impacts}"
+    )
     horizon = impacts if name == "parabola-5.4hz" else 50
     assert np.all(distance[:horizon] < 1e-9)
     assert np.array_equal(a["regime"][:horizon], b["regime"][:horizon])
@@ -156,12 +182,26 @@ def test_restart_through_the_scene_file(name):
     assert result.stop_reason is None
     c = result.columns
     for n in (99, 699, 1299):
-        values = {f"initial.{k}": float(c[col][n]) for k, col in
-                  (("t", "t"), ("q1", "q1"), ("q2", "q2"), ("v1", "v1"), ("v2", "v2"),
-                   ("omega", "omega"))}
+        values = {
+            f"initial.{k}": float(c[col][n])
+            for k, col in (
+                ("t", "t"),
+                ("q1", "q1"),
+                ("q2", "q2"),
+                ("v1", "v1"),
+                ("v2", "v2"),
+                ("omega", "omega"),
+            )
+        }
         again = simulate(with_values(scene, values), collisions=5).columns
-        assert np.array_equal(again["regime"], c["regime"][n + 1:n + 6])
-        for key, scale in (("t", 1.0), ("q1", 1.0), ("q2", 1.0), ("v1", T_SCALE),
-                           ("v2", T_SCALE), ("omega", T_SCALE * R)):
-            error = scale * np.abs(again[key] - c[key][n + 1:n + 6])
+        assert np.array_equal(again["regime"], c["regime"][n + 1 : n + 6])
+        for key, scale in (
+            ("t", 1.0),
+            ("q1", 1.0),
+            ("q2", 1.0),
+            ("v1", T_SCALE),
+            ("v2", T_SCALE),
+            ("omega", T_SCALE * R),
+        ):
+            error = scale * np.abs(again[key] - c[key][n + 1 : n + 6])
             assert np.all(error < TOLERANCE["fowles"]), (n, key, error)
