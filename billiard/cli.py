@@ -148,7 +148,7 @@ def cmd_run(args: argparse.Namespace) -> int:
     try:
         try:
             if args.resume is not None:
-                if args.scene or args.set or args.method or args.out:
+                if args.scene or args.set or args.method or args.out or args.duration:
                     raise UserError(
                         "run --resume DIR continues a run as it was set up: give no "
                         "SCENE, --out, --set or --method with it"
@@ -192,6 +192,7 @@ def cmd_run(args: argparse.Namespace) -> int:
                         method=args.method,
                         out_dir=out,
                         progress=bar,
+                        duration=args.duration,
                     )
                 except CheckpointError as exc:  # another process is writing a run in DIR
                     raise UserError(f"cannot run in {out}: {exc}") from None
@@ -389,6 +390,13 @@ def build_parser() -> argparse.ArgumentParser:
         "--method",
         choices=["event", "rk4"],
         help="flight and impact-detection method (default: the scene's, 'event')",
+    )
+    p.add_argument(
+        "--duration",
+        type=float,
+        metavar="S",
+        help="stop after S seconds of simulated time (with --collisions: whichever comes "
+        "first; default: the scene's run.duration, no limit)",
     )
     p.add_argument("--out", help="output directory (default: runs/SCENE)")
     p.add_argument(

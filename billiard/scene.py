@@ -470,6 +470,8 @@ class Run:
         rtol: relative tolerance of the error-controlled flight with drag, in (0, 1e-3].
         step: time step (s) of the ``"rk4"`` method.
         gravity: gravitational acceleration g (m/s^2).
+        duration: simulated time (s) after which the run stops, or None for no limit;
+            the run ends at whichever of ``collisions`` and ``duration`` comes first.
     """
 
     collisions: int = 25000
@@ -477,6 +479,7 @@ class Run:
     rtol: float = 1e-10
     step: float = 1e-4
     gravity: float = 9.81
+    duration: float | None = None
 
     def __post_init__(self) -> None:
         collisions = self.collisions
@@ -490,6 +493,8 @@ class Run:
         _set(self, "rtol", rtol)
         _set(self, "step", _positive("run.step", self.step))
         _set(self, "gravity", _positive("run.gravity", self.gravity))
+        if self.duration is not None:
+            _set(self, "duration", _positive("run.duration", self.duration))
 
 
 @dataclass(frozen=True)
@@ -720,6 +725,7 @@ _ABSENT_NOTES = {
     "boundary.ceiling": "ceiling: absent, the container has no lid",
     "initial.q1": "q1: absent, resolved by the engine",
     "initial.q2": "q2: absent, resolved by the engine",
+    "run.duration": "duration: absent, no limit on simulated time",
 }
 
 

@@ -305,6 +305,10 @@ class Simulation:
             self.locator = EventLocator(self.boundary, self.flight, scene.run.gravity)
         self.impact = KaneLevinsonImpact.from_scene(scene)
         self.initial = self.initial_state()
+        #: simulated time (s) at which a run ends (inf when the scene sets no duration)
+        self.end_time = (
+            math.inf if scene.run.duration is None else self.initial.t + scene.run.duration
+        )
         self.counts: dict[str, int] = {"stick": 0, "slip": 0, "elastic": 0, "resting": 0}
         self.final_time = self.initial.t
         #: the engine state after the last recorded impact of the latest :meth:`run`
@@ -422,6 +426,7 @@ class Simulation:
         start: EngineState | None = None,
         checkpoint: Callable[[EngineState], None] | None = None,
         stop: _StopRequest | None = None,
+        until: float = math.inf,
     ) -> str | None:
         """Simulate until ``collisions`` impacts, appending one row per impact to
         ``recorder``. Returns None, or the one-line reason the run stopped early.
@@ -436,6 +441,8 @@ class Simulation:
                 every ``CHECKPOINT_INTERVAL`` seconds of wall-clock time.
             stop: a stop request set by a signal handler: the loop ends at the next
                 impact boundary by raising :class:`RunInterrupted`.
+            until: simulated time (s) at which the run ends: an impact after it is not
+                recorded, and ``self.final_time`` becomes ``until``.
 
         Afterwards ``self.state`` is the engine state after the last recorded impact.
         """
@@ -482,6 +489,9 @@ class Simulation:
                 else:
                     error = clock_error + ((tau - total) + clock)
                 t = total + error
+                if t > until:
+                    self.final_time = until
+                    break
                 if ev.surface.kind == "escape":
                     raise SimulationError(
                         f"ball escaped above escape_height = {scene.boundary.escape_height!r} m "
@@ -698,6 +708,7 @@ def simulate(
     method: str | None = None,
     out_dir: str | os.PathLike[str] | None = None,
     progress: Progress | None = None,
+    duration: float | None = None,
 ) -> Result:
     """Run a scene.
 
@@ -708,6 +719,8 @@ def simulate(
         out_dir: stream the run to ``out_dir`` (``collisions.csv``, ``scene.toml`` and
             ``checkpoint.json``, see the module docstring) instead of memory.
         progress: called as ``progress(n_done, n_total)`` every few impacts.
+        duration: simulated time (s) after which the run stops, whichever of the two
+            limits comes first; default ``scene.run.duration`` (None: no limit).
 
     Returns:
         A :class:`Result`; a run that had to stop early (ball escaped, inelastic
@@ -721,13 +734,15 @@ def simulate(
         RunInterrupted: a streamed run got SIGINT or SIGTERM; its files are complete up
             to the last impact and :func:`resume` continues it.
     """
+    if duration is not None:
+        scene = with_values(scene, {"run.duration": duration})  # validates it
     sim = Simulation(scene, method)
     total = scene.run.collisions if collisions is None else int(collisions)
     resolved = sim.resolved_scene(total)  # validates the impact count before any work
     if out_dir is None:
         recorder = MemoryRecorder()
         start = time.perf_counter()
-        stop_reason = sim.run(total, recorder, progress)
+        stop_reason = sim.run(total, recorder, progress, until=sim.end_time)
         wall_time = time.perf_counter() - start
         return Result(resolved, recorder, stop_reason, wall_time, sim.counts, sim.final_time)
     return run_streamed(sim, out_dir, collisions=total, progress=progress)
@@ -822,7 +837,8 @@ def resume(
         )
     total = scene.run.collisions if collisions is None else int(collisions)
     rows = mark.rows
-    if status == "stopped" or (status == "complete" and total <= rows):
+    by_time = scene.run.duration is not None and collisions is None
+    if status == "stopped" or (status == "complete" and (total <= rows or by_time)):
         if collisions is not None and total < rows:
             raise CheckpointError(
                 f"the run in {out} already has {rows} impacts; to extend it, ask for more"
@@ -986,6 +1002,7 @@ def _run_streamed(
                     start=start,
                     checkpoint=lambda state: save(state, "running"),
                     stop=request,
+                    until=sim.end_time,
                 )
             except RunInterrupted as exc:
                 save(sim.state, "interrupted")

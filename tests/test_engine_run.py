@@ -191,3 +191,26 @@ def test_run_from_written_scene_toml_reproduces_the_csv(tmp_path, name):
     a = (first / "collisions.csv").read_bytes()
     assert a.count(b"\n") == 301
     assert a == (second / "collisions.csv").read_bytes()
+
+
+def test_duration_stops_at_the_last_impact_before_it():
+    scene = load_scene("wedge-6.6hz")
+    limited = simulate(scene, collisions=100_000, duration=0.5)
+    free = simulate(scene, collisions=len(limited) + 1)
+    t_limited, t_free = limited.columns["t"], free.columns["t"]
+    assert limited.stop_reason is None
+    assert limited.final_time == 0.5
+    assert t_limited[-1] <= 0.5 < t_free[-1]
+    # the time limit changes nothing before it: the rows are a prefix of the free run
+    np.testing.assert_array_equal(t_limited, t_free[:-1])
+
+
+def test_duration_from_the_command_line(tmp_path, capsys):
+    from billiard.cli import main
+
+    assert main(["run", "wedge-6.6hz", "--duration", "-1", "--out", str(tmp_path / "a")]) == 2
+    assert "run.duration" in capsys.readouterr().err
+    out = tmp_path / "b"
+    assert main(["run", "wedge-6.6hz", "--duration", "0.2", "--no-plot", "--out", str(out)]) == 0
+    rows = (out / "collisions.csv").read_text().splitlines()[1:]
+    assert rows and float(rows[-1].split(",")[1]) <= 0.2
