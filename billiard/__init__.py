@@ -18,6 +18,7 @@ from __future__ import annotations
 import importlib
 from typing import Any
 
+from .engine import Simulation
 from .scene import (
     Scene,
     SceneError,
@@ -28,12 +29,13 @@ from .scene import (
     with_values,
 )
 from .simulate import Result, simulate
+from .status import Status
 
 __version__ = "0.1.0"
 
 _EXPORTS = {
     "load_curve": "billiard.curves",
-    "read_collisions": "billiard.camera",
+    "read_collisions": "billiard.record",
     "camera_filter": "billiard.camera",
     "calibrate": "billiard.calibrate",
     "plot_run": "billiard.plot",
@@ -41,6 +43,8 @@ _EXPORTS = {
 
 __all__ = [
     "Result",
+    "Simulation",
+    "Status",
     "Scene",
     "SceneError",
     "builtin_scenes",

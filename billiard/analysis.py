@@ -22,12 +22,11 @@ from typing import Any
 
 import numpy as np
 
-from billiard.simulate import BallState, Simulation
+from billiard.engine import Simulation
+from billiard.errors import SimulationError
+from billiard.state import BallState
 
 __all__ = ["LyapunovResult", "format_lyapunov", "lyapunov_exponent"]
-
-# column positions in an engine record row (see billiard.record.COLUMNS)
-_T, _Q1, _Q2, _U1, _U2, _U3 = 1, 2, 3, 4, 5, 6
 
 
 @dataclass(frozen=True)
@@ -66,21 +65,6 @@ class LyapunovResult:
     stop_reason: str | None = None
 
 
-class _LastRows:
-    """A minimal recorder that keeps only the latest row and counts rows."""
-
-    def __init__(self) -> None:
-        self.row: tuple[Any, ...] | None = None
-        self.count = 0
-
-    def append(self, row: tuple[Any, ...]) -> None:
-        self.row = row
-        self.count += 1
-
-    def close(self) -> None:
-        pass
-
-
 class _Stopped(Exception):
     """A run ended early; the message is the engine's stop reason."""
 
@@ -98,30 +82,26 @@ def _fly(sim: Simulation, state: BallState, tau: float) -> BallState:
     return BallState(t, sim.drive.angle(t), q1, q2, u1, u2, state.u3, 0.0)
 
 
+def _advance(sim: Simulation, state: BallState, impacts: int) -> BallState:
+    """Post-impact state after ``impacts`` engine steps from ``state``."""
+    if impacts <= 0:
+        return state
+    sim.reset(state)
+    try:
+        for _ in range(impacts):
+            sim.step()
+        if sim.pending_stop is not None:
+            raise sim.pending_stop
+    except SimulationError as exc:
+        raise _Stopped(str(exc)) from None
+    b = sim.ball
+    # the drive angle from the impact time, as for any state handed to the engine
+    return BallState(b.t, sim.drive.angle(b.t), b.q1, b.q2, b.u1, b.u2, b.u3, 0.0)
+
+
 def _next_impact(sim: Simulation, state: BallState) -> BallState:
     """Post-impact state of the next impact after ``state`` (one engine step)."""
-    sim.initial = state
-    rows = _LastRows()
-    reason = sim.run(1, rows)
-    if reason is not None or rows.row is None:
-        raise _Stopped(reason or "no impact recorded")
-    row = rows.row
-    t = float(row[_T])
-    return BallState(t, sim.drive.angle(t), row[_Q1], row[_Q2], row[_U1], row[_U2], row[_U3], 0.0)
-
-
-def _advance(sim: Simulation, state: BallState, collisions: int) -> BallState:
-    """Post-impact state after ``collisions`` impacts from ``state`` (one engine run)."""
-    if collisions <= 0:
-        return state
-    sim.initial = state
-    rows = _LastRows()
-    reason = sim.run(collisions, rows)
-    if reason is not None or rows.row is None:
-        raise _Stopped(reason or "no impact recorded")
-    row = rows.row
-    t = float(row[_T])
-    return BallState(t, sim.drive.angle(t), row[_Q1], row[_Q2], row[_U1], row[_U2], row[_U3], 0.0)
+    return _advance(sim, state, 1)
 
 
 def lyapunov_exponent(

@@ -31,7 +31,7 @@ def _user_errors() -> tuple[type[BaseException], ...]:
         ("billiard.errors", ["GeometryError", "SimulationError"]),
         ("billiard.derivation.curve", ["CurveDerivationError"]),
         ("billiard.calibrate", ["CalibrationError"]),
-        ("billiard.camera", ["RunDataError"]),
+        ("billiard.record", ["RunDataError", "CheckpointError"]),
     ):
         mod = sys.modules.get(module)
         if mod is not None:

@@ -6,6 +6,8 @@ traceback.
 
 from __future__ import annotations
 
+from billiard.status import Status
+
 __all__ = ["GeometryError", "SimulationError"]
 
 
@@ -20,4 +22,12 @@ class GeometryError(ValueError):
 class SimulationError(RuntimeError):
     """A run cannot continue: the ball escaped, the impacts collapsed, a number became
     non-finite, or a root solve failed. :func:`billiard.simulate.simulate` turns it into
-    ``Result.stop_reason`` and keeps the impacts recorded so far."""
+    ``Result.status`` and ``Result.stop_reason`` and keeps the impacts recorded so far.
+
+    Attributes:
+        status: the :class:`~billiard.status.Status` of the stop.
+    """
+
+    def __init__(self, message: str, status: Status = Status.SOLVER_FAILED):
+        super().__init__(message)
+        self.status = status

@@ -61,14 +61,15 @@ flight starts at tau = 0 with the drive angle theta0 and ends at the returned ev
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass
+from typing import Protocol
 
 from billiard.boundary import Boundary, Surface
 from billiard.errors import SimulationError
 from billiard.flight import FlightModel, RK4Flight
 
-__all__ = ["Event", "EventLocator", "FixedStepLocator"]
+__all__ = ["LOCATORS", "Event", "EventLocator", "FixedStepLocator", "Locator"]
 
 # The longest flight the locators follow before giving up (s of simulated time).
 MAX_FLIGHT_TIME = 1.0e3
@@ -109,6 +110,19 @@ class Event:
     theta: float
     s: float
     z: float
+
+
+class Locator(Protocol):
+    """What the engine needs of an impact locator: the next event of a flight, and its
+    memory between flights (for checkpoints)."""
+
+    def locate(
+        self, theta0: float, q1: float, q2: float, u1: float, u2: float, u3: float
+    ) -> Event: ...
+
+    def memory(self) -> dict[str, list[float]]: ...
+
+    def restore_memory(self, memory: Mapping[str, list[float]]) -> None: ...
 
 
 class EventLocator:
@@ -608,3 +622,19 @@ def _first_positive_root(c0: float, c1: float, c2: float) -> float:
     q = -0.5 * (c1 + math.copysign(root, c1))
     roots = [x for x in (q / c2, c0 / q if q != 0.0 else math.inf) if x > 0.0]
     return min(roots, default=math.inf)
+
+
+def _fixed_step_locator(
+    boundary: Boundary, flight: FlightModel, gravity: float
+) -> FixedStepLocator:
+    if not isinstance(flight, RK4Flight):
+        raise ValueError("the fixed-step locator drives the RK4 flight model only")
+    return FixedStepLocator(boundary, flight)
+
+
+#: Impact locators by method name (``run.method``): each is built from the boundary, the
+#: flight model and g (m/s^2).
+LOCATORS: dict[str, Callable[[Boundary, FlightModel, float], Locator]] = {
+    "event": EventLocator,
+    "rk4": _fixed_step_locator,
+}

@@ -31,12 +31,21 @@ Models:
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
+from typing import Any
 
 from billiard.errors import SimulationError
 from billiard.generated import ball as _ball
 
-__all__ = ["AdaptiveFlight", "ExactFlight", "FlightModel", "RK4Flight", "flight_model"]
+__all__ = [
+    "FLIGHT_MODELS",
+    "AdaptiveFlight",
+    "ExactFlight",
+    "FlightModel",
+    "RK4Flight",
+    "flight_model",
+    "flight_model_name",
+]
 
 State = tuple[float, float, float, float]
 
@@ -324,15 +333,53 @@ class RK4Flight(_AirFlight):
         )
 
 
-def flight_model(scene, method: str = "event") -> FlightModel:
-    """The flight model a scene needs: exact parabola when no air force is on, else the
-    error-controlled integrator; the fixed-step RK4 for ``method = "rk4"``."""
-    g = scene.run.gravity
-    m = scene.ball.mass
+def _exact(scene: Any) -> FlightModel:
+    return ExactFlight(scene.run.gravity)
+
+
+def _adaptive(scene: Any) -> FlightModel:
     c_lin, c_quad = scene.air.coefficients
-    c_magnus = float(scene.air.magnus)
+    return AdaptiveFlight(
+        scene.run.gravity,
+        scene.ball.mass,
+        c_lin,
+        c_quad,
+        float(scene.air.magnus),
+        rtol=scene.run.rtol,
+    )
+
+
+def _rk4(scene: Any) -> FlightModel:
+    c_lin, c_quad = scene.air.coefficients
+    return RK4Flight(
+        scene.run.gravity,
+        scene.ball.mass,
+        c_lin,
+        c_quad,
+        float(scene.air.magnus),
+        step=scene.run.step,
+    )
+
+
+#: Flight models by name, each built from a scene.
+FLIGHT_MODELS: dict[str, Callable[[Any], FlightModel]] = {
+    "exact": _exact,
+    "adaptive": _adaptive,
+    "rk4": _rk4,
+}
+
+
+def flight_model_name(scene: Any, method: str = "event") -> str:
+    """The flight model a scene needs: the exact parabola when no air force is on, else
+    the error-controlled integrator; the fixed-step RK4 for ``method = "rk4"``."""
     if method == "rk4":
-        return RK4Flight(g, m, c_lin, c_quad, c_magnus, step=scene.run.step)
-    if c_lin == 0.0 and c_quad == 0.0 and c_magnus == 0.0:
-        return ExactFlight(g)
-    return AdaptiveFlight(g, m, c_lin, c_quad, c_magnus, rtol=scene.run.rtol)
+        return "rk4"
+    c_lin, c_quad = scene.air.coefficients
+    if c_lin == 0.0 and c_quad == 0.0 and float(scene.air.magnus) == 0.0:
+        return "exact"
+    return "adaptive"
+
+
+def flight_model(scene: Any, method: str = "event") -> FlightModel:
+    """Build the flight model :func:`flight_model_name` chooses for a scene."""
+    return FLIGHT_MODELS[flight_model_name(scene, method)](scene)

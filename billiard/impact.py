@@ -9,12 +9,21 @@ needs the same ``apply(state, contact)`` method.
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any, Protocol
 
 from billiard.generated import ball as _ball
 
-__all__ = ["Contact", "ImpactLaw", "ImpactResult", "KaneLevinsonImpact"]
+__all__ = [
+    "IMPACT_LAWS",
+    "Contact",
+    "ImpactLaw",
+    "ImpactResult",
+    "KaneLevinsonImpact",
+    "LowVelocityRule",
+    "impact_law",
+]
 
 STICK = "stick"
 SLIP = "slip"
@@ -64,7 +73,43 @@ class ImpactResult:
 
 
 class ImpactLaw(Protocol):
+    """What the engine needs of an impact law: the regimes it reports (an open set; the
+    summary, plots and audits read them from here) and the jump of the speeds."""
+
+    regimes: tuple[str, ...]
+
     def apply(self, state: Any, contact: Contact) -> ImpactResult: ...
+
+
+class LowVelocityRule:
+    """The paper's low-velocity rule, a policy of the impact law (after Luding): an
+    impact whose relative normal speed |wn| is below ``threshold`` (m/s) is elastic
+    (e = 1), which prevents inelastic collapse.
+
+    A ball *lying* on the surface (|wn| below the threshold while its relative
+    acceleration presses it into the surface, e.g. at rest at the bottom of a shaken
+    container) cannot be lifted by any restitution, as there is nothing to reflect. For
+    it the impact is evaluated as if the ball approached at ``threshold``: it leaves at
+    that speed, and the ensuing micro-bounces, each carrying its friction impulse, stand
+    in for the rolling or sliding contact that the impact-only model lacks. The paper's
+    fixed time step plays the same role implicitly. ``threshold = 0`` disables the rule.
+    """
+
+    def __init__(self, threshold: float):
+        self.threshold = float(threshold)
+
+    def applies(self, wn: float) -> bool:
+        """Does the rule set e = 1 for this relative normal velocity (m/s)?"""
+        return abs(wn) < self.threshold
+
+    def lifts(self, wn: float, contact: Contact) -> bool:
+        """Is this a lying ball, to be relaunched at the threshold speed?"""
+        return contact.pressing and wn > -self.threshold
+
+    def approach_shift(self, wn: float) -> float:
+        """Change of the normal velocity (m/s, along c2) that makes a lying ball
+        approach at the threshold speed."""
+        return -self.threshold - wn
 
 
 class KaneLevinsonImpact:
@@ -73,22 +118,15 @@ class KaneLevinsonImpact:
     Newton restitution on the contact point's normal velocity relative to the boundary.
     The no-slip solution is tried first and kept if its impulse lies in the static
     friction cone, |Rt| <= mu_s Rn; otherwise the ball slips with Rt = -mu_k Rn sign(wt).
-
-    Low-velocity rule (to prevent inelastic collapse, after Luding): when the relative
-    normal speed |wn| is below ``elastic_below``, e = 1 and the regime is ``"elastic"``.
-    A ball *lying* on the surface (|wn| below the threshold while its relative
-    acceleration presses it into the surface, e.g. at rest at the bottom of a shaken
-    container) cannot be lifted by any restitution, as there is nothing to reflect. For
-    it the impact is evaluated as if the ball approached at ``elastic_below``: it leaves
-    at that speed, and the ensuing micro-bounces, each carrying its friction impulse,
-    stand in for the rolling or sliding contact that the impact-only model lacks. The
-    paper's fixed time step plays the same role implicitly.
+    Slow impacts follow the :class:`LowVelocityRule` (regime ``"elastic"``).
 
     Args:
         mass, radius, inertia_factor: the ball (kg, m, I / (m r^2)).
         restitution, mu_static, mu_kinetic: contact coefficients.
         elastic_below: threshold of the low-velocity rule (m/s); 0 disables it.
     """
+
+    regimes: tuple[str, ...] = (STICK, SLIP, ELASTIC)
 
     def __init__(
         self,
@@ -107,6 +145,7 @@ class KaneLevinsonImpact:
         self.mu_s = float(mu_static)
         self.mu_k = float(mu_kinetic)
         self.elastic_below = float(elastic_below)
+        self.low_velocity = LowVelocityRule(elastic_below)
 
     @classmethod
     def from_scene(cls, scene: Any) -> KaneLevinsonImpact:
@@ -127,14 +166,15 @@ class KaneLevinsonImpact:
         m, r, k = self.m, self.r, self.k
         wt, wn = _ball.contact_velocity(u1, u2, u3, z, vb1, vb2, r)
         e = self.e
-        low = abs(wn) < self.elastic_below
+        rule = self.low_velocity
+        low = rule.applies(wn)
         resting = False
         v1, v2 = u1, u2
         if low:
             e = 1.0
-            if contact.pressing and wn > -self.elastic_below:
-                # a lying ball: shift its normal velocity to an approach at elastic_below
-                shift = -self.elastic_below - wn
+            if rule.lifts(wn, contact):
+                # a lying ball: shift its normal velocity to an approach at the threshold
+                shift = rule.approach_shift(wn)
                 v1 -= math.sin(z) * shift
                 v2 += math.cos(z) * shift
                 resting = True
@@ -162,3 +202,20 @@ class KaneLevinsonImpact:
             rt = m * (c * du1 + s * du2)
             rn = m * (c * du2 - s * du1)
         return ImpactResult(n1, n2, n3, rt, rn, regime, wt, wn, resting)
+
+
+#: Impact laws by name: each builds the law from a scene.
+IMPACT_LAWS: dict[str, Callable[[Any], ImpactLaw]] = {
+    "kane-levinson": KaneLevinsonImpact.from_scene,
+}
+
+
+def impact_law(scene: Any, name: str = "kane-levinson") -> ImpactLaw:
+    """The impact law ``name`` (a key of :data:`IMPACT_LAWS`) for a scene."""
+    try:
+        make = IMPACT_LAWS[name]
+    except KeyError:
+        raise ValueError(
+            f"unknown impact law {name!r}: choose from {', '.join(IMPACT_LAWS)}"
+        ) from None
+    return make(scene)

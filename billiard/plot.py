@@ -39,7 +39,8 @@ from matplotlib.patches import Circle
 from matplotlib.ticker import MultipleLocator
 from PIL import Image
 
-from .camera import RunDataError, camera_filter, read_collisions
+from .camera import camera_filter
+from .record import RunDataError, read_collisions
 
 __all__ = [
     "FIGURE_NAMES",

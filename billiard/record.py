@@ -39,10 +39,10 @@ import json
 import os
 import shutil
 import time
-from collections.abc import Iterable, Iterator, Mapping, Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import Any, NamedTuple
 
 import numpy as np
 
@@ -55,44 +55,64 @@ __all__ = [
     "CHECKPOINT_FORMAT",
     "CHECKPOINT_VERSION",
     "COLUMNS",
+    "REQUIRED_COLUMNS",
+    "TEXT_COLUMNS",
     "CheckpointError",
+    "ImpactRecord",
+    "RunDataError",
     "CsvMark",
     "CsvRecorder",
     "MemoryRecorder",
     "RunBusyError",
     "read_checkpoint",
     "read_collisions",
+    "write_collisions",
     "write_checkpoint",
     "write_text_atomic",
 ]
 
-COLUMNS: tuple[str, ...] = (
-    "n",
-    "t",
-    "q1",
-    "q2",
-    "v1",
-    "v2",
-    "omega",
-    "u4",
-    "un",
-    "tof",
-    "regime",
-    "z",
-    "energy",
-    "wall",
-    "Rt",
-    "Rn",
-    "s",
-    "q3",
-)
-_TEXT = frozenset({"regime", "wall"})
+
+class ImpactRecord(NamedTuple):
+    """One impact, as :meth:`billiard.engine.Simulation.step` returns it and as it is
+    written to ``collisions.csv`` (one row; the fields are the columns, in order)."""
+
+    n: int
+    t: float
+    q1: float
+    q2: float
+    v1: float
+    v2: float
+    omega: float
+    u4: float
+    un: float
+    tof: float
+    regime: str
+    z: float
+    energy: float
+    wall: str
+    Rt: float
+    Rn: float
+    s: float
+    q3: float
+
+
+#: The columns of ``collisions.csv``, in order: the fields of :class:`ImpactRecord`.
+COLUMNS: tuple[str, ...] = ImpactRecord._fields
+#: Columns every run file must have for plots and analyses (the first thirteen).
+REQUIRED_COLUMNS: tuple[str, ...] = COLUMNS[:13]
+#: Columns read as text; ``n`` is an integer, every other column a float.
+TEXT_COLUMNS: frozenset[str] = frozenset({"regime", "wall"})
+_TEXT = TEXT_COLUMNS
 _INTEGER = frozenset({"n"})
 FLUSH_INTERVAL = 1.0  # s of wall-clock time between flushes of a streamed file
 
 #: ``format`` and ``version`` fields of a checkpoint file.
 CHECKPOINT_FORMAT = "billiard-checkpoint"
-CHECKPOINT_VERSION = 1
+CHECKPOINT_VERSION = 2
+
+
+class RunDataError(ValueError):
+    """A run's files cannot be read; the message is one line naming the file."""
 
 
 class CheckpointError(ValueError):
@@ -113,7 +133,11 @@ def _as_arrays(columns: dict[str, list[Any]]) -> dict[str, np.ndarray]:
 
 
 def _format(value: Any) -> str:
-    return repr(value) if isinstance(value, float) else str(value)
+    if isinstance(value, (float, np.floating)):
+        return repr(float(value))
+    if isinstance(value, np.integer):
+        return str(int(value))
+    return str(value)
 
 
 class MemoryRecorder:
@@ -137,11 +161,7 @@ class MemoryRecorder:
         return _as_arrays(dict(zip(self.names, self._data, strict=True)))
 
     def write_csv(self, path: str | os.PathLike[str]) -> None:
-        with open(path, "w", newline="", encoding="utf-8") as handle:
-            writer = csv.writer(handle)
-            writer.writerow(self.names)
-            for row in zip(*self._data, strict=True):
-                writer.writerow([_format(v) for v in row])
+        write_collisions(path, dict(zip(self.names, self._data, strict=True)))
 
 
 @dataclass(frozen=True)
@@ -390,26 +410,110 @@ def _header_line(columns: Sequence[str]) -> str:
     return buffer.getvalue()
 
 
-def _complete_lines(lines: Iterable[str]) -> Iterator[str]:
-    """The lines that end with a line terminator: an unterminated last line is the
-    remains of an interrupted write, not a row."""
-    for line in lines:
-        if line.endswith("\n"):
-            yield line
+def _fail(path: str | os.PathLike[str], problem: str) -> RunDataError:
+    return RunDataError(f"{path}: {' '.join(problem.split())}")
 
 
 def read_collisions(path: str | os.PathLike[str]) -> dict[str, np.ndarray]:
-    """Read a collisions CSV written by a run into numpy arrays, one per column. An
-    unterminated last line (a write cut short by a kill) is skipped."""
-    with open(path, newline="", encoding="utf-8") as handle:
-        reader = csv.reader(_complete_lines(handle))
-        names = next(reader)
-        data: list[list[Any]] = [[] for _ in names]
-        convert = [str if name in _TEXT else int if name in _INTEGER else float for name in names]
-        for row in reader:
-            for column, conv, value in zip(data, convert, row, strict=True):
-                column.append(conv(value))
-    return _as_arrays(dict(zip(names, data, strict=True)))
+    """Read a run's ``collisions.csv`` into numpy arrays, one per column.
+
+    The first non-blank line that does not start with ``#`` is the header; blank lines
+    and ``#`` comment lines are skipped, and so is an unterminated last row (a write cut
+    short when the run was killed; resuming the run completes it).
+
+    Returns:
+        A dict column name -> 1-D array with one entry per impact, in file order, with
+        the same dtypes as ``Result.columns``: ``n`` int64, ``regime`` and ``wall``
+        strings, every other column of :data:`COLUMNS` float64 in SI units (s, m, m/s,
+        rad/s, J, N s). Extra columns are kept (float64 when every value is a number,
+        else strings). A file with a header and no rows gives arrays of length 0.
+
+    Raises:
+        RunDataError: the file is missing or unreadable, has no header, lacks one of
+            :data:`REQUIRED_COLUMNS`, has a row with the wrong number of fields, a value
+            that is not of its column's type, or impact times that decrease.
+    """
+    try:
+        with open(path, newline="", encoding="utf-8") as handle:
+            lines = [
+                (number, line)
+                for number, line in enumerate(handle, start=1)
+                if line.strip() and not line.lstrip().startswith("#")
+            ]
+    except FileNotFoundError:
+        raise _fail(path, "file not found") from None
+    except (OSError, UnicodeDecodeError) as exc:
+        raise _fail(path, f"cannot read: {exc}") from None
+    if not lines:
+        raise _fail(path, "empty file (no header line)")
+    if len(lines) > 1 and not lines[-1][1].endswith("\n"):
+        lines.pop()
+    rows = csv.reader(line for _, line in lines)
+    try:
+        header = [name.strip() for name in next(rows)]
+        body = list(rows)
+    except csv.Error as exc:
+        raise _fail(path, f"not valid CSV: {exc}") from None
+    missing = [name for name in REQUIRED_COLUMNS if name not in header]
+    if missing:
+        raise _fail(
+            path, f"missing column(s) {', '.join(missing)} (header: {','.join(header)[:120]})"
+        )
+    duplicated = sorted({name for name in header if header.count(name) > 1})
+    if duplicated:
+        raise _fail(path, f"duplicated column(s) {', '.join(duplicated)}")
+    width = len(header)
+    if len(body) != len(lines) - 1:
+        raise _fail(path, "not valid CSV: a quoted field spans lines")
+    for (number, _), row in zip(lines[1:], body, strict=True):
+        if len(row) != width:
+            raise _fail(path, f"line {number}: expected {width} fields, got {len(row)}")
+    table = list(zip(*body, strict=True)) if body else [()] * width
+    columns: dict[str, np.ndarray] = {}
+    for index, name in enumerate(header):
+        cells = [cell.strip() for cell in table[index]]
+        if name in TEXT_COLUMNS:
+            columns[name] = np.array(cells, dtype=str)
+            continue
+        kind = int if name in _INTEGER else float
+        try:
+            columns[name] = np.array([kind(cell) for cell in cells], dtype=kind)
+        except ValueError:
+            if name not in COLUMNS:
+                columns[name] = np.array(cells, dtype=str)
+                continue
+            for (number, _), cell in zip(lines[1:], cells, strict=True):
+                try:
+                    kind(cell)
+                except ValueError:
+                    what = "an integer" if kind is int else "a number"
+                    raise _fail(
+                        path, f"line {number}: column {name}: {cell[:40]!r} is not {what}"
+                    ) from None
+    if columns["n"].dtype != np.int64:
+        columns["n"] = columns["n"].astype(np.int64)
+    t = columns["t"]
+    if t.size > 1 and np.any(np.diff(t) < 0):
+        first = int(np.argmax(np.diff(t) < 0)) + 1
+        raise _fail(
+            path,
+            f"line {lines[first + 1][0]}: impact times decrease (column t must be non-decreasing)",
+        )
+    return columns
+
+
+def write_collisions(path: str | os.PathLike[str], columns: Mapping[str, Sequence[Any]]) -> Path:
+    """Write columns (name -> one value per impact) as a CSV file in the
+    ``collisions.csv`` format: header line, one row per impact, floats with
+    :func:`repr` so that they read back bit for bit."""
+    path = Path(path)
+    names = list(columns)
+    with open(path, "w", newline="", encoding="utf-8") as handle:
+        writer = csv.writer(handle)
+        writer.writerow(names)
+        for row in zip(*(columns[name] for name in names), strict=True):
+            writer.writerow([_format(v) for v in row])
+    return path
 
 
 # ----------------------------------------------------------------------------------

@@ -15,8 +15,9 @@ from pathlib import Path
 import numpy as np
 
 from .calibrate import Calibration, calibrate, find_period_one
-from .camera import camera_filter, read_collisions
+from .camera import camera_filter
 from .plot import paper_figure, paper_phase_figure, plot_run
+from .record import read_collisions
 from .scene import load_scene, scene_to_toml
 from .simulate import simulate
 

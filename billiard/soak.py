@@ -44,6 +44,7 @@ import math
 import multiprocessing
 import os
 import random
+import signal
 import sys
 import tempfile
 import time
@@ -59,16 +60,17 @@ from billiard.boundary import Boundary, Drive
 from billiard.curves import load_curve
 from billiard.errors import GeometryError
 from billiard.impact import ImpactResult
+from billiard.interrupt import signal_after
 from billiard.record import read_collisions
 from billiard.scene import Scene, fowles_coefficients, load_scene, with_values
 from billiard.simulate import (
-    STOP_AFTER_VARIABLE,
     RunInterrupted,
     Simulation,
     resume,
     run_streamed,
     simulate,
 )
+from billiard.status import Status
 
 __all__ = [
     "CURVES",
@@ -91,12 +93,15 @@ GAP_LIMIT = 1e-9
 #: Relative rounding allowance of the energy audit.
 ENERGY_ROUNDING = 1e-12
 _LARGEST_RADIUS = 4e-3  # m; random balls are at most this large
-_STOP_KINDS = (
-    ("ball escaped", "escape"),
-    ("inelastic collapse", "collapse"),
-    ("non-finite", "non-finite"),
-    ("numerical failure", "numerical"),
-)
+_STOP_KINDS = {
+    Status.COMPLETE: "complete",
+    Status.TIME_LIMIT: "complete",
+    Status.ESCAPED: "escape",
+    Status.COLLAPSE: "collapse",
+    Status.NON_FINITE: "non-finite",
+    Status.NUMERICAL_FAULT: "numerical",
+    Status.SOLVER_FAILED: "root",
+}
 
 
 # ----------------------------------------------------------------------------------
@@ -259,6 +264,10 @@ class ImpactAudit:
     #: when a list, gets (energy before, energy after, allowance) of every impact
     history: list[tuple[float, float, float]] | None = None
 
+    @property
+    def regimes(self) -> tuple[str, ...]:
+        return self.law.regimes
+
     def apply(self, state: Any, contact: Any) -> ImpactResult:
         res = self.law.apply(state, contact)
         law = self.law
@@ -334,15 +343,10 @@ def audit_rows(boundary: Boundary, drive: Any, columns: Mapping[str, np.ndarray]
     }
 
 
-def stop_kind(reason: str | None) -> str:
-    """Category of a stop reason: complete, escape, collapse, non-finite, numerical, or
+def stop_kind(status: Status) -> str:
+    """Category of a run's status: complete, escape, collapse, non-finite, numerical, or
     root (a root or step-size solve that failed)."""
-    if reason is None:
-        return "complete"
-    for prefix, kind in _STOP_KINDS:
-        if reason.startswith(prefix):
-            return kind
-    return "root"
+    return _STOP_KINDS[Status(status)]
 
 
 # ----------------------------------------------------------------------------------
@@ -379,7 +383,7 @@ def run_job(job: Job) -> dict[str, Any]:
         report.update(audit_rows(sim.boundary, sim.drive, columns))
         report.update(
             impacts=len(result),
-            stop=stop_kind(result.stop_reason),
+            stop=stop_kind(result.status),
             reason=result.stop_reason,
             energy_created=audit.created,
             lifts=audit.lifts,
@@ -390,14 +394,17 @@ def run_job(job: Job) -> dict[str, Any]:
         )
         if job.resume_at is not None:
             report["resume_checked"] = 1
-            os.environ[STOP_AFTER_VARIABLE] = f"{job.resume_at}:TERM"
             try:
-                simulate(scene, collisions=job.impacts, method=job.method, out_dir=Path(tmp) / "b")
+                simulate(
+                    scene,
+                    collisions=job.impacts,
+                    method=job.method,
+                    out_dir=Path(tmp) / "b",
+                    on_record=signal_after(job.resume_at, signal.SIGTERM),
+                )
                 interrupted = False
             except RunInterrupted:
                 interrupted = True
-            finally:
-                del os.environ[STOP_AFTER_VARIABLE]
             if interrupted:
                 resume(Path(tmp) / "b")
             same = filecmp.cmp(

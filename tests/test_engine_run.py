@@ -214,3 +214,18 @@ def test_duration_from_the_command_line(tmp_path, capsys):
     assert main(["run", "wedge-6.6hz", "--duration", "0.2", "--no-plot", "--out", str(out)]) == 0
     rows = (out / "collisions.csv").read_text().splitlines()[1:]
     assert rows and float(rows[-1].split(",")[1]) <= 0.2
+
+
+def test_one_run_file_format_read_back_with_the_same_dtypes(tmp_path):
+    """The CSV reader and the in-memory result agree on every column's dtype and value."""
+    import billiard
+
+    scene = load_scene("wedge-6.6hz")
+    memory = simulate(scene, collisions=300).columns
+    streamed = simulate(scene, collisions=300, out_dir=tmp_path).columns
+    read = billiard.read_collisions(tmp_path / "collisions.csv")
+    assert list(memory) == list(read) == list(COLUMNS)
+    for name in COLUMNS:
+        assert memory[name].dtype == read[name].dtype == streamed[name].dtype, name
+        np.testing.assert_array_equal(memory[name], read[name])
+    assert read["n"].dtype == np.int64 and read["wall"].dtype.kind == "U"

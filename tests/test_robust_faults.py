@@ -14,13 +14,13 @@ from billiard.generated import ball as generated_ball
 from billiard.cli import main
 from billiard.errors import SimulationError
 from billiard.events import Event, EventLocator
+from billiard.interrupt import signal_after
 from billiard.record import MemoryRecorder, read_checkpoint, read_collisions
 from billiard.scene import load_scene, with_values
 from billiard.simulate import (
     CHECKPOINT_NAME,
     COLLAPSE_COUNT,
     CSV_NAME,
-    STOP_AFTER_VARIABLE,
     RunInterrupted,
     Simulation,
     resume,
@@ -88,7 +88,7 @@ def test_non_finite_impact_result(tmp_path, monkeypatch):
 def test_non_finite_energy_is_named(monkeypatch):
     scene = load_scene("wedge-6.6hz")
     when = time_of_impact(scene, K)
-    patched_ball(monkeypatch, importlib.import_module("billiard.simulate"), "energy", K)
+    patched_ball(monkeypatch, importlib.import_module("billiard.engine"), "energy", K)
     result = simulate(scene, collisions=100)
     assert result.stop_reason == f"non-finite state at impact {K} (t = {when} s): energy = nan"
     assert len(result) == K - 1
@@ -208,10 +208,8 @@ def test_collapse_in_time_is_detected_and_survives_a_checkpoint(tmp_path, monkey
         f"inelastic collapse: {COLLAPSE_COUNT} impacts within 1e-06 s of simulated time, "
         f"at impact {COLLAPSE_COUNT + 1} (t = "
     )
-    monkeypatch.setenv(STOP_AFTER_VARIABLE, "6000")
     with pytest.raises(RunInterrupted):
-        simulate(scene, collisions=20000, out_dir=tmp_path / "parts")
-    monkeypatch.delenv(STOP_AFTER_VARIABLE)
+        simulate(scene, collisions=20000, out_dir=tmp_path / "parts", on_record=signal_after(6000))
     checkpoint = read_checkpoint(tmp_path / "parts" / CHECKPOINT_NAME)
     assert len(checkpoint["engine"]["recent"]) == 6000
     parts = resume(tmp_path / "parts")

@@ -115,7 +115,7 @@ def check_run(draw: dict, method: str, impacts: int) -> None:
         event("geometry error")
         return
     reason = result.stop_reason
-    event(f"{method}: {stop_kind(reason)}")
+    event(f"{method}: {stop_kind(result.status)}")
     if reason is None:
         assert len(result) == n and status == "complete"
     else:

@@ -18,13 +18,13 @@ from pathlib import Path
 import pytest
 
 from billiard.cli import main
+from billiard.interrupt import signal_after
 from billiard.record import CheckpointError, read_checkpoint, read_collisions
 from billiard.scene import Initial, load_scene, replace, with_values
 from billiard.simulate import (
     CHECKPOINT_NAME,
     CSV_NAME,
     SCENE_NAME,
-    STOP_AFTER_VARIABLE,
     EngineState,
     RunInterrupted,
     resume,
@@ -32,7 +32,8 @@ from billiard.simulate import (
 )
 
 # billiard.simulate the module (the package exports a function of the same name)
-engine = importlib.import_module("billiard.simulate")
+engine = importlib.import_module("billiard.engine")
+persist = importlib.import_module("billiard.persist")
 record = importlib.import_module("billiard.record")
 
 REPO = Path(__file__).resolve().parent.parent
@@ -58,15 +59,17 @@ def reference(tmp_path: Path, scene, method: str, impacts: int) -> Path:
     return out
 
 
+def stop_after(at: str):
+    """The ``on_record`` hook for "K" (SIGINT after impact K), "K:TERM" or "K:KILL"."""
+    count, _, name = at.partition(":")
+    return signal_after(int(count), getattr(signal, f"SIG{name or 'INT'}"))
+
+
 def interrupted(
     scene, method: str, impacts: int, out: Path, at: str, monkeypatch
 ) -> RunInterrupted:
-    monkeypatch.setenv(STOP_AFTER_VARIABLE, at)
-    try:
-        with pytest.raises(RunInterrupted) as caught:
-            simulate(scene, collisions=impacts, method=method, out_dir=out)
-    finally:
-        monkeypatch.delenv(STOP_AFTER_VARIABLE)
+    with pytest.raises(RunInterrupted) as caught:
+        simulate(scene, collisions=impacts, method=method, out_dir=out, on_record=stop_after(at))
     return caught.value
 
 
@@ -85,6 +88,32 @@ def cli(*args: str, cwd: Path, env: dict | None = None, timeout: float = 120.0):
         text=True,
         timeout=timeout,
         env={**os.environ, **(env or {})},
+    )
+
+
+_STOPPING_CLI = """
+import importlib, sys
+from billiard import cli
+from billiard.interrupt import signal_after
+import signal
+api = importlib.import_module("billiard.simulate")
+run = api.simulate
+count, _, name = sys.argv[1].partition(":")
+hook = signal_after(int(count), getattr(signal, "SIG" + (name or "INT")))
+api.simulate = lambda *a, **k: run(*a, on_record=hook, **k)
+sys.exit(cli.main(sys.argv[2:]))
+"""
+
+
+def cli_stopping(at: str, *args: str, cwd: Path, timeout: float = 120.0):
+    """``billiard ARGS`` in a fresh interpreter whose run signals itself after impact K
+    (``at`` = "K", "K:TERM" or "K:KILL")."""
+    return subprocess.run(
+        [sys.executable, "-c", _STOPPING_CLI, at, *args],
+        cwd=cwd,
+        capture_output=True,
+        text=True,
+        timeout=timeout,
     )
 
 
@@ -158,10 +187,8 @@ def test_repeated_interruptions(tmp_path, monkeypatch):
     out = tmp_path / "run"
     interrupted(scene, method, impacts, out, "300", monkeypatch)
     for k in (301, 1000, 1001, 2000):  # a TERM, then INTs, each inside the resumed run
-        monkeypatch.setenv(STOP_AFTER_VARIABLE, f"{k}:TERM" if k == 301 else str(k))
         with pytest.raises(RunInterrupted) as caught:
-            resume(out)
-        monkeypatch.delenv(STOP_AFTER_VARIABLE)
+            resume(out, on_record=stop_after(f"{k}:TERM" if k == 301 else str(k)))
         assert caught.value.rows == k
         assert caught.value.signum == (signal.SIGTERM if k == 301 else signal.SIGINT)
     resume(out)
@@ -181,7 +208,7 @@ def test_resume_from_every_kind_of_checkpoint(tmp_path, monkeypatch):
         ref = reference(work, scene, method, impacts)
         out = work / "live"
         snapshots: list[Path] = []
-        original = engine.write_checkpoint
+        original = persist.write_checkpoint
 
         def snapshot(path, body, out=out, snapshots=snapshots, every=every, original=original):
             original(path, body)
@@ -191,9 +218,9 @@ def test_resume_from_every_kind_of_checkpoint(tmp_path, monkeypatch):
                 shutil.copytree(out, copy, dirs_exist_ok=True)
                 snapshots.append(copy)
 
-        monkeypatch.setattr(engine, "write_checkpoint", snapshot)
+        monkeypatch.setattr(persist, "write_checkpoint", snapshot)
         simulate(scene, collisions=impacts, method=method, out_dir=out)
-        monkeypatch.setattr(engine, "write_checkpoint", original)
+        monkeypatch.setattr(persist, "write_checkpoint", original)
         assert len(snapshots) >= 8
         for copy in snapshots:
             resume(copy)
@@ -208,7 +235,7 @@ def test_engine_state_round_trips_exactly():
     captured.ball.q3 = -0.0
     captured.recent = (5e-324, 0.1 + 0.2, 1e308)
     text = json.dumps(captured.to_dict(), allow_nan=False)
-    back = EngineState.from_dict(json.loads(text))
+    back = EngineState.from_dict(json.loads(text), engine.COLLAPSE_COUNT + 1)
     assert back == captured
     assert repr(back.ball.q3) == "-0.0" and back.recent[0] == 5e-324
 
@@ -298,7 +325,8 @@ def test_kill_before_the_first_flush_keeps_the_scene_and_a_checkpoint(tmp_path):
     """The run kills itself after impact 5, long before the first flush: scene.toml and a
     checkpoint at impact 0 were written at the start, so the run can be resumed."""
     out = tmp_path / "run"
-    proc = cli(
+    proc = cli_stopping(
+        "5:KILL",
         "run",
         "wedge-6.6hz",
         "--collisions",
@@ -307,7 +335,6 @@ def test_kill_before_the_first_flush_keeps_the_scene_and_a_checkpoint(tmp_path):
         str(out),
         "--no-plot",
         cwd=tmp_path,
-        env={STOP_AFTER_VARIABLE: "5:KILL"},
     )
     assert proc.returncode == -signal.SIGKILL
     checkpoint = read_checkpoint(out / CHECKPOINT_NAME)
@@ -321,7 +348,8 @@ def test_kill_before_the_first_flush_keeps_the_scene_and_a_checkpoint(tmp_path):
 
 def test_sigterm_stops_cleanly(tmp_path):
     out = tmp_path / "run"
-    proc = cli(
+    proc = cli_stopping(
+        "250:TERM",
         "run",
         "wedge-6.6hz",
         "--collisions",
@@ -330,7 +358,6 @@ def test_sigterm_stops_cleanly(tmp_path):
         str(out),
         "--no-plot",
         cwd=tmp_path,
-        env={STOP_AFTER_VARIABLE: "250:TERM"},
     )
     assert proc.returncode == 128 + signal.SIGTERM
     assert proc.stderr.startswith("billiard: interrupted (SIGTERM): 250 impacts kept in ")

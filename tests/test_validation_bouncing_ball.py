@@ -118,17 +118,6 @@ def bisect(predicate, lo: float, hi: float, steps: int) -> float:
     return 0.5 * (lo + hi)
 
 
-class _LastRow:
-    def __init__(self) -> None:
-        self.row: tuple | None = None
-
-    def append(self, row: tuple) -> None:
-        self.row = row
-
-    def close(self) -> None:
-        pass
-
-
 class ImpactMap:
     """The engine's one-impact map of a ball launched from the table:
     (launch time t, launch velocity v) -> (next impact time, velocity after it)."""
@@ -140,10 +129,9 @@ class ImpactMap:
         sim = self.sim
         theta = sim.drive.angle(t)
         height = FLOOR + R + sim.drive.displacement(theta)
-        sim.initial = BallState(t, theta, 0.0, height, 0.0, v, 0.0)
-        last = _LastRow()
-        assert sim.run(1, last) is None
-        return np.array([last.row[1], last.row[5]])
+        sim.reset(BallState(t, theta, 0.0, height, 0.0, v, 0.0))
+        record = sim.step()
+        return np.array([record.t, record.v2])
 
     def jacobian(self, x: np.ndarray, h: float = 1e-7) -> np.ndarray:
         """Central finite differences (steps of h s and h m/s)."""

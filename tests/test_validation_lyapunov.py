@@ -93,30 +93,18 @@ def flown(sim: Simulation, state: BallState, tau: float) -> BallState:
     return BallState(t, sim.drive.angle(t), q1, q2, u1, u2, state.u3)
 
 
-class _LastRow:
-    def __init__(self) -> None:
-        self.row: tuple | None = None
-
-    def append(self, row: tuple) -> None:
-        self.row = row
-
-    def close(self) -> None:
-        pass
-
-
 def period_map(sim: Simulation, t0: float, x: np.ndarray, period: float):
     """The engine's map: in-flight state x = (q1, q2, u1, u2, u3) at t0 -> the state at
     t0 + period, and the number of impacts in between."""
     state = BallState(t0, sim.drive.angle(t0), *(float(v) for v in x))
     impacts = 0
     while True:
-        sim.initial = state
-        last = _LastRow()
-        assert sim.run(1, last) is None
-        t = last.row[1]
+        sim.reset(state)
+        record = sim.step()
+        t = record.t
         if t > t0 + period:
             break
-        state = BallState(t, sim.drive.angle(t), *last.row[2:7])
+        state = BallState(t, sim.drive.angle(t), *record[2:7])
         impacts += 1
     end = flown(sim, state, t0 + period - state.t)
     return np.array([end.q1, end.q2, end.u1, end.u2, end.u3]), impacts

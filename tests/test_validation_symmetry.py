@@ -41,23 +41,12 @@ R = 1.55e-3
 TOLERANCE = {"none": 1e-11, "fowles": 1e-9}
 
 
-class _LastRow:
-    def __init__(self) -> None:
-        self.row: tuple | None = None
-
-    def append(self, row: tuple) -> None:
-        self.row = row
-
-    def close(self) -> None:
-        pass
-
-
 def one_impact(sim: Simulation, t, q1, q2, v1, v2, omega) -> tuple:
     """The engine's record row of the next impact from a given state."""
-    sim.initial = BallState(t, sim.drive.angle(t), q1, q2, v1, v2, omega)
-    last = _LastRow()
-    assert sim.run(1, last) is None
-    return last.row
+    sim.reset(BallState(t, sim.drive.angle(t), q1, q2, v1, v2, omega))
+    record = sim.step()
+    assert record is not None
+    return record
 
 
 def mirror_distance(a: dict, b: dict) -> np.ndarray:

@@ -1,0 +1,447 @@
+"""The engine: a simulation built from a scene, advanced one event at a time.
+
+>>> from billiard import Simulation, load_scene
+>>> sim = Simulation(load_scene("wedge-6.6hz"))
+>>> record = sim.step()          # the next impact, as an ImpactRecord  # doctest: +SKIP
+>>> sim.state.impacts            # the complete engine state  # doctest: +SKIP
+
+:meth:`Simulation.step` is the one kernel under every run and analysis (as
+``OdeSolver.step`` in scipy, ``bounce!`` in DynamicalBilliards.jl): it locates the next
+impact with the scene's locator, applies the impact law, and returns one record.
+:meth:`Simulation.run` is a thin loop over it that appends records to a recorder and
+looks after progress, checkpoints and stop requests.
+
+A run is deterministic: the same scene gives the same records bit for bit.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from collections import deque
+from collections.abc import Callable
+from typing import Any
+
+from billiard.boundary import Boundary, Drive
+from billiard.curves import load_curve
+from billiard.errors import GeometryError, SimulationError
+from billiard.events import LOCATORS, Event
+from billiard.flight import flight_model
+from billiard.generated import ball as _ball
+from billiard.impact import Contact, ImpactLaw, impact_law
+from billiard.interrupt import RunInterrupted, StopRequest
+from billiard.record import COLUMNS, CheckpointError, ImpactRecord
+from billiard.scene import SceneError, with_values
+from billiard.state import BallState, EngineState
+from billiard.status import Status
+
+__all__ = ["COLLAPSE_COUNT", "COLLAPSE_SPAN", "ZERO_FLIGHT_LIMIT", "Simulation"]
+
+#: Inelastic collapse: this many impacts ...
+COLLAPSE_COUNT = 10_000
+#: ... within this much simulated time (s) stop the run.
+COLLAPSE_SPAN = 1e-6
+#: So does this many consecutive impacts at zero time of flight.
+ZERO_FLIGHT_LIMIT = 1_000
+_PROGRESS_EVERY = 100
+#: Wall-clock seconds between two checkpoints (and CSV flushes) of a streamed run.
+CHECKPOINT_INTERVAL = 1.0
+
+Progress = Callable[[int, int], None]
+
+# Floats of a record, by column name, for naming the culprit of a non-finite state.
+_ROW_FLOATS = tuple(name for name in COLUMNS if name not in ("n", "regime", "wall"))
+
+
+class Simulation:
+    """Everything a run needs, built and validated from a scene, and the engine state.
+
+    Args:
+        scene: a :class:`billiard.scene.Scene`.
+        method: ``"event"`` or ``"rk4"`` (a key of :data:`billiard.events.LOCATORS`);
+            default ``scene.run.method``.
+        law: the impact law; default the scene's (:func:`billiard.impact.impact_law`).
+
+    Raises:
+        GeometryError: the ball is too large for the boundary's curvature, the curve
+            has no bottom to rest on, or the initial position overlaps the wall or lid.
+        SceneError: an unknown method, or a curve parameter the curve does not have.
+    """
+
+    def __init__(self, scene: Any, method: str | None = None, law: ImpactLaw | None = None):
+        self.scene = scene
+        self.method = method or scene.run.method
+        if self.method not in LOCATORS:
+            raise SceneError(
+                f"unknown method {self.method!r}: choose from {', '.join(map(repr, LOCATORS))}"
+            )
+        try:
+            self.curve = load_curve(scene.boundary.curve, dict(scene.boundary.parameters))
+        except ValueError as exc:
+            if type(exc) is not ValueError:  # the curve modules' own errors say what failed
+                raise
+            # a parameter the named curve does not have: bad input, not a crash
+            raise SceneError(str(exc)) from None
+        self.boundary = Boundary.from_scene(scene, self.curve.walls)
+        self.drive: Drive = self.boundary.drive
+        self.flight = flight_model(scene, self.method)
+        self.locator = LOCATORS[self.method](self.boundary, self.flight, scene.run.gravity)
+        self.impact: ImpactLaw = law if law is not None else impact_law(scene)
+        self.initial = self.initial_state()
+        #: simulated time (s) at which a run ends (inf when the scene sets no duration)
+        self.end_time = (
+            math.inf if scene.run.duration is None else self.initial.t + scene.run.duration
+        )
+        self.counts: dict[str, int] = dict.fromkeys(self.impact.regimes, 0)
+        self.counts["resting"] = 0
+        self.final_time = self.initial.t
+        #: how the latest :meth:`run` ended, and why (None while it goes on)
+        self.status: Status | None = None
+        self._fault: SimulationError | None = None
+        self.reset()
+
+    # ------------------------------------------------------------------ set-up
+
+    def initial_state(self) -> BallState:
+        """The scene's initial state; a missing q2 puts the ball at rest on the bottom
+        (at the lowest admissible point, or below a given q1)."""
+        init = self.scene.initial
+        theta = self.drive.angle(init.t)
+        q1, q2 = init.q1, init.q2
+        if q2 is None:
+            if q1 is None:
+                x, y = self.boundary.resting_position()
+                xl, xr = self.boundary.x_range
+                if not xl < x < xr:
+                    raise GeometryError(
+                        f"the boundary curve has no bottom to rest on: its lowest point in "
+                        f"reach is at the edge of the container, x = {x:.4g} m (the curve must "
+                        f"rise on both sides); give initial.q1 and initial.q2 to start elsewhere"
+                    )
+            else:
+                x = self.drive.to_boundary_frame(theta, q1, 0.0, 0.0, 0.0)[0]
+                y = self.boundary.offset_height(x)
+            q1, q2 = self.drive.to_lab_frame(theta, x, y)
+            if init.q1 is not None:
+                q1 = init.q1
+        elif q1 is None:
+            q1 = self.drive.to_lab_frame(theta, self.boundary.resting_position()[0], 0.0)[0]
+        self.boundary.check_initial_position(q1, q2, theta)
+        return BallState(init.t, theta, q1, q2, init.v1, init.v2, init.omega, 0.0)
+
+    def resolved_scene(self, collisions: int) -> Any:
+        """The scene as run: initial position resolved, impact count and method set."""
+        return with_values(
+            self.scene,
+            {
+                "initial.q1": self.initial.q1,
+                "initial.q2": self.initial.q2,
+                "run.collisions": collisions,
+                "run.method": self.method,
+            },
+        )
+
+    # ------------------------------------------------------------------ engine state
+
+    def reset(self, ball: BallState | None = None) -> None:
+        """Start the event count afresh from ``ball`` (default: the scene's initial
+        state), e.g. a state in flight or just after an impact. The components' memories
+        (warm starts, step proposals) and the regime counters are kept."""
+        ball = self.initial if ball is None else ball
+        self._ball = ball.copy()
+        self._impacts = 0
+        # The clock is a sum of tens of thousands of flight times: keep it with
+        # Neumaier's compensated summation so that t stays the correctly rounded sum
+        # (a plain sum drifts by ~1e-13 s, ~1e-12 rad of drive phase, by 3000 impacts).
+        self._clock, self._clock_error = ball.t, 0.0
+        self._zero_flights = 0
+        self._recent: deque[float] = deque(maxlen=COLLAPSE_COUNT + 1)
+        self._fault = None
+
+    @property
+    def ball(self) -> BallState:
+        """The ball after the last event (a copy)."""
+        return self._ball.copy()
+
+    @property
+    def pending_stop(self) -> SimulationError | None:
+        """The stop detected after the last impact (an inelastic collapse), which the
+        next :meth:`step` raises; None when the run can go on."""
+        return self._fault
+
+    @property
+    def state(self) -> EngineState:
+        """The complete engine state after the last event (a snapshot)."""
+        return EngineState(
+            ball=self._ball.copy(),
+            impacts=self._impacts,
+            clock=self._clock,
+            clock_error=self._clock_error,
+            zero_flights=self._zero_flights,
+            recent=tuple(self._recent),
+            counts=dict(self.counts),
+            walls=tuple((wall.s, wall.slope) for wall in self.boundary.offsets),
+            flight=self.flight.memory(),
+            locator=self.locator.memory(),
+        )
+
+    def start_state(self) -> EngineState:
+        """The engine state before the first impact of the scene."""
+        self.reset()
+        return self.state
+
+    def restore(self, state: EngineState) -> None:
+        """Put the engine where ``state`` says.
+
+        Raises:
+            CheckpointError: the state was not made by an engine of this scene.
+        """
+        offsets = self.boundary.offsets
+        if len(state.walls) != len(offsets):
+            raise CheckpointError(
+                f"its engine state has {len(state.walls)} walls, the scene's curve {len(offsets)}"
+            )
+        if set(state.counts) != set(self.counts):
+            raise CheckpointError("its engine state has the wrong regime counters")
+        try:
+            self.flight.restore_memory(state.flight)
+            self.locator.restore_memory(state.locator)
+        except ValueError as exc:
+            raise CheckpointError(f"its engine state does not fit this engine: {exc}") from None
+        for wall, (s, slope) in zip(offsets, state.walls, strict=True):
+            wall.s, wall.slope = s, slope
+        self.counts = dict(state.counts)
+        self._ball = state.ball.copy()
+        self._impacts = state.impacts
+        self._clock, self._clock_error = state.clock, state.clock_error
+        self._zero_flights = state.zero_flights
+        self._recent = deque(state.recent, maxlen=COLLAPSE_COUNT + 1)
+        self._fault = None
+        self.final_time = state.ball.t
+
+    # ------------------------------------------------------------------ one event
+
+    def _pressing(self, ev: Event) -> bool:
+        """Does the ball's acceleration relative to the boundary push it into the surface
+        it touches (d2G/dt2 < 0)?"""
+        px, py, vx, vy = self.drive.to_boundary_frame(ev.theta, ev.q1, ev.q2, ev.u1, ev.u2)
+        a1, a2 = self.flight.acceleration(ev.u1, ev.u2)
+        ab = self.drive.acceleration(ev.theta)
+        ax, ay = (a1 - ab, a2) if self.drive.horizontal else (a1, a2 - ab)
+        return ev.surface.gap_accel(px, py, vx, vy, ax, ay) < 0.0
+
+    def step(self, until: float = math.inf) -> ImpactRecord | None:
+        """Advance the engine to the next impact and return its record.
+
+        Args:
+            until: simulated time (s): when the next impact comes after it, nothing
+                changes and None is returned.
+
+        Raises:
+            SimulationError: a documented stop (``.status`` says which): the ball
+                escaped, a search failed, a non-finite state, an arithmetic fault in the
+                equations, or an inelastic collapse detected after the previous impact.
+                The state is left as it was after the previous impact.
+        """
+        if self._fault is not None:
+            raise self._fault
+        try:
+            return self._step(until)
+        except (ArithmeticError, ValueError) as exc:
+            # Only the equations' arithmetic faults are a documented stop: overflow,
+            # division by zero, and math's domain error (the square root or logarithm of
+            # a negative number). Any other ValueError is a bug and surfaces as one.
+            if isinstance(exc, ValueError) and str(exc) != "math domain error":
+                raise
+            raise SimulationError(
+                f"numerical failure after impact {self._impacts} "
+                f"(t = {self._ball.t:.9g} s): {type(exc).__name__}: {exc}",
+                Status.NUMERICAL_FAULT,
+            ) from None
+
+    def _step(self, until: float) -> ImpactRecord | None:
+        state = self._ball
+        n = self._impacts
+        try:
+            ev = self.locator.locate(state.theta, state.q1, state.q2, state.u1, state.u2, state.u3)
+        except SimulationError as exc:
+            raise SimulationError(
+                f"{exc} after impact {n} (t = {state.t:.9g} s)", exc.status
+            ) from None
+        tau = ev.tau
+        clock = self._clock
+        total = clock + tau
+        if abs(clock) >= abs(tau):
+            error = self._clock_error + ((clock - total) + tau)
+        else:
+            error = self._clock_error + ((tau - total) + clock)
+        t = total + error
+        if t > until:
+            return None
+        if ev.surface.kind == "escape":
+            raise SimulationError(
+                f"ball escaped above escape_height = {self.scene.boundary.escape_height!r} m "
+                f"at t = {t:.9g} s after impact {n}",
+                Status.ESCAPED,
+            )
+        q3 = state.q3 + state.u3 * tau
+        before = BallState(t, ev.theta, ev.q1, ev.q2, ev.u1, ev.u2, state.u3, q3)
+        vb1, vb2 = self.drive.boundary_velocity(ev.theta)
+        try:
+            res = self.impact.apply(before, Contact(ev.z, vb1, vb2, self._pressing(ev)))
+        except SimulationError as exc:
+            raise SimulationError(f"{exc} at impact {n + 1} (t = {t:.9g} s)", exc.status) from None
+        scene = self.scene
+        u4, un = _ball.frame_velocity(res.u1, res.u2, ev.z)
+        energy = _ball.energy(
+            ev.q2,
+            res.u1,
+            res.u2,
+            res.u3,
+            scene.ball.mass,
+            scene.ball.radius,
+            scene.ball.inertia_factor,
+            scene.run.gravity,
+        )
+        record = ImpactRecord(
+            n + 1,
+            t,
+            ev.q1,
+            ev.q2,
+            res.u1,
+            res.u2,
+            res.u3,
+            u4,
+            un,
+            tau,
+            res.regime,
+            ev.z,
+            energy,
+            ev.surface.label,
+            res.Rt,
+            res.Rn,
+            ev.s,
+            q3,
+        )
+        # a non-finite number is never recorded (the sum of finite numbers of physical
+        # size is finite, so one addition chain tests them all)
+        if not math.isfinite(
+            t + ev.q1 + ev.q2 + res.u1 + res.u2 + res.u3 + u4 + un + tau + ev.z + energy
+            + res.Rt + res.Rn + ev.s + q3
+        ):  # fmt: skip
+            _check_finite(record)
+        # commit: from here on nothing can fail, so the state always matches the records
+        self._impacts = n + 1
+        self._ball = BallState(t, ev.theta, ev.q1, ev.q2, res.u1, res.u2, res.u3, q3)
+        self._clock, self._clock_error = total, error
+        counts = self.counts
+        counts[res.regime] = counts.get(res.regime, 0) + 1
+        if res.resting:
+            counts["resting"] += 1
+        self._zero_flights = self._zero_flights + 1 if tau == 0.0 else 0
+        # collapse window: the impact times within COLLAPSE_SPAN of this one (the times
+        # are non-decreasing, so those form the deque's tail)
+        recent = self._recent
+        recent.append(t)
+        while t - recent[0] >= COLLAPSE_SPAN:
+            recent.popleft()
+        self.final_time = t
+        self._fault = self._collapse(n + 1, t)
+        return record
+
+    def _collapse(self, n: int, t: float) -> SimulationError | None:
+        """The inelastic-collapse stop after impact n, if the impacts have piled up."""
+        if len(self._recent) > COLLAPSE_COUNT:
+            return SimulationError(
+                f"inelastic collapse: {COLLAPSE_COUNT} impacts within "
+                f"{COLLAPSE_SPAN:g} s of simulated time, at impact {n} (t = {t:.9g} s)",
+                Status.COLLAPSE,
+            )
+        if self._zero_flights >= ZERO_FLIGHT_LIMIT:
+            return SimulationError(
+                f"inelastic collapse: {ZERO_FLIGHT_LIMIT} consecutive impacts with "
+                f"zero time of flight, at impact {n} (t = {t:.9g} s)",
+                Status.COLLAPSE,
+            )
+        return None
+
+    # ------------------------------------------------------------------ the loop
+
+    def run(
+        self,
+        collisions: int,
+        recorder: Any,
+        progress: Progress | None = None,
+        *,
+        start: EngineState | None = None,
+        checkpoint: Callable[[EngineState], None] | None = None,
+        stop: StopRequest | None = None,
+        until: float | None = None,
+        on_record: Callable[[int], None] | None = None,
+    ) -> str | None:
+        """Step until ``collisions`` impacts (or ``until``), appending each record to
+        ``recorder``. Returns None, or the one-line reason the run stopped early;
+        ``self.status`` says how it ended.
+
+        Args:
+            collisions: impact number to stop at (counted from the scene's start, so a
+                run continued from ``start`` does ``collisions - start.impacts`` more).
+            recorder: gets ``append(record)`` for each impact.
+            progress: called as ``progress(n_done, collisions)`` every few impacts.
+            start: continue from this engine state (default: from the current one).
+            checkpoint: called with the engine state after the last appended record,
+                about every ``CHECKPOINT_INTERVAL`` seconds of wall-clock time.
+            stop: a stop request set by a signal handler: the loop ends at the next
+                impact boundary by raising :class:`RunInterrupted`.
+            until: simulated time (s) at which the run ends; default ``self.end_time``.
+            on_record: called with the impact number after each record is appended
+                (a hook for tests and audits).
+        """
+        if start is not None:
+            self.restore(start)
+        until = self.end_time if until is None else until
+        request = stop if stop is not None else StopRequest()
+        monotonic = time.monotonic
+        next_save = monotonic() + CHECKPOINT_INTERVAL if checkpoint is not None else math.inf
+        self.status = None
+        reason: str | None = None
+        status = Status.COMPLETE
+        try:
+            while self._impacts < collisions:
+                # a signal arrived: stop here, where the state matches the records exactly
+                if request.signum:
+                    raise RunInterrupted(request.signum)
+                record = self.step(until)
+                if record is None:
+                    status = Status.TIME_LIMIT
+                    self.final_time = until
+                    break
+                recorder.append(record)
+                n = record.n
+                if on_record is not None:
+                    on_record(n)
+                if progress is not None and n % _PROGRESS_EVERY == 0:
+                    progress(n, collisions)
+                if checkpoint is not None and monotonic() >= next_save:
+                    checkpoint(self.state)
+                    next_save = monotonic() + CHECKPOINT_INTERVAL
+                if self._fault is not None:
+                    raise self._fault
+        except SimulationError as exc:
+            status, reason = exc.status, str(exc)
+        finally:
+            if progress is not None:
+                progress(self._impacts, collisions)
+        self.status = status
+        return reason
+
+
+def _check_finite(record: ImpactRecord) -> None:
+    """Raise SimulationError naming the first non-finite quantity of an impact's record."""
+    for name in _ROW_FLOATS:
+        value = getattr(record, name)
+        if not math.isfinite(value):
+            raise SimulationError(
+                f"non-finite state at impact {record.n} (t = {record.t:.9g} s): {name} = {value!r}",
+                Status.NON_FINITE,
+            )

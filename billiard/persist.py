@@ -1,0 +1,320 @@
+"""Streamed runs that survive interruptions, and resuming them.
+
+A streamed run (``simulate(..., out_dir=DIR)``) keeps three files in DIR:
+
+``scene.toml``
+    the fully resolved scene, written before the first impact.
+``collisions.csv``
+    one row per impact, written in whole rows and synced at least once a second.
+``checkpoint.json``
+    written atomically with every flush: the number of rows on disk and the complete
+    :class:`~billiard.state.EngineState` after the last of them. :func:`resume`
+    continues from it, and the finished CSV equals that of an uninterrupted run byte for
+    byte, because the engine state holds everything the engine carries from one impact
+    to the next (the compensated clock, the collapse detector's window, the surfaces'
+    Newton warm starts, the flight integrator's step proposal), written with
+    :func:`repr` so that every float reads back exactly.
+
+SIGINT (Ctrl-C) and SIGTERM during a streamed run stop it at the next impact boundary:
+the rows so far are flushed, a final checkpoint is written and
+:class:`~billiard.interrupt.RunInterrupted` (a ``KeyboardInterrupt``) is raised. A second
+signal stops at once; the files then still hold a valid prefix of the run and the last
+checkpoint, from which :func:`resume` redoes the few impacts after it. A SIGKILL leaves
+the last checkpoint (at most a second old) and possibly rows after it, even an
+unterminated last line; :func:`resume` cuts those off.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import hashlib
+import math
+import os
+import signal
+import time
+from collections.abc import Callable, Mapping
+from pathlib import Path
+from typing import Any
+
+from billiard.engine import COLLAPSE_COUNT, Progress, Simulation
+from billiard.interrupt import RunInterrupted, StopRequest, signals_deferred
+from billiard.record import (
+    CheckpointError,
+    CsvMark,
+    CsvRecorder,
+    Truncation,
+    read_checkpoint,
+    write_checkpoint,
+    write_text_atomic,
+)
+from billiard.result import Result, RunFile
+from billiard.scene import scene_from_toml, scene_to_toml
+from billiard.state import EngineState
+from billiard.status import Status
+
+__all__ = ["CHECKPOINT_NAME", "CSV_NAME", "SCENE_NAME", "resume", "run_streamed"]
+
+#: File names inside a run directory.
+CSV_NAME = "collisions.csv"
+SCENE_NAME = "scene.toml"
+CHECKPOINT_NAME = "checkpoint.json"
+
+OnRecord = Callable[[int], None]
+
+
+def run_streamed(
+    sim: Simulation,
+    out_dir: str | os.PathLike[str],
+    *,
+    collisions: int | None = None,
+    progress: Progress | None = None,
+    on_record: OnRecord | None = None,
+) -> Result:
+    """Stream a run of ``sim`` (built by the caller, who may have given it its own impact
+    law, e.g. to audit every impact) to ``out_dir``: write ``scene.toml`` first, then
+    the records with checkpoints.
+
+    Raises:
+        RunBusyError: another process is writing a run in ``out_dir``.
+        RunInterrupted: SIGINT or SIGTERM; the files are complete up to the last impact.
+    """
+    total = sim.scene.run.collisions if collisions is None else int(collisions)
+    resolved = sim.resolved_scene(total)
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    # first take the CSV file (locked: a run still going on in DIR is left alone) ...
+    stream = CsvRecorder(out / CSV_NAME, autoflush=False)
+    try:
+        # ... then drop the checkpoint of an earlier run, which must not outlive its CSV
+        (out / CHECKPOINT_NAME).unlink(missing_ok=True)
+        write_text_atomic(out / SCENE_NAME, scene_to_toml(resolved))
+    except BaseException:
+        stream.close()
+        raise
+    return _run_streamed(sim, total, out, stream, sim.start_state(), progress, on_record)
+
+
+def resume(
+    out_dir: str | os.PathLike[str],
+    *,
+    collisions: int | None = None,
+    progress: Progress | None = None,
+    notify: Callable[[str], None] | None = None,
+    on_record: OnRecord | None = None,
+) -> Result:
+    """Continue a streamed run from its checkpoint.
+
+    The CSV file is first cut back to the checkpoint's row (dropping rows written after
+    it and an unterminated last line); the finished file then equals that of an
+    uninterrupted run byte for byte.
+
+    Args:
+        out_dir: the run directory (written by ``simulate(..., out_dir=...)``).
+        collisions: a new total number of impacts (to extend a run); default the
+            scene's ``run.collisions``.
+        progress: as for :func:`~billiard.simulate.simulate`.
+        notify: called with a one-line description of where the run continues from,
+            before the first new impact.
+        on_record: called with the impact number after each new record.
+
+    Returns:
+        A :class:`~billiard.result.Result`. A run that is already complete (and not
+        extended) or that stopped early is left as it is: ``already_finished`` is True.
+
+    Raises:
+        CheckpointError: the directory has no usable checkpoint, or its CSV file or
+            scene does not match it, or another process is still writing it.
+        SceneError: DIR/scene.toml is not a valid scene.
+        RunInterrupted: as for :func:`~billiard.simulate.simulate`.
+    """
+    out = Path(out_dir)
+    if not out.is_dir():
+        raise CheckpointError(f"{out} is not a run directory")
+    checkpoint_path = out / CHECKPOINT_NAME
+    data = read_checkpoint(checkpoint_path)
+    try:
+        status = data["status"]
+        mark = CsvMark.from_dict(data["csv"])
+        fingerprint = data["scene_sha256"]
+        engine = data["engine"]
+        stop_reason = data.get("stop_reason")
+        stop_status = Status(data.get("stop_status", Status.COMPLETE))
+    except (KeyError, TypeError, ValueError):
+        raise CheckpointError(f"{checkpoint_path} lacks an entry it needs") from None
+    except CheckpointError as exc:
+        raise CheckpointError(f"{checkpoint_path}: {exc}") from None
+    if status not in ("running", "interrupted", "complete", "stopped"):
+        raise CheckpointError(f"{checkpoint_path} has an unknown status {status!r}")
+    scene_path = out / SCENE_NAME
+    try:
+        text = scene_path.read_text(encoding="utf-8")
+    except FileNotFoundError:
+        raise CheckpointError(f"{scene_path} is missing") from None
+    except (OSError, UnicodeDecodeError) as exc:
+        raise CheckpointError(f"{scene_path} cannot be read: {exc}") from None
+    scene = scene_from_toml(text, source=f"'{scene_path}'")
+    sim = Simulation(scene)
+    if _fingerprint(sim) != fingerprint:
+        raise CheckpointError(
+            f"{scene_path} is not the scene the checkpoint was written for (edited since?)"
+        )
+    total = scene.run.collisions if collisions is None else int(collisions)
+    rows = mark.rows
+    by_time = scene.run.duration is not None and collisions is None
+    if status == "stopped" or (status == "complete" and (total <= rows or by_time)):
+        if collisions is not None and total < rows:
+            raise CheckpointError(
+                f"the run in {out} already has {rows} impacts; to extend it, ask for more"
+            )
+        final_time = math.nan
+        with contextlib.suppress(CheckpointError):
+            last = EngineState.from_dict(engine, COLLAPSE_COUNT + 1)
+            sim.counts, final_time = dict(last.counts), last.ball.t
+        return Result(
+            scene,
+            RunFile(out / CSV_NAME, rows),
+            stop_status,
+            stop_reason,
+            0.0,
+            sim.counts,
+            final_time,
+            regimes=sim.impact.regimes,
+            resumed_from=rows,
+            already_finished=True,
+        )
+    if total < rows:
+        raise CheckpointError(f"the run in {out} already has {rows} impacts, more than {total}")
+    if engine is None:
+        raise CheckpointError(f"{checkpoint_path} holds no engine state to continue from")
+    try:
+        state = EngineState.from_dict(engine, COLLAPSE_COUNT + 1)
+    except CheckpointError as exc:
+        raise CheckpointError(f"{checkpoint_path}: {exc}") from None
+    if state.impacts != rows:
+        raise CheckpointError(
+            f"{checkpoint_path} is inconsistent: engine state after impact {state.impacts}, "
+            f"CSV position after impact {rows}"
+        )
+    # check the state before touching the CSV file: a mismatch leaves everything as it was
+    try:
+        sim.restore(state)
+    except CheckpointError as exc:
+        raise CheckpointError(f"{checkpoint_path}: {exc}") from None
+    sim.resolved_scene(total)  # validates the new total
+    stream, cut = CsvRecorder.reopen(out / CSV_NAME, mark, autoflush=False)
+    if notify is not None:
+        dropped = []
+        if cut.rows:
+            dropped.append(f"{cut.rows} row(s) written after the checkpoint")
+        if cut.partial_bytes:
+            dropped.append(f"an unterminated last line ({cut.partial_bytes} bytes)")
+        note = f"; dropped {' and '.join(dropped)}" if dropped else ""
+        notify(f"resuming {out} after impact {rows} of {total}{note}")
+    if total != scene.run.collisions:
+        write_text_atomic(out / SCENE_NAME, scene_to_toml(sim.resolved_scene(total)))
+    return _run_streamed(
+        sim, total, out, stream, state, progress, on_record, resumed_from=rows, truncation=cut
+    )
+
+
+def _fingerprint(sim: Simulation) -> str:
+    """sha256 of the resolved scene, impact count aside (a run may be extended)."""
+    return hashlib.sha256(scene_to_toml(sim.resolved_scene(1)).encode("utf-8")).hexdigest()
+
+
+def _run_streamed(
+    sim: Simulation,
+    total: int,
+    out: Path,
+    stream: CsvRecorder,
+    start: EngineState,
+    progress: Progress | None,
+    on_record: OnRecord | None,
+    *,
+    resumed_from: int | None = None,
+    truncation: Truncation | None = None,
+) -> Result:
+    """Run ``sim`` from ``start`` to ``total`` impacts, streaming rows to ``stream`` and
+    keeping ``out/checkpoint.json`` in step with what the CSV file holds."""
+    checkpoint_path = out / CHECKPOINT_NAME
+    fingerprint = _fingerprint(sim)
+    saved = [stream.mark.rows]
+
+    def save(state: EngineState, status: str, reason: str | None = None) -> None:
+        mark = stream.flush()
+        if state.impacts != mark.rows:  # pragma: no cover - an engine bug
+            raise AssertionError(f"engine state after {state.impacts}, CSV {mark.rows}")
+        engine: dict[str, Any] | None = state.to_dict()
+        if not _all_finite(engine):
+            # only a stopped run can get here (a fault left a memory non-finite); its
+            # checkpoint then records the stop without a state to continue from
+            engine = None
+        write_checkpoint(
+            checkpoint_path,
+            {
+                "status": status,
+                "stop_reason": reason,
+                "stop_status": int(sim.status if sim.status is not None else Status.COMPLETE),
+                "collisions": total,
+                "method": sim.method,
+                "scene_sha256": fingerprint,
+                "csv": mark.as_dict(),
+                "engine": engine,
+            },
+        )
+        saved[0] = mark.rows
+
+    request = StopRequest()
+    began = time.perf_counter()
+    try:
+        save(start, "running")
+        with signals_deferred(request):
+            try:
+                reason = sim.run(
+                    total,
+                    stream,
+                    progress,
+                    start=start,
+                    checkpoint=lambda state: save(state, "running"),
+                    stop=request,
+                    on_record=on_record,
+                )
+            except RunInterrupted as exc:
+                save(sim.state, "interrupted")
+                stream.close()
+                exc.rows, exc.checkpoint_rows, exc.out_dir = len(stream), saved[0], out
+                raise
+            except KeyboardInterrupt as exc:
+                # a second signal broke off an impact: the rows so far are whole and the
+                # last checkpoint still describes a prefix of them
+                stream.close()
+                raise RunInterrupted(signal.SIGINT, len(stream), saved[0], out) from exc
+            save(sim.state, "complete" if reason is None else "stopped", reason)
+    finally:
+        stream.close()
+    if request.signum:
+        # the signal came after the last impact: the files are complete; let it act now
+        signal.raise_signal(request.signum)
+    wall_time = time.perf_counter() - began
+    return Result(
+        sim.resolved_scene(total),
+        stream,
+        sim.status,
+        reason,
+        wall_time,
+        sim.counts,
+        sim.final_time,
+        regimes=sim.impact.regimes,
+        resumed_from=resumed_from,
+        truncation=truncation,
+    )
+
+
+def _all_finite(data: Any) -> bool:
+    if isinstance(data, float):
+        return math.isfinite(data)
+    if isinstance(data, Mapping):
+        return all(_all_finite(v) for v in data.values())
+    if isinstance(data, (list, tuple)):
+        return all(_all_finite(v) for v in data)
+    return True

@@ -1,0 +1,130 @@
+"""The outcome of a run: its records (in memory or in the run's CSV file), how it ended,
+and a one-line summary."""
+
+from __future__ import annotations
+
+import math
+import os
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from billiard.record import CsvRecorder, MemoryRecorder, Truncation, read_collisions
+from billiard.status import Status
+
+__all__ = ["Result", "RunFile"]
+
+
+class RunFile:
+    """A finished run's CSV file, read-only, with the recorder interface of a Result."""
+
+    def __init__(self, path: Path, rows: int):
+        self.path = path
+        self._rows = rows
+
+    def __len__(self) -> int:
+        return self._rows
+
+    def close(self) -> None:
+        pass
+
+    def columns(self) -> dict[str, np.ndarray]:
+        return read_collisions(self.path)
+
+    def write_csv(self, path: str | os.PathLike[str]) -> None:
+        if Path(path).resolve() != self.path.resolve():
+            Path(path).write_bytes(self.path.read_bytes())
+
+
+class Result:
+    """The outcome of :func:`~billiard.simulate.simulate` or
+    :func:`~billiard.persist.resume`.
+
+    Attributes:
+        scene: the scene as run (initial position resolved, count and method set).
+        status: how the run ended (:class:`~billiard.status.Status`).
+        stop_reason: None when the run did all it was asked for, else the one-line
+            message of its stop.
+        message: a one-line description of how the run ended (always set).
+        wall_time: seconds the run took (this session only, for a resumed run).
+        counts: impacts per regime of the impact law, and how many of them relaunched
+            a ball lying on the surface (``resting``).
+        regimes: the impact law's regimes, in the order the summary lists them.
+        path: the streamed CSV file, or None for an in-memory run.
+        final_time: simulated time the run reached (s): the last impact, or
+            ``run.duration`` when that ended it.
+        resumed_from: for a resumed run, the impacts already on disk when it started
+            (None for a fresh run).
+        truncation: for a resumed run, what was cut off the CSV file's end.
+        already_finished: the resume found the run complete (or stopped) and did nothing.
+    """
+
+    def __init__(
+        self,
+        scene: Any,
+        recorder: MemoryRecorder | CsvRecorder | RunFile,
+        status: Status,
+        stop_reason: str | None,
+        wall_time: float,
+        counts: dict[str, int],
+        final_time: float,
+        *,
+        regimes: tuple[str, ...] = ("stick", "slip", "elastic"),
+        resumed_from: int | None = None,
+        truncation: Truncation | None = None,
+        already_finished: bool = False,
+    ):
+        self.scene = scene
+        self.status = Status(status)
+        self.final_time = final_time
+        self._recorder = recorder
+        self.stop_reason = stop_reason
+        self.wall_time = wall_time
+        self.counts = dict(counts)
+        self.regimes = tuple(regimes)
+        self.path: Path | None = getattr(recorder, "path", None)
+        self.resumed_from = resumed_from
+        self.truncation = truncation
+        self.already_finished = already_finished
+        self._columns: dict[str, np.ndarray] | None = None
+
+    @property
+    def message(self) -> str:
+        if self.stop_reason:
+            return self.stop_reason
+        if self.status is Status.TIME_LIMIT:
+            return f"reached the simulated time t = {self.final_time:.6g} s"
+        return "all impacts simulated"
+
+    @property
+    def columns(self) -> dict[str, np.ndarray]:
+        """Column name -> numpy array (read back from the CSV file on first use)."""
+        if self._columns is None:
+            self._columns = self._recorder.columns()
+        return self._columns
+
+    def __len__(self) -> int:
+        return len(self._recorder)
+
+    def to_csv(self, path: str | os.PathLike[str]) -> None:
+        """Write the records as CSV (floats with repr, so they read back exactly)."""
+        self._recorder.write_csv(path)
+
+    def summary(self) -> str:
+        n = len(self)
+        c = self.counts
+        done = n - (self.resumed_from or 0)
+        rate = done / self.wall_time if self.wall_time > 0 else math.inf
+        regimes = ", ".join(f"{c.get(name, 0)} {name}" for name in self.regimes)
+        text = (
+            f"{n} impacts ({regimes}) up to t = {self.final_time:.6g} s "
+            f"in {self.wall_time:.3g} s ({rate:,.0f} impacts/s)"
+        )
+        if self.resumed_from is not None:
+            text += f"; resumed after impact {self.resumed_from}"
+        if self.status is Status.TIME_LIMIT:
+            text += "; reached run.duration"
+        if self.stop_reason:
+            text += f"; stopped: {self.stop_reason}"
+        return text

@@ -1,0 +1,38 @@
+"""Why a run ended: a status code plus a one-line message, as scipy's solvers report.
+
+A run that simulated everything it was asked for ends with :attr:`Status.COMPLETE` (the
+impact count) or :attr:`Status.TIME_LIMIT` (``run.duration``); every other status is a
+documented stop of the model or the numerics, with its message in
+``Result.stop_reason``. A programming error is none of these: it surfaces as the
+exception it is.
+"""
+
+from __future__ import annotations
+
+from enum import IntEnum
+
+__all__ = ["Status"]
+
+
+class Status(IntEnum):
+    """How a run ended (``Result.status``)."""
+
+    #: the requested number of impacts was simulated
+    COMPLETE = 0
+    #: the requested simulated time (``run.duration``) was reached
+    TIME_LIMIT = 1
+    #: the ball left an open container above ``boundary.escape_height``
+    ESCAPED = 2
+    #: inelastic collapse: impacts piled up in a vanishing span of time
+    COLLAPSE = 3
+    #: a quantity of the state became infinite or NaN
+    NON_FINITE = 4
+    #: a root or step-size search did not converge
+    SOLVER_FAILED = 5
+    #: an arithmetic fault (overflow, a math domain error) in the equations
+    NUMERICAL_FAULT = 6
+
+    @property
+    def finished(self) -> bool:
+        """True when the run did all it was asked for (no early stop)."""
+        return self in (Status.COMPLETE, Status.TIME_LIMIT)
