@@ -17,7 +17,9 @@ One module per figure:
 
 | module | what it draws |
 | --- | --- |
-| ``common`` | shared helpers: the run-file reader, units, colours, titles, saving |
+| ``common`` | shared helpers: the run-file reader, units, colours, axes, saving |
+| ``inputs`` | checked user input: :func:`parse_frame_interval`, :func:`parse_window` |
+| ``titles`` | figure titles and legend labels: :func:`scene_title` |
 | ``outline`` | the boundary's outline y = f(x) and the drive's displacement D(t) |
 | ``flights`` | flight arcs between impacts (exact parabola, or integrated with drag) |
 | ``maps`` | :func:`return_map`, :func:`time_map` |
@@ -31,13 +33,15 @@ One module per figure:
 from __future__ import annotations
 
 from .animation import animate
-from .common import RunDataError, parse_frame_interval, parse_window, scene_title
+from .common import RunDataError
 from .flights import flight_positions
+from .inputs import parse_frame_interval, parse_window
 from .maps import return_map, time_map
 from .outline import drive_offset
 from .paper import paper_figure, paper_phase_figure
 from .phase import phase_coordinates, phase_plot
 from .run import FIGURE_NAMES, load_run, plot_run, read_scene
+from .titles import scene_title
 from .trajectory import default_window, trajectory
 
 __all__ = [

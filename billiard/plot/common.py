@@ -1,5 +1,4 @@
-"""What every figure shares: reading a run's CSV, units, colours, axes helpers, titles and
-saving.
+"""What every figure shares: reading a run's CSV, units, colours, axes helpers and saving.
 
 This is the one module of :mod:`billiard.plot` that imports the run-file reader
 (:func:`billiard.camera.read_collisions`) and :class:`RunDataError`; the others import
@@ -10,9 +9,7 @@ from __future__ import annotations
 
 import math
 import os
-import textwrap
 from collections.abc import Mapping, Sequence
-from fractions import Fraction
 from pathlib import Path
 from typing import Any
 
@@ -23,16 +20,8 @@ from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
 
 from ..camera import RunDataError, camera_filter, read_collisions
-from ..scene import Scene
 
-__all__ = [
-    "RunDataError",
-    "camera_filter",
-    "parse_frame_interval",
-    "parse_window",
-    "read_collisions",
-    "scene_title",
-]
+__all__ = ["RunDataError", "camera_filter", "read_collisions"]
 
 MM = 1e3  # mm per m
 
@@ -74,132 +63,6 @@ def lid_mask(columns: Columns) -> np.ndarray:
         if wall.dtype.kind in "US":
             lid |= np.char.strip(wall.astype(str)) == "lid"
     return lid
-
-
-# --- checked input -------------------------------------------------------------------------
-
-
-def checked_interval(frame_interval: float | None) -> float | None:
-    """A camera frame interval (s) as a positive finite float, or None.
-
-    Raises:
-        RunDataError: not a positive finite number.
-    """
-    if frame_interval is None:
-        return None
-    try:
-        value = float(frame_interval)
-    except (TypeError, ValueError):
-        value = math.nan
-    if not (math.isfinite(value) and value > 0):
-        raise RunDataError(
-            f"camera frame interval must be a positive number of seconds, got {frame_interval!r}"
-        )
-    return value
-
-
-def parse_frame_interval(text: str) -> float:
-    """Parse a frame interval in seconds: a number (``0.0333``) or a fraction (``1/30``).
-
-    Raises:
-        RunDataError: not a number, or not > 0.
-    """
-    try:
-        value = float(Fraction(text.strip())) if "/" in text else float(text)
-    except (ValueError, ZeroDivisionError):
-        raise RunDataError(
-            f"frame interval {text!r} is not a number of seconds (e.g. 0.0333 or 1/30)"
-        ) from None
-    if not (math.isfinite(value) and value > 0):
-        raise RunDataError(f"frame interval {text!r} must be a number of seconds > 0")
-    return value
-
-
-def parse_window(text: str) -> Window:
-    """Parse ``"N0:N1"`` (either side may be empty) into a window of impact numbers.
-
-    Raises:
-        RunDataError: (a ValueError) not of that form, or not whole numbers.
-    """
-    start, sep, stop = text.partition(":")
-    if not sep:
-        raise RunDataError(
-            f"window {text!r}: expected N0:N1 (impact numbers, N0 included, N1 excluded)"
-        )
-    try:
-        n0 = int(start) if start.strip() else None
-        n1 = int(stop) if stop.strip() else None
-    except ValueError:
-        raise RunDataError(f"window {text!r}: N0 and N1 must be whole impact numbers") from None
-    return n0, n1
-
-
-# --- titles and labels ---------------------------------------------------------------------
-
-
-def fmt(value: float) -> str:
-    return f"{value:.4g}"
-
-
-def _curve_text(scene: Scene) -> str:
-    curve = scene.boundary.curve
-    if scene.boundary.kind == "expression":
-        text = "f(x) = " + (curve if len(curve) <= 50 else curve[:47] + "...")
-    else:
-        text = f"curve {curve}"
-    if scene.boundary.parameters:
-        text += " (" + ", ".join(f"{k}={fmt(v)}" for k, v in scene.boundary.parameters) + ")"
-    return text
-
-
-def scene_title(scene: Scene, n_impacts: int | None = None, width: int = 90) -> str:
-    """A figure title: the scene's name, then curve, drive, restitution and friction.
-
-    The parts are joined with "; " on lines of at most ``width`` characters, e.g.::
-
-        parabola-5.4hz, 25000 impacts
-        curve parabola; drive 5.4 Hz, A = 5 mm horizontal; e = 0.393, mu_s = 0.61, mu_k = 0.47
-
-    (mu_s and mu_k are drawn as Greek letters).
-    """
-    head = scene.name if n_impacts is None else f"{scene.name}, {n_impacts} impacts"
-    drive = scene.drive
-    drive_text = (
-        f"drive {fmt(drive.frequency)} Hz, A = {fmt(drive.amplitude * MM)} mm {drive.direction}"
-    )
-    contact = scene.contact
-    contact_text = (
-        f"e = {fmt(contact.restitution)}, $\\mu_s$ = {fmt(contact.mu_static)}, "
-        f"$\\mu_k$ = {fmt(contact.mu_kinetic)}"
-    )
-    # Break between the parts where possible; wrap a part only if it is too long alone.
-    # Lengths are measured on plain text, so that the mathtext of mu counts as 4 characters.
-    lines: list[str] = []
-    for part in (_curve_text(scene), drive_text, contact_text):
-        plain = _plain(part)
-        current = lines[-1] if lines else None
-        if current is not None and len(_plain(current)) + 2 + len(plain) <= width:
-            lines[-1] = f"{current}; {part}"
-        elif len(plain) <= width:
-            lines.append(part)
-        else:
-            lines += textwrap.wrap(part, width=width)
-    return head + "\n" + "\n".join(lines)
-
-
-def _plain(text: str) -> str:
-    return text.replace("$\\mu_s$", "mu_s").replace("$\\mu_k$", "mu_k")
-
-
-def short_label(scene: Scene) -> str:
-    """A panel title such as 'wedge, 6.6 Hz'."""
-    curve = scene.name if scene.boundary.kind == "expression" else scene.boundary.curve
-    return f"{curve}, {fmt(scene.drive.frequency)} Hz"
-
-
-def camera_label(frame_interval: float, count: int) -> str:
-    fps = 1.0 / frame_interval
-    return f"camera, frame {frame_interval * 1e3:.3g} ms ({fps:.3g} fps): {count} impacts"
 
 
 # --- axes helpers --------------------------------------------------------------------------

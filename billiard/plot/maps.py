@@ -13,8 +13,6 @@ from .common import (
     MODEL_COLOR,
     Columns,
     camera_filter,
-    camera_label,
-    checked_interval,
     column,
     diagonal,
     dots,
@@ -24,6 +22,8 @@ from .common import (
     square_limits,
     uniform_legend_markers,
 )
+from .inputs import checked_interval
+from .titles import camera_label
 
 __all__ = ["return_map", "time_map"]
 

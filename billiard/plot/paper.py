@@ -18,15 +18,15 @@ from .common import (
     RunDataError,
     camera_filter,
     camera_handle,
-    checked_interval,
     lid_mask,
     new_figure,
     save,
-    short_label,
 )
+from .inputs import checked_interval
 from .maps import return_map, time_map
 from .phase import PHASE_CAPTION, phase_plot
 from .run import load_run
+from .titles import short_label
 
 __all__ = ["paper_figure", "paper_phase_figure"]
 

@@ -13,14 +13,14 @@ from .common import (
     MODEL_COLOR,
     Columns,
     camera_filter,
-    camera_label,
-    checked_interval,
     column,
     dots,
     marker_size,
     rings,
     uniform_legend_markers,
 )
+from .inputs import checked_interval
+from .titles import camera_label
 
 __all__ = [
     "PHASE_CAPTION",

@@ -17,16 +17,16 @@ from .common import (
     Columns,
     RunDataError,
     Window,
-    checked_interval,
     new_figure,
     output_directory,
     read_collisions,
     save,
-    scene_title,
     uniform_legend_markers,
 )
+from .inputs import checked_interval
 from .maps import return_map, time_map
 from .phase import PHASE_CAPTION, phase_plot
+from .titles import scene_title
 from .trajectory import trajectory, window_rows
 
 __all__ = ["FIGURE_NAMES", "load_run", "plot_run", "read_scene"]

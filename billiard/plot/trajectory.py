@@ -19,12 +19,12 @@ from .common import (
     RunDataError,
     Window,
     camera_filter,
-    checked_interval,
     column,
-    fmt,
 )
 from .flights import arcs, flight_label
+from .inputs import checked_interval
 from .outline import boundary_function, boundary_outline
+from .titles import fmt
 
 __all__ = ["default_window", "trajectory", "view", "window_rows"]
 
