@@ -277,25 +277,20 @@ def cmd_calibrate(args: argparse.Namespace) -> int:
 
 
 def cmd_plot(args: argparse.Namespace) -> int:
-    from .plot import plot_run
+    from .plot import parse_frame_interval, parse_window, plot_run
 
-    window = _window(args.window) if args.window else None
+    interval = None if args.frame_interval is None else parse_frame_interval(args.frame_interval)
+    window = None if args.window is None else parse_window(args.window)
     paths = plot_run(
-        Path(args.dir), frame_interval=args.frame_interval, window=window, gif=not args.no_gif
+        Path(args.dir),
+        Path(args.out) if args.out else None,
+        frame_interval=interval,
+        window=window,
+        gif=not args.no_gif,
     )
     for path in paths:
         print(f"wrote {path}")
     return 0
-
-
-def _window(text: str) -> tuple[int, int]:
-    a, sep, b = text.partition(":")
-    try:
-        if not sep:
-            raise ValueError
-        return int(a), int(b)
-    except ValueError:
-        raise UserError(f"--window {text!r}: expected N0:N1, impact numbers") from None
 
 
 def cmd_lyapunov(args: argparse.Namespace) -> int:
@@ -455,13 +450,19 @@ def build_parser() -> argparse.ArgumentParser:
         "and animation from DIR/collisions.csv and DIR/scene.toml.",
     )
     p.add_argument("dir", help="run directory")
+    p.add_argument("--out", metavar="DIR", help="where to write the figures (default: DIR)")
     p.add_argument(
         "--frame-interval",
-        type=float,
         metavar="S",
-        help="also show what a camera with this frame interval (s) would record",
+        help="also show what a camera with this frame interval (s, e.g. 0.0333 or 1/30) "
+        "would record",
     )
-    p.add_argument("--window", metavar="N0:N1", help="impacts drawn in the trajectory and GIF")
+    p.add_argument(
+        "--window",
+        metavar="N0:N1",
+        help="impacts N0 <= n < N1 drawn in the trajectory and GIF (either may be "
+        "left out; default: the last four drive periods)",
+    )
     p.add_argument("--no-gif", action="store_true", help="skip the animated GIF")
     p.set_defaults(func=cmd_plot)
 

@@ -1,0 +1,172 @@
+"""An animated GIF of the ball inside the moving boundary."""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Sequence
+from pathlib import Path
+
+import numpy as np
+from matplotlib.backends.backend_agg import FigureCanvasAgg
+from matplotlib.patches import Circle
+from PIL import Image
+
+from ..scene import Scene
+from .common import MM, Columns, Window, cannot_write, column, new_figure
+from .flights import arcs, flight_positions
+from .outline import drive_offset
+from .trajectory import boundary_positions, view, window_rows
+
+__all__ = ["animate"]
+
+
+def _ball_centres(
+    columns: Columns, rows: np.ndarray, frame_times: np.ndarray, scene: Scene
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The centre (m) at each frame time (s), on the flight from the last impact before
+    it, and that impact's row."""
+    t = column(columns, "t")
+    index = np.searchsorted(t[rows], frame_times, side="right") - 1
+    starts = rows[np.maximum(index, 0)]
+    x = np.empty(frame_times.shape)
+    y = np.empty(frame_times.shape)
+    for row in np.unique(starts):
+        mask = starts == row
+        x[mask], y[mask] = flight_positions(columns, int(row), frame_times[mask] - t[row], scene)
+    return x, y, starts
+
+
+def animate(
+    columns: Columns,
+    scene: Scene,
+    path: str | os.PathLike[str],
+    window: Window | None = None,
+    fps: int = 30,
+    *,
+    max_frames: int = 150,
+    dpi: int = 80,
+) -> Path:
+    """Write an animated GIF of the ball inside the moving boundary.
+
+    The still parts are drawn once; each frame redraws only the moving artists, and the
+    frames are written with Pillow in one shared 64-colour palette.
+
+    The ball is drawn as a circle of its true radius. Frames are spaced uniformly in time
+    from the first to the last impact of the window; between impacts the centre follows
+    the scene's flight (with air drag if the scene has it, see
+    :mod:`billiard.plot.flights`) from the previous impact's position and velocity, and
+    the boundary is drawn shifted by the drive D(t) (see :func:`drive_offset`). The faint
+    line is the whole reconstructed path in the window. The GIF plays at ``fps`` frames
+    per second, so it is in slow or fast motion; the speed relative to real time is
+    written in the frame.
+
+    Args:
+        columns: a run's columns.
+        scene: the run's scene.
+        path: the GIF to write.
+        window: impact numbers ``(n0, n1)``, n0 <= n < n1 (default: the last few drive
+            periods, see :func:`billiard.plot.default_window`).
+        fps: playback frames per second.
+        max_frames: number of frames (at most; fewer if the window has one impact).
+        dpi: pixels per inch of the frame, 5 inches wide (400 px at 80 dpi), as high
+            as the view needs.
+
+    Returns:
+        The path written.
+
+    Raises:
+        RunDataError: the window holds no impacts, or the GIF cannot be written.
+    """
+    rows = window_rows(columns, scene, window)
+    r = scene.ball.radius
+    t = column(columns, "t")
+    t0, t1 = float(t[rows[0]]), float(t[rows[-1]])
+    count = max_frames if t1 > t0 else 1
+    frame_times = np.linspace(t0, t1, count)
+    arc_x, arc_y = arcs(columns, rows, scene)
+    q1 = column(columns, "q1")[rows]
+    q2 = column(columns, "q2")[rows]
+    x_lim, y_lim, show_lid = view(scene, np.concatenate([q1, arc_x]), np.concatenate([q2, arc_y]))
+    grid, height = boundary_positions(scene, x_lim)
+    direction = scene.drive.direction
+    ball_x, ball_y, starts = _ball_centres(columns, rows, frame_times, scene)
+
+    aspect = (y_lim[1] - y_lim[0]) / (x_lim[1] - x_lim[0])
+    fig = new_figure((5.0, float(np.clip(4.2 * aspect + 0.9, 2.5, 6.5))), dpi=dpi)
+    ax = fig.add_subplot()
+    ax.plot(arc_x * MM, arc_y * MM, color="0.8", linewidth=0.7, zorder=0)
+    (boundary,) = ax.plot(grid * MM, height * MM, color="black", linewidth=1.5)
+    ceiling = scene.boundary.ceiling
+    lid = None
+    if ceiling is not None and show_lid:
+        (lid,) = ax.plot(np.asarray(x_lim) * MM, [ceiling * MM] * 2, color="0.3", linewidth=1.2)
+    ball = Circle(
+        (float(q1[0]) * MM, float(q2[0]) * MM),
+        r * MM,
+        facecolor="tab:blue",
+        edgecolor="navy",
+        linewidth=0.6,
+        zorder=3,
+    )
+    ax.add_patch(ball)
+    ax.set_xlim(x_lim[0] * MM, x_lim[1] * MM)
+    ax.set_ylim(y_lim[0] * MM, y_lim[1] * MM)
+    ax.set_aspect("equal", adjustable="box")
+    ax.set_xlabel("$q_1$ (mm)")
+    ax.set_ylabel("$q_2$ (mm)")
+    duration = (count / fps) if count > 1 else 1.0
+    speed = (t1 - t0) / duration if t1 > t0 else 1.0
+    fig.suptitle(f"{scene.name}: {speed:.2g}x real time", fontsize=10)
+    clock = ax.text(
+        0.02, 0.97, "", transform=ax.transAxes, va="top", fontsize=9, family="monospace"
+    )
+
+    moving = [boundary, ball, clock] + (
+        [lid] if lid is not None and direction == "vertical" else []
+    )
+    for artist in moving:
+        artist.set_animated(True)
+    canvas = fig.canvas
+    assert isinstance(canvas, FigureCanvasAgg)
+    canvas.draw()
+    fig.set_layout_engine("none")  # freeze the layout: the frames only move artists
+    background = canvas.copy_from_bbox(fig.bbox)
+    frames: list[Image.Image] = []
+    for tf, x, y, row in zip(frame_times, ball_x, ball_y, starts, strict=True):
+        ball.center = (float(x) * MM, float(y) * MM)
+        offset = float(drive_offset(scene, tf))
+        if direction == "vertical":
+            boundary.set_data(grid * MM, (height + offset) * MM)
+            if lid is not None and ceiling is not None:
+                lid.set_ydata([(ceiling + offset) * MM] * 2)
+        else:
+            boundary.set_data((grid + offset) * MM, height * MM)
+        clock.set_text(f"t = {tf:8.3f} s\nimpact {int(columns['n'][row])}")
+        canvas.restore_region(background)
+        for artist in moving:
+            ax.draw_artist(artist)
+        frames.append(Image.fromarray(np.asarray(canvas.buffer_rgba())[..., :3].copy()))
+    fig.clear()
+    path = Path(path)
+    try:
+        _save_gif(frames, path, fps)
+    except OSError as exc:
+        raise cannot_write(path, exc) from None
+    return path
+
+
+def _save_gif(frames: Sequence[Image.Image], path: Path, fps: int) -> None:
+    """Save RGB frames as a looping GIF sharing one palette (small and fast to write;
+    Pillow stores only the changed part of each frame)."""
+    palette = frames[0].quantize(colors=64, method=Image.Quantize.MEDIANCUT)
+    indexed = [palette] + [
+        f.quantize(palette=palette, dither=Image.Dither.NONE) for f in frames[1:]
+    ]
+    indexed[0].save(
+        path,
+        format="GIF",
+        save_all=True,
+        append_images=indexed[1:],
+        duration=max(1, round(1000 / fps)),
+        loop=0,
+    )

@@ -1,0 +1,212 @@
+"""Every figure of one run directory: :func:`plot_run` (``billiard plot DIR``)."""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Callable
+from pathlib import Path
+
+import numpy as np
+from matplotlib.axes import Axes
+from matplotlib.figure import Figure
+
+from ..scene import Scene, SceneError, scene_from_toml
+from .animation import animate
+from .common import (
+    SINGLE_SIZE,
+    Columns,
+    RunDataError,
+    Window,
+    new_figure,
+    output_directory,
+    read_collisions,
+    save,
+    uniform_legend_markers,
+)
+from .inputs import checked_interval
+from .maps import return_map, time_map
+from .phase import PHASE_CAPTION, phase_plot
+from .titles import scene_title
+from .trajectory import trajectory, window_rows
+
+__all__ = ["FIGURE_NAMES", "load_run", "plot_run", "read_scene"]
+
+#: Files written by :func:`plot_run`, in order.
+FIGURE_NAMES: tuple[str, ...] = (
+    "return_map.png",
+    "time_map.png",
+    "phase.png",
+    "trajectory.png",
+    "animation.gif",
+)
+
+
+def read_scene(path: str | os.PathLike[str]) -> Scene:
+    """Read and validate a run's ``scene.toml`` (see :func:`billiard.scene.scene_from_toml`).
+
+    Raises:
+        RunDataError: the file is missing or unreadable (one line, naming it).
+        SceneError: the file is not valid TOML or not a valid scene (one line, naming it).
+    """
+    try:
+        text = Path(path).read_bytes().decode("utf-8")
+    except FileNotFoundError:
+        raise RunDataError(
+            f"{path}: file not found (the run's scene is needed "
+            "for the ball's mass, the boundary and the titles)"
+        ) from None
+    except (OSError, UnicodeDecodeError) as exc:
+        raise RunDataError(f"{path}: cannot read: {' '.join(str(exc).split())}") from None
+    try:
+        return scene_from_toml(text, name=Path(path).parent.name or "run", source=str(path))
+    except SceneError as exc:
+        message = " ".join(str(exc).split())
+        raise SceneError(message if str(path) in message else f"{path}: {message}") from None
+
+
+def load_run(run_dir: str | os.PathLike[str]) -> tuple[dict[str, np.ndarray], Scene]:
+    """Columns of ``run_dir/collisions.csv`` and the scene of ``run_dir/scene.toml``.
+
+    Raises:
+        RunDataError: a file is missing or malformed, or the CSV has no impacts.
+        SceneError: the scene file is not a valid scene.
+    """
+    run_dir = Path(run_dir)
+    if not run_dir.is_dir():
+        raise RunDataError(f"{run_dir}: not a directory")
+    csv_path = run_dir / "collisions.csv"
+    columns = read_collisions(csv_path)
+    if columns["t"].size == 0:
+        raise RunDataError(f"{csv_path}: no impacts to plot")
+    return columns, read_scene(run_dir / "scene.toml")
+
+
+def _legend_outside(fig: Figure, ax: Axes, caption: str | None = None) -> None:
+    """Move the axes' legend below the axes, so that it hides no data; ``caption`` is
+    written above the legend's entries."""
+    legend = ax.get_legend()
+    if legend is None:
+        return
+    handles, labels = ax.get_legend_handles_labels()
+    legend.remove()
+    uniform_legend_markers(
+        fig.legend(
+            handles,
+            labels,
+            loc="outside lower center",
+            ncol=2,
+            fontsize=8,
+            frameon=False,
+            title=caption,
+            title_fontsize=7,
+        )
+    )
+
+
+def _single(
+    draw: Callable[[Axes], object],
+    title: str,
+    path: Path,
+    *,
+    fit_height: bool = False,
+    caption: str | None = None,
+) -> Path:
+    """One-panel figure, 600 px wide, with the title on top and the legend below.
+
+    With ``fit_height``, the height follows the shape of the (equal-aspect) view;
+    ``caption`` is small text under the axes, above the legend.
+    """
+    fig = new_figure()
+    ax = fig.add_subplot()
+    draw(ax)
+    if fit_height:
+        x0, x1 = ax.get_xlim()
+        y0, y1 = ax.get_ylim()
+        aspect = abs(y1 - y0) / max(abs(x1 - x0), 1e-300)
+        fig.set_size_inches(SINGLE_SIZE[0], float(np.clip(4.6 * aspect + 2.0, 3.6, 8.0)))
+    fig.suptitle(title, fontsize=9)
+    _legend_outside(fig, ax, caption)
+    return save(fig, path)
+
+
+def _figures(
+    columns: Columns,
+    scene: Scene,
+    out: Path,
+    interval: float | None,
+    window: tuple[int, int],
+) -> list[Path]:
+    title = scene_title(scene, int(columns["t"].size))
+    return [
+        _single(
+            lambda ax: return_map(columns, ax, frame_interval=interval),
+            title,
+            out / "return_map.png",
+        ),
+        _single(
+            lambda ax: time_map(columns, ax, frame_interval=interval), title, out / "time_map.png"
+        ),
+        _single(
+            lambda ax: phase_plot(columns, scene, ax, frame_interval=interval),
+            title,
+            out / "phase.png",
+            caption=PHASE_CAPTION,
+        ),
+        _single(
+            lambda ax: trajectory(columns, scene, ax, window, frame_interval=interval),
+            title,
+            out / "trajectory.png",
+            fit_height=True,
+        ),
+    ]
+
+
+def plot_run(
+    run_dir: str | os.PathLike[str],
+    out_dir: str | os.PathLike[str] | None = None,
+    *,
+    frame_interval: float | None = None,
+    window: Window | None = None,
+    gif: bool = True,
+) -> list[Path]:
+    """Draw every figure of a run.
+
+    Reads ``run_dir/collisions.csv`` and ``run_dir/scene.toml`` and writes into
+    ``out_dir`` (default ``run_dir``, created if missing): ``return_map.png``,
+    ``time_map.png``, ``phase.png``, ``trajectory.png`` and, unless ``gif`` is False,
+    ``animation.gif``. Each PNG is 600 px wide, titled with the scene's name and key
+    parameters.
+
+    With ``frame_interval`` (s), the maps also show, as hollow rings in a second colour,
+    the data a camera with that frame interval would have recorded (the experiment missed
+    impacts in rapid succession; see :func:`billiard.camera.camera_filter`), with the
+    frame interval and impact counts in the legend, and the trajectory rings the impacts
+    the camera would have seen. The files keep the same names.
+
+    Args:
+        run_dir: a directory written by ``billiard run``.
+        out_dir: where to write the figures.
+        frame_interval: the camera's frame interval (s), or None for the model data only.
+        window: impact numbers ``(n0, n1)``, n0 <= n < n1, for the trajectory and the
+            animation (default: :func:`billiard.plot.default_window`, the last few drive
+            periods); either may be None for an open end.
+        gif: write the animation (the slowest figure, a few seconds).
+
+    Returns:
+        The paths written, in the order of :data:`FIGURE_NAMES`.
+
+    Raises:
+        RunDataError: (a ValueError) a missing, empty or malformed file, a window with no
+            impacts, a bad frame interval, or an output directory that cannot be written;
+            the message is one line.
+        SceneError: (a ValueError) ``scene.toml`` is not a valid scene; one line.
+    """
+    interval = checked_interval(frame_interval)
+    columns, scene = load_run(run_dir)
+    rows = window_rows(columns, scene, window)  # check the window before drawing
+    chosen = (int(columns["n"][rows[0]]), int(columns["n"][rows[-1]]) + 1)
+    out = output_directory(out_dir if out_dir is not None else run_dir)
+    written = _figures(columns, scene, out, interval, chosen)
+    if gif:
+        written.append(animate(columns, scene, out / "animation.gif", window=chosen))
+    return written

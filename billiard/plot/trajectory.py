@@ -1,0 +1,232 @@
+"""The ball's path over a window of impacts, in the lab frame: impacts, flight arcs, the
+boundary at its mean and extreme positions, and the lid."""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+import numpy as np
+from matplotlib.axes import Axes
+
+from ..scene import Scene
+from .common import (
+    CAMERA_COLOR,
+    MM,
+    MODEL_COLOR,
+    REGIME_COLORS,
+    Columns,
+    RunDataError,
+    Window,
+    camera_filter,
+    column,
+)
+from .flights import arcs, flight_label
+from .inputs import checked_interval
+from .outline import boundary_function, boundary_outline
+from .titles import fmt
+
+__all__ = ["default_window", "trajectory", "view", "window_rows"]
+
+
+def default_window(
+    columns: Columns, scene: Scene, *, periods: float = 4.0, max_impacts: int = 400
+) -> tuple[int, int]:
+    """The impacts of the last ``periods`` drive periods of the run (the last second if
+    the drive has no frequency), at most ``max_impacts`` and at least two of them.
+
+    Returns:
+        ``(n0, n1)``: impact numbers (the ``n`` column), n0 included, n1 excluded.
+    """
+    t = column(columns, "t")
+    n = column(columns, "n").astype(int)
+    frequency = scene.drive.frequency
+    span = periods / frequency if frequency > 0 else 1.0
+    first = int(np.searchsorted(t, t[-1] - span, side="left"))
+    first = max(0, min(first, t.size - 2), t.size - max_impacts)
+    return int(n[first]), int(n[-1]) + 1
+
+
+def window_rows(columns: Columns, scene: Scene, window: Window | None) -> np.ndarray:
+    """Row indices of the impacts n0 <= n < n1 (default: :func:`default_window`).
+
+    Raises:
+        RunDataError: the window holds no impacts.
+    """
+    n = column(columns, "n")
+    if window is None:
+        window = default_window(columns, scene)
+    n0, n1 = window
+    lo = -math.inf if n0 is None else n0
+    hi = math.inf if n1 is None else n1
+    rows = np.flatnonzero((n >= lo) & (n < hi))
+    if rows.size == 0:
+        shown = f"{'' if n0 is None else n0}:{'' if n1 is None else n1}"
+        raise RunDataError(
+            f"window {shown} holds no impacts (the run has impacts "
+            f"{int(n[0])} to {int(n[-1])}; N1 is excluded)"
+        )
+    return rows
+
+
+def view(
+    scene: Scene, xs: np.ndarray, ys: np.ndarray
+) -> tuple[tuple[float, float], tuple[float, float], bool]:
+    """Limits (m) around the ball's path, boundary included, and whether the lid shows."""
+    drive = scene.drive
+    r = scene.ball.radius
+    f = boundary_function(scene)
+    x = xs[np.isfinite(xs)]
+    y = ys[np.isfinite(ys)]
+    x_lo, x_hi = float(x.min()), float(x.max())
+    y_hi = float(y.max()) + r
+    margin = max(0.15 * (x_hi - x_lo), 3 * r)
+    x_lo, x_hi = x_lo - margin, x_hi + margin
+    heights = f(np.linspace(x_lo, x_hi, 401))
+    floor = np.nanmin(heights) if np.any(np.isfinite(heights)) else float(y.min()) - r
+    y_lo = min(float(floor), float(y.min()) - r)
+    if drive.direction == "vertical":
+        y_lo -= drive.amplitude
+    ceiling = scene.boundary.ceiling
+    show_lid = ceiling is not None and y_hi > y_lo + 0.6 * (ceiling - y_lo)
+    if ceiling is not None and show_lid:
+        y_hi = max(y_hi, ceiling)
+    # Avoid a sliver: with equal aspect, neither side may be much shorter than the other.
+    width, height = x_hi - x_lo, y_hi - y_lo
+    if width < 0.6 * height:
+        centre = 0.5 * (x_lo + x_hi)
+        x_lo, x_hi = centre - 0.3 * height, centre + 0.3 * height
+    elif height < 0.35 * width:
+        y_hi = y_lo + 0.35 * width
+    pad = 0.04 * max(x_hi - x_lo, y_hi - y_lo)
+    return (x_lo, x_hi), (y_lo - pad, y_hi + pad), show_lid
+
+
+def boundary_positions(scene: Scene, x_lim: tuple[float, float]) -> tuple[np.ndarray, np.ndarray]:
+    """A grid of the boundary's own x (m) wide enough for any drive offset, and f there."""
+    amplitude = scene.drive.amplitude
+    return boundary_outline(scene, x_lim[0] - amplitude, x_lim[1] + amplitude)
+
+
+def trajectory(
+    columns: Columns,
+    scene: Scene,
+    ax: Axes,
+    window: Window | None = None,
+    *,
+    frame_interval: float | None = None,
+) -> dict[str, Any]:
+    """The ball's path over a window of impacts, in the lab frame, in mm (equal aspect).
+
+    Drawn: the boundary y = f(x) at its mean position (solid), and at its extreme drive
+    offsets +-A (dotted) since it moves; the lid at ``boundary.ceiling`` if the path gets
+    near it; the centre of the ball at each impact (coloured by the impact's regime); and
+    the flight arcs between consecutive impacts, rebuilt from each impact's position and
+    velocity over the next impact's time of flight with the scene's flight model (the
+    exact parabola without air drag, the integrated drag flight with it; see
+    :mod:`billiard.plot.flights`), so that each arc ends at the next impact. Impact points
+    are ball centres, so they lie one radius inside the boundary.
+
+    Args:
+        columns: a run's columns.
+        scene: the run's scene.
+        ax: the axes to draw in.
+        window: ``(n0, n1)``: impact numbers (the ``n`` column) n0 <= n < n1; either may
+            be None for an open end. Default: :func:`default_window`.
+        frame_interval: if given (s), ring the impacts the camera would have recorded.
+
+    Returns:
+        A dict with the row indices drawn (``rows``) and the artists (``impacts``,
+        ``arcs``, ``boundary``, and ``camera`` with ``frame_interval``).
+    """
+    interval = checked_interval(frame_interval)
+    rows = window_rows(columns, scene, window)
+    arc_x, arc_y = arcs(columns, rows, scene)
+    q1 = column(columns, "q1")[rows]
+    q2 = column(columns, "q2")[rows]
+    x_lim, y_lim, show_lid = view(scene, np.concatenate([q1, arc_x]), np.concatenate([q2, arc_y]))
+    amplitude, direction = scene.drive.amplitude, scene.drive.direction
+
+    grid, height = boundary_positions(scene, x_lim)
+    (boundary,) = ax.plot(
+        grid * MM, height * MM, color="black", linewidth=1.4, label="boundary, mean position"
+    )
+    if amplitude > 0:
+        for sign in (-1.0, 1.0):
+            if direction == "vertical":
+                bx, by = grid, height + sign * amplitude
+            else:
+                bx, by = grid + sign * amplitude, height
+            ax.plot(
+                bx * MM,
+                by * MM,
+                color="0.55",
+                linewidth=0.7,
+                linestyle=":",
+                label=f"boundary at $\\pm A$ = $\\pm${fmt(amplitude * MM)} mm"
+                if sign > 0
+                else None,
+            )
+    ceiling = scene.boundary.ceiling
+    if ceiling is not None and show_lid:
+        ax.axhline(ceiling * MM, color="0.3", linewidth=1.2, label="lid")
+    (arc_line,) = ax.plot(
+        arc_x * MM, arc_y * MM, color=MODEL_COLOR, linewidth=0.8, label=flight_label(scene)
+    )
+    regime = np.asarray(columns["regime"])[rows] if "regime" in columns else None
+    impacts = []
+    if regime is None:
+        impacts.append(
+            ax.plot(
+                q1 * MM, q2 * MM, "o", markersize=3.5, color="tab:red", label="impact (ball centre)"
+            )[0]
+        )
+    else:
+        for name in sorted(set(regime.tolist())):
+            mask = regime == name
+            impacts.append(
+                ax.plot(
+                    q1[mask] * MM,
+                    q2[mask] * MM,
+                    "o",
+                    markersize=3.5,
+                    color=REGIME_COLORS.get(name, "0.4"),
+                    label=f"{name} impact ({int(mask.sum())})",
+                    zorder=2.5,
+                )[0]
+            )
+    drawn: dict[str, Any] = {
+        "rows": rows,
+        "impacts": impacts,
+        "arcs": arc_line,
+        "boundary": boundary,
+    }
+    if interval is not None:
+        seen = camera_filter(columns, interval)
+        mask = np.isin(column(columns, "n")[rows], column(seen, "n"))
+        (drawn["camera"],) = ax.plot(
+            q1[mask] * MM,
+            q2[mask] * MM,
+            "o",
+            markersize=7,
+            markerfacecolor="none",
+            markeredgecolor=CAMERA_COLOR,
+            markeredgewidth=1.0,
+            label=f"seen by camera (frame {interval * 1e3:.3g} ms)",
+            zorder=2.0,
+        )
+    ax.set_xlim(x_lim[0] * MM, x_lim[1] * MM)
+    ax.set_ylim(y_lim[0] * MM, y_lim[1] * MM)
+    ax.set_aspect("equal", adjustable="box")
+    ax.set_xlabel("horizontal position of the centre $q_1$ (mm)")
+    ax.set_ylabel("height of the centre $q_2$ (mm)")
+    t = column(columns, "t")
+    n_all = column(columns, "n")
+    ax.set_title(
+        f"impacts {int(n_all[rows[0]])} to {int(n_all[rows[-1]])}, "
+        f"t = {t[rows[0]]:.3f} to {t[rows[-1]]:.3f} s",
+        fontsize=9,
+    )
+    ax.grid(True, linewidth=0.3, alpha=0.5)
+    ax.legend(loc="upper right", fontsize=7, framealpha=0.85)
+    return drawn
