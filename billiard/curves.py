@@ -22,6 +22,7 @@ from pathlib import Path
 from types import ModuleType
 
 from .expr import parse_curve
+from .walls import CURVE_FORMAT, Wall
 
 PAPER_CURVES = ("parabola", "wedge", "hyperbola")
 _NAME = re.compile(r"^[A-Za-z][A-Za-z0-9_]{0,40}$")
@@ -43,26 +44,20 @@ def user_curve_dir() -> Path:
 class CurveModel:
     """Numeric functions of a boundary curve, parameters bound.
 
-    ``walls`` is a tuple of dicts with keys lo, hi, f, df, d2f, near, dnear, poly (see
-    docs/design.md). The curve is the maximum of its walls.
+    ``walls`` is a tuple of :class:`~billiard.walls.Wall` (plain generated functions and
+    the parameter array they take). The curve is the maximum of its walls.
     """
 
     name: str
     expression: str
     parameters: dict[str, float]
-    walls: tuple[dict, ...]
+    walls: tuple[Wall, ...]
     breakpoints: tuple[float, ...]
     source: str = field(default="", compare=False)
 
     def f(self, x: float) -> float:
         """Height of the curve at x (m): the maximum of the walls."""
-        return max(w["f"](x) for w in self.walls)
-
-    def wall_at(self, x: float) -> dict:
-        for w in self.walls:
-            if w["lo"] <= x <= w["hi"]:
-                return w
-        return self.walls[-1]
+        return max(w.f(x, w.p) for w in self.walls)
 
 
 def is_expression(curve: str) -> bool:
@@ -104,7 +99,13 @@ def curve_module(
                 f"unknown curve {curve!r}: not built in and not in {directory} "
                 f"(known: {known}; make one with `billiard derive --name {curve} --curve EXPR`)"
             )
-        return _import_path(path)
+        module = _import_path(path)
+        if getattr(module, "FORMAT", 1) != CURVE_FORMAT:
+            raise CurveNotFoundError(
+                f"curve {curve!r} in {path} was derived by an older version of billiard; "
+                f"derive it again (`billiard derive --name {curve} --curve EXPR --force`)"
+            )
+        return module
     name = expression_module_name(curve, parameters)
     path = directory / f"{name}.py"
     if not path.exists():
@@ -114,7 +115,16 @@ def curve_module(
 
         print(f"deriving curve {curve!r} (first use; cached in {path})", file=sys.stderr)
         derive_user_curve(name, curve, parameters, directory)
-    return _import_path(path)
+    module = _import_path(path)
+    if getattr(module, "FORMAT", 1) != CURVE_FORMAT and derive_missing:
+        # a cache entry written by an older version: derive it again in the new layout
+        from .derivation.build import derive_user_curve
+
+        print(f"deriving curve {curve!r} again (cached in an older layout)", file=sys.stderr)
+        derive_user_curve(name, curve, parameters, directory)
+        del sys.modules[f"billiard_user_curves.{path.stem}"]
+        module = _import_path(path)
+    return module
 
 
 def user_curve_names() -> list[str]:
@@ -135,11 +145,16 @@ def load_curve(curve: str, parameters: dict[str, float] | None = None) -> CurveM
             f"its parameters: {', '.join(sorted(values)) or 'none'}"
         )
     values.update({k: float(v) for k, v in (parameters or {}).items()})
+    p = tuple(float(values[name]) for name in module.PARAMETER_NAMES)
+    walls = []
+    for index, (interval, f, df, d2f, near, dnear, poly) in enumerate(module.WALLS):
+        lo, hi = interval(p)
+        walls.append(Wall(index, float(lo), float(hi), p, f, df, d2f, near, dnear, poly))
     return CurveModel(
         name=module.NAME,
         expression=module.EXPRESSION,
         parameters=values,
-        walls=tuple(module.make(**values)),
-        breakpoints=tuple(module.breakpoints(**values)),
+        walls=tuple(walls),
+        breakpoints=tuple(module.breakpoints(p)),
         source=getattr(module, "__file__", "") or "",
     )

@@ -25,11 +25,12 @@ from typing import Any
 from billiard.boundary import Boundary, Drive
 from billiard.curves import load_curve
 from billiard.errors import GeometryError, SimulationError
-from billiard.events import LOCATORS, Event
+from billiard.events import Event
 from billiard.flight import flight_model
 from billiard.generated import ball as _ball
 from billiard.impact import Contact, ImpactLaw, impact_law
 from billiard.interrupt import RunInterrupted, StopRequest
+from billiard.locators import LOCATORS
 from billiard.record import COLUMNS, CheckpointError, ImpactRecord
 from billiard.scene import SceneError, with_values
 from billiard.state import BallState, EngineState
@@ -85,7 +86,12 @@ class Simulation:
         self.boundary = Boundary.from_scene(scene, self.curve.walls)
         self.drive: Drive = self.boundary.drive
         self.flight = flight_model(scene, self.method)
-        self.locator = LOCATORS[self.method](self.boundary, self.flight, scene.run.gravity)
+        #: warm starts of the offset inversion, one [s, slope] per surface: engine state
+        #: passed to every geometry query (see billiard.surfaces)
+        self.warm = self.boundary.initial_warm()
+        self.locator = LOCATORS[self.method](
+            self.boundary, self.flight, scene.run.gravity, self.warm
+        )
         self.impact: ImpactLaw = law if law is not None else impact_law(scene)
         self.initial = self.initial_state()
         #: simulated time (s) at which a run ends (inf when the scene sets no duration)
@@ -110,7 +116,7 @@ class Simulation:
         q1, q2 = init.q1, init.q2
         if q2 is None:
             if q1 is None:
-                x, y = self.boundary.resting_position()
+                x, y = self.boundary.resting_position(self.warm)
                 xl, xr = self.boundary.x_range
                 if not xl < x < xr:
                     raise GeometryError(
@@ -120,13 +126,15 @@ class Simulation:
                     )
             else:
                 x = self.drive.to_boundary_frame(theta, q1, 0.0, 0.0, 0.0)[0]
-                y = self.boundary.offset_height(x)
+                y = self.boundary.offset_height(x, self.warm)
             q1, q2 = self.drive.to_lab_frame(theta, x, y)
             if init.q1 is not None:
                 q1 = init.q1
         elif q1 is None:
-            q1 = self.drive.to_lab_frame(theta, self.boundary.resting_position()[0], 0.0)[0]
-        self.boundary.check_initial_position(q1, q2, theta)
+            q1 = self.drive.to_lab_frame(theta, self.boundary.resting_position(self.warm)[0], 0.0)[
+                0
+            ]
+        self.boundary.check_initial_position(q1, q2, theta, self.warm)
         return BallState(init.t, theta, q1, q2, init.v1, init.v2, init.omega, 0.0)
 
     def resolved_scene(self, collisions: int) -> Any:
@@ -180,7 +188,7 @@ class Simulation:
             zero_flights=self._zero_flights,
             recent=tuple(self._recent),
             counts=dict(self.counts),
-            walls=tuple((wall.s, wall.slope) for wall in self.boundary.offsets),
+            walls=tuple((w[0], w[1]) for w in self.warm[: len(self.boundary.offsets)]),
             flight=self.flight.memory(),
             locator=self.locator.memory(),
         )
@@ -208,8 +216,8 @@ class Simulation:
             self.locator.restore_memory(state.locator)
         except ValueError as exc:
             raise CheckpointError(f"its engine state does not fit this engine: {exc}") from None
-        for wall, (s, slope) in zip(offsets, state.walls, strict=True):
-            wall.s, wall.slope = s, slope
+        for warm, (s, slope) in zip(self.warm, state.walls, strict=False):
+            warm[0], warm[1] = s, slope
         self.counts = dict(state.counts)
         self._ball = state.ball.copy()
         self._impacts = state.impacts
@@ -228,7 +236,7 @@ class Simulation:
         a1, a2 = self.flight.acceleration(ev.u1, ev.u2)
         ab = self.drive.acceleration(ev.theta)
         ax, ay = (a1 - ab, a2) if self.drive.horizontal else (a1, a2 - ab)
-        return ev.surface.gap_accel(px, py, vx, vy, ax, ay) < 0.0
+        return ev.surface.gap_accel(px, py, vx, vy, ax, ay, self.warm[ev.index]) < 0.0
 
     def step(self, until: float = math.inf) -> ImpactRecord | None:
         """Advance the engine to the next impact and return its record.

@@ -1,4 +1,4 @@
-"""Finding the next impact of a flight.
+"""Finding the next impact of a flight: the event-driven locator (``method = "event"``).
 
 Two locators share one interface, ``locate(theta0, q1, q2, u1, u2, u3) -> Event``: the
 flight starts at tau = 0 with the drive angle theta0 and ends at the returned event.
@@ -48,28 +48,22 @@ flight starts at tau = 0 with the drive angle theta0 and ends at the returned ev
     exact to floating point; with air forces each probe inside a step re-integrates from
     the step start with one step of the exact length.
 
-:class:`FixedStepLocator` (``method = "rk4"``)
-    The paper's scheme, kept as the baseline: fixed RK4 steps, after each step the
-    Euclidean distance to the curve from Newton-Raphson on the nearest-point condition,
-    an impact when distance <= r, located Baraff-style by re-integrating from the step
-    start with shorter steps until |gap| <= 1e-12 m. The distance is taken negative for a
-    centre below the curve, so that a coarse step cannot carry the ball through a wall
-    unnoticed. It can miss an impact that starts and ends between two steps (a grazing
-    impact); that is the method's known weakness.
+The paper's fixed-step scheme is :class:`billiard.fixed_step.FixedStepLocator`.
 """
 
 from __future__ import annotations
 
 import math
-from collections.abc import Callable, Mapping
+from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import Protocol
 
-from billiard.boundary import Boundary, Surface
+from billiard.boundary import Boundary
 from billiard.errors import SimulationError
-from billiard.flight import FlightModel, RK4Flight
+from billiard.flight import FlightModel
+from billiard.surfaces import Surface, WarmStart
 
-__all__ = ["LOCATORS", "Event", "EventLocator", "FixedStepLocator", "Locator"]
+__all__ = ["Event", "EventLocator", "Locator"]
 
 # The longest flight the locators follow before giving up (s of simulated time).
 MAX_FLIGHT_TIME = 1.0e3
@@ -98,7 +92,8 @@ class Event:
 
     ``q1, q2, u1, u2`` are the lab-frame position and velocity of the centre then,
     ``theta`` the drive angle, ``s`` the contact point's abscissa on the boundary and ``z``
-    the tangent angle there (pi for the lid).
+    the tangent angle there (pi for the lid); ``index`` is the surface's place in
+    ``Boundary.surfaces`` (and in the engine's warm starts).
     """
 
     tau: float
@@ -110,6 +105,7 @@ class Event:
     theta: float
     s: float
     z: float
+    index: int = -1
 
 
 class Locator(Protocol):
@@ -128,9 +124,17 @@ class Locator(Protocol):
 class EventLocator:
     """Impact detection on offset-curve gaps for ``method = "event"`` (module docstring)."""
 
-    def __init__(self, boundary: Boundary, flight: FlightModel, gravity: float):
+    def __init__(
+        self,
+        boundary: Boundary,
+        flight: FlightModel,
+        gravity: float,
+        warm: list[WarmStart] | None = None,
+    ):
         self.boundary = boundary
         self.surfaces = boundary.surfaces
+        #: the engine's warm starts, one per surface (see billiard.surfaces)
+        self.warm = boundary.initial_warm() if warm is None else warm
         self.flight = flight
         drive = boundary.drive
         self.amplitude = drive.amplitude
@@ -175,16 +179,17 @@ class EventLocator:
         ab = -self.drive_accel * math.sin(self.theta0 + self.omega * tau)
         return (a1 - ab, a2) if self.horizontal else (a1, a2 - ab)
 
-    def _gap(self, surface: Surface, tau: float) -> tuple[float, float]:
+    def _gap(self, j: int, tau: float) -> tuple[float, float]:
         y = self.flight.state(tau)
-        return surface.gap_rate(*self._relative(tau, y))
+        return self.surfaces[j].gap_rate(*self._relative(tau, y), self.warm[j])
 
-    def _event(self, tau: float, surface: Surface) -> Event:
+    def _event(self, tau: float, j: int) -> Event:
         q1, q2, u1, u2 = self.flight.state(tau)
         px = self._relative(tau, (q1, q2, u1, u2))[0]
-        s, z, _ = surface.contact(px)
+        surface = self.surfaces[j]
+        s, z, _ = surface.contact(px, self.warm[j])
         theta = (self.theta0 + self.omega * tau) % (2.0 * math.pi)
-        return Event(tau, surface, q1, q2, u1, u2, theta, s, z)
+        return Event(tau, surface, q1, q2, u1, u2, theta, s, z, j)
 
     # ------------------------------------------------------------------ main loop
 
@@ -194,11 +199,12 @@ class EventLocator:
         self.theta0 = theta0
         flight = self.flight
         surfaces = self.surfaces
+        warm = self.warm
         flight.begin(q1, q2, u1, u2, u3)
         ta = 0.0
         ya = (q1, q2, u1, u2)
         rel_a = self._relative(0.0, ya)
-        gaps_a = [surf.gap_rate(*rel_a) for surf in surfaces]
+        gaps_a = [surf.gap_rate(*rel_a, warm[j]) for j, surf in enumerate(surfaces)]
         leaving = [False] * len(surfaces)
 
         # At tau = 0 a surface in contact (to within rounding) is either being left
@@ -210,20 +216,20 @@ class EventLocator:
                 continue
             if dg0 == 0.0:
                 ax, ay = self._relative_acceleration(0.0, u1, u2)
-                dg0 = surfaces[j].gap_accel(*rel_a, ax, ay)
+                dg0 = surfaces[j].gap_accel(*rel_a, ax, ay, warm[j])
             if dg0 >= 0.0:
                 leaving[j] = True
             elif immediate is None or dg0 < immediate[1]:
                 immediate = (j, dg0)
         if immediate is not None:
-            return self._event(0.0, surfaces[immediate[0]])
+            return self._event(0.0, immediate[0])
 
         h = self.h_first
         while ta < MAX_FLIGHT_TIME:
             tb = flight.advance(ta, ta + h)
             yb = flight.state(tb)
             rel_b = self._relative(tb, yb)
-            gaps_b = [surf.gap_rate(*rel_b) for surf in surfaces]
+            gaps_b = [surf.gap_rate(*rel_b, warm[j]) for j, surf in enumerate(surfaces)]
             span = tb - ta
             px, _, vx, vy = rel_a
             speed = math.hypot(vx, vy)
@@ -234,12 +240,12 @@ class EventLocator:
             self._split = False
             first = None
             for j, surf in enumerate(surfaces):
-                m = surf.max_gap_deceleration(px, vx, span, *bounds)
+                m = surf.max_gap_deceleration(px, vx, span, *bounds, warm[j])
                 ga, dga = gaps_a[j]
                 gb, dgb = gaps_b[j]
-                tau = self._scan(surf, ta, ga, dga, tb, gb, dgb, m, _MAX_SPLITS, leaving[j])
+                tau = self._scan(j, ta, ga, dga, tb, gb, dgb, m, _MAX_SPLITS, leaving[j])
                 if tau is not None and (first is None or tau < first[0]):
-                    first = (tau, surf)
+                    first = (tau, j)
             if first is not None:
                 return self._event(*first)
             for j in range(len(surfaces)):
@@ -277,7 +283,7 @@ class EventLocator:
 
     def _scan(
         self,
-        surf: Surface,
+        j: int,
         ta: float,
         ga: float,
         dga: float,
@@ -288,44 +294,44 @@ class EventLocator:
         splits: int,
         leaving: bool = False,
     ) -> float | None:
-        """First time in (ta, tb] at which the ball reaches ``surf``, or None.
+        """First time in (ta, tb] at which the ball reaches ``j``, or None.
 
         G and dG/dtau are known at both ends; m >= -d2G/dtau2 on the substep. ``leaving``:
         the ball is separating from this surface at ta (G ~ 0, dG/dtau >= 0); otherwise
         it is clear of it there (G > 0).
         """
         if leaving:
-            return self._scan_leaving(surf, ta, ga, dga, tb, gb, dgb, m, splits)
+            return self._scan_leaving(j, ta, ga, dga, tb, gb, dgb, m, splits)
         if gb <= 0.0:
             if tb - ta <= self.h_bracket or splits == 0:
-                return self._root(surf, ta, ga, dga, tb, gb, dgb)
+                return self._root(j, ta, ga, dga, tb, gb, dgb)
         elif _provably_clear(ga, dga, gb, dgb, tb - ta, m):
             return None
         elif dga < 0.0 < dgb and splits > 0:
             # grazing candidate: a minimum of the gap inside the substep
-            tm = self._rate_root(surf, ta, dga, tb, dgb)
-            gm, dgm = self._gap(surf, tm)
-            first = self._scan(surf, ta, ga, dga, tm, gm, dgm, m, splits - 1)
+            tm = self._rate_root(j, ta, dga, tb, dgb)
+            gm, dgm = self._gap(j, tm)
+            first = self._scan(j, ta, ga, dga, tm, gm, dgm, m, splits - 1)
             if first is not None or gm <= 0.0:
                 return first
-            return self._scan(surf, tm, gm, dgm, tb, gb, dgb, m, splits - 1)
+            return self._scan(j, tm, gm, dgm, tb, gb, dgb, m, splits - 1)
         elif splits == 0:
             return None
         # look closer: halve the substep and scan both halves in order (a sign change in
         # the first half always yields its root there)
         self._split = True
         tm = 0.5 * (ta + tb)
-        gm, dgm = self._gap(surf, tm)
+        gm, dgm = self._gap(j, tm)
         if gm <= 0.0:
-            return self._scan(surf, ta, ga, dga, tm, gm, dgm, m, splits - 1)
-        first = self._scan(surf, ta, ga, dga, tm, gm, dgm, m, splits - 1)
+            return self._scan(j, ta, ga, dga, tm, gm, dgm, m, splits - 1)
+        first = self._scan(j, ta, ga, dga, tm, gm, dgm, m, splits - 1)
         if first is not None:
             return first
-        return self._scan(surf, tm, gm, dgm, tb, gb, dgb, m, splits - 1)
+        return self._scan(j, tm, gm, dgm, tb, gb, dgb, m, splits - 1)
 
     def _scan_leaving(
         self,
-        surf: Surface,
+        j: int,
         ta: float,
         ga: float,
         dga: float,
@@ -344,17 +350,17 @@ class EventLocator:
         # is proven. A hop that ends inside the substep is then found like any contact.
         proven = m > 0.0 and dga > 0.0 and dga / m < span
         tp = ta + dga / m if proven else ta + 0.5 * span
-        gp, dgp = self._gap(surf, tp)
+        gp, dgp = self._gap(j, tp)
         if gp > 0.0:
-            return self._scan(surf, tp, gp, dgp, tb, gb, dgb, m, splits)
+            return self._scan(j, tp, gp, dgp, tb, gb, dgb, m, splits)
         if proven or splits == 0:
             return tp  # the contact never opened beyond rounding
         self._split = True
-        return self._scan_leaving(surf, ta, ga, dga, tp, gp, dgp, m, splits - 1)
+        return self._scan_leaving(j, ta, ga, dga, tp, gp, dgp, m, splits - 1)
 
     def _root(
         self,
-        surf: Surface,
+        j: int,
         lo: float,
         glo: float,
         dglo: float,
@@ -376,7 +382,7 @@ class EventLocator:
                 t = 0.5 * (lo + hi)
         dx = dx_old = hi - lo
         for _ in range(200):
-            g, dg = self._gap(surf, t)
+            g, dg = self._gap(j, t)
             if g > 0.0:
                 lo = t
             else:
@@ -403,7 +409,7 @@ class EventLocator:
             t = newton
         raise SimulationError("the impact time did not converge")
 
-    def _rate_root(self, surf: Surface, a: float, da: float, b: float, db: float) -> float:
+    def _rate_root(self, j: int, a: float, da: float, b: float, db: float) -> float:
         """Root of dG/dtau in (a, b), where it changes sign: the gap's extremum
         (Illinois; precise to ~1e-13 s, so G there is exact to ~G'' * 1e-26 m)."""
         side = 0
@@ -411,7 +417,7 @@ class EventLocator:
             t = b - db * (b - a) / (db - da)
             if not a < t < b:
                 t = 0.5 * (a + b)
-            _, d = self._gap(surf, t)
+            _, d = self._gap(j, t)
             if d == 0.0:
                 return t
             if (d < 0.0) == (da < 0.0):
@@ -427,162 +433,6 @@ class EventLocator:
             if b - a <= 1e-13 + 4.0 * math.ulp(b):
                 return 0.5 * (a + b)
         raise SimulationError("the gap's extremum did not converge")
-
-
-class FixedStepLocator:
-    """The paper's fixed-step detection for ``method = "rk4"`` (module docstring)."""
-
-    #: |gap| (m) at which the Baraff-style search accepts the impact time.
-    GAP_TOLERANCE = 1e-12
-    #: shortest step interval (s) the search refines to.
-    TIME_TOLERANCE = 1e-15
-
-    def __init__(self, boundary: Boundary, flight: RK4Flight):
-        self.boundary = boundary
-        self.flight = flight
-        self.h = flight.max_step
-        self.walls = boundary.walls
-        self.r = boundary.radius
-        self.lid = boundary.lid
-        self.escape = boundary.escape
-        self.offsets = boundary.offsets
-        self.drive = boundary.drive
-        self._feet = [0.0] * len(self.walls)
-        self.theta0 = 0.0
-
-    def memory(self) -> dict[str, list[float]]:
-        """What the locator carries from one flight to the next, for a checkpoint: the
-        Newton warm starts (feet) of the walls' nearest points."""
-        return {"feet": list(self._feet)}
-
-    def restore_memory(self, memory: Mapping[str, list[float]]) -> None:
-        feet = memory.get("feet") if set(memory) == {"feet"} else None
-        if not (
-            isinstance(feet, list)
-            and len(feet) == len(self.walls)
-            and all(isinstance(s, float) and math.isfinite(s) for s in feet)
-        ):
-            raise ValueError(
-                f"FixedStepLocator memory must be {{'feet': [s, ...]}}, got {memory!r}"
-            )
-        self._feet = list(feet)
-
-    def _clearance(
-        self, tau: float, y: tuple[float, float, float, float]
-    ) -> tuple[float, Surface, float, float]:
-        """(distance to the boundary minus r, the surface, contact abscissa s, angle z).
-
-        The distance is signed, negative for a centre below the curve, so that a step
-        that carries the ball right through the wall still counts as a contact.
-        """
-        theta = self.theta0 + self.drive.omega * tau
-        px, py, _, _ = self.drive.to_boundary_frame(theta, *y)
-        nearest = (math.inf, 0, 0.0)
-        for i, wall in enumerate(self.walls):
-            s, d = self._wall_distance(i, wall, px, py)
-            if d < nearest[0]:
-                nearest = (d, i, s)
-        d, i, s = nearest
-        if py < max(wall["f"](px) for wall in self.walls):
-            d = -d  # the centre is outside the container
-        best = (d - self.r, self.offsets[i], s, math.atan(self.walls[i]["df"](s)))
-        if self.lid is not None and self.lid.level - py < best[0]:
-            best = (self.lid.level - py, self.lid, px, math.pi)
-        if self.escape is not None and py >= self.escape.level:
-            best = (-math.inf, self.escape, px, math.pi)
-        return best
-
-    def _wall_distance(self, i: int, wall: dict, px: float, py: float) -> tuple[float, float]:
-        """Newton-Raphson on the nearest-point condition of one wall, from the previous
-        foot and from the vertical projection; the nearer converged point wins."""
-        near, dnear, f = wall["near"], wall["dnear"], wall["f"]
-        lo, hi = wall["lo"], wall["hi"]
-        best_s, best_d = 0.0, math.inf
-        for s in (self._feet[i], px):
-            for _ in range(30):
-                d = dnear(s, px, py)
-                if not d > 0.0:
-                    s = math.nan
-                    break
-                step = near(s, px, py) / d
-                s -= step
-                if abs(step) <= 1e-15 * (1.0 + abs(s)):
-                    break
-            if not math.isfinite(s):
-                continue
-            s = min(max(s, lo), hi)
-            dist = math.hypot(px - s, py - f(s))
-            if dist < best_d:
-                best_s, best_d = s, dist
-        if best_d == math.inf:  # Newton failed from both starts: global search
-            near_pt = self.boundary.nearest_point(px, py)
-            wall_pt = near_pt if near_pt.wall == i else None
-            best_s = wall_pt.s if wall_pt else min(max(px, lo), hi)
-            best_d = math.hypot(px - best_s, py - f(best_s))
-        self._feet[i] = best_s
-        return best_s, best_d
-
-    def locate(self, theta0: float, q1: float, q2: float, u1: float, u2: float, u3: float) -> Event:
-        self.theta0 = theta0
-        flight = self.flight
-        flight.begin(q1, q2, u1, u2, u3)
-        h = self.h
-        y = (q1, q2, u1, u2)
-        gap0 = self._clearance(0.0, y)[0]
-        n = 0
-        while n * h < MAX_FLIGHT_TIME:
-            tau = n * h
-            y_next = flight.step(y, h)
-            found = self._clearance(tau + h, y_next)
-            if found[0] <= 0.0:
-                return self._locate_in_step(tau, y, gap0, h, found)
-            y, gap0 = y_next, found[0]
-            n += 1
-        raise SimulationError(f"no impact found within {MAX_FLIGHT_TIME:g} s of flight")
-
-    def _locate_in_step(
-        self,
-        tau: float,
-        y: tuple[float, float, float, float],
-        gap_lo: float,
-        h: float,
-        found: tuple[float, Surface, float, float],
-    ) -> Event:
-        """Shrink the step from its start until the gap is within GAP_TOLERANCE:
-        regula falsi (Illinois) while the start is clear, bisection otherwise."""
-        lo, hi = 0.0, h
-        g_lo, g_hi = gap_lo, found[0]
-        best = (hi, found)
-        side = 0
-        for _ in range(400):
-            if g_lo > 0.0 and math.isfinite(g_hi):
-                step = hi - g_hi * (hi - lo) / (g_hi - g_lo)
-                if not lo < step < hi:
-                    step = 0.5 * (lo + hi)
-            else:
-                step = 0.5 * (lo + hi)
-            found = self._clearance(tau + step, self.flight.step(y, step))
-            g = found[0]
-            if abs(g) <= self.GAP_TOLERANCE:
-                best = (step, found)
-                break
-            if g > 0.0:
-                lo, g_lo = step, g
-                if side == -1:
-                    g_hi *= 0.5
-                side = -1
-            else:
-                hi, g_hi = step, g
-                best = (hi, found)
-                if side == 1:
-                    g_lo *= 0.5
-                side = 1
-            if hi - lo < self.TIME_TOLERANCE:
-                break
-        step, (_, surface, s, z) = best
-        q1, q2, u1, u2 = self.flight.step(y, step)
-        theta = (self.theta0 + self.drive.omega * (tau + step)) % (2.0 * math.pi)
-        return Event(tau + step, surface, q1, q2, u1, u2, theta, s, z)
 
 
 def _quadratic_start(lo: float, glo: float, dglo: float, hi: float, dghi: float) -> float:
@@ -622,19 +472,3 @@ def _first_positive_root(c0: float, c1: float, c2: float) -> float:
     q = -0.5 * (c1 + math.copysign(root, c1))
     roots = [x for x in (q / c2, c0 / q if q != 0.0 else math.inf) if x > 0.0]
     return min(roots, default=math.inf)
-
-
-def _fixed_step_locator(
-    boundary: Boundary, flight: FlightModel, gravity: float
-) -> FixedStepLocator:
-    if not isinstance(flight, RK4Flight):
-        raise ValueError("the fixed-step locator drives the RK4 flight model only")
-    return FixedStepLocator(boundary, flight)
-
-
-#: Impact locators by method name (``run.method``): each is built from the boundary, the
-#: flight model and g (m/s^2).
-LOCATORS: dict[str, Callable[[Boundary, FlightModel, float], Locator]] = {
-    "event": EventLocator,
-    "rk4": _fixed_step_locator,
-}

@@ -137,6 +137,13 @@ def curve_from_text(name: str, text: str, parameters: dict[str, str]) -> curve.C
     return curve.derive_curve(name, text, expr, parameters, psyms)
 
 
+#: Version of the generated curve modules' layout; the runtime refuses other layouts.
+CURVE_FORMAT = 2
+#: Name of the parameter-array argument of every generated wall function (parameter
+#: names start with a letter, so it cannot clash with one).
+PARAMETER_ARRAY = "_p"
+
+
 def curve_module(cd: curve.CurveDerivation) -> str:
     x, s, px, py = sm.Symbol("x"), sm.Symbol("s"), sm.Symbol("px"), sm.Symbol("py")
 
@@ -144,77 +151,97 @@ def curve_module(cd: curve.CurveDerivation) -> str:
         expr = sm.sympify(expr)
         return expr.xreplace({a: sm.Symbol(a.name) for a in expr.free_symbols})
 
-    params = ", ".join(f"{n}={float(sm.Rational(v))!r}" for n, v in sorted(cd.parameters.items()))
+    names = sorted(cd.parameters)
+    array = (PARAMETER_ARRAY, names)
     lines = [
-        f'"""Boundary curve {cd.name!r}: f(x) = {cd.text} (x and f in metres)."""',
+        f'"""Boundary curve {cd.name!r}: f(x) = {cd.text} (x and f in metres).',
+        "",
+        "Every function takes the curve's parameters as its last argument, an array in the",
+        "order of PARAMETER_NAMES. WALLS lists, per smooth wall, the functions",
+        "(interval, f, df, d2f, near, dnear, poly); poly is None where the nearest-point",
+        'condition is not a polynomial."""',
         "",
         "import math",
         "",
+        f"FORMAT = {CURVE_FORMAT}",
         f"NAME = {cd.name!r}",
         f"EXPRESSION = {cd.text!r}",
+        f"PARAMETER_NAMES = {tuple(names)!r}",
         "PARAMETERS = {"
         + ", ".join(f"{n!r}: {float(sm.Rational(v))!r}" for n, v in sorted(cd.parameters.items()))
         + "}",
         "",
-        "",
-        f"def make({params}):",
-        '    """Numeric functions of each smooth wall, with the parameters bound."""',
     ]
     walls = []
     for i, w in enumerate(cd.walls):
         fx = {curve.s: curve.x}
+        lo = "-math.inf" if w.lo == -sm.oo else f"float({codegen.pyexpr(p(w.lo))})"
+        hi = "math.inf" if w.hi == sm.oo else f"float({codegen.pyexpr(p(w.hi))})"
+        used = {a.name for b in (w.lo, w.hi) if b not in (-sm.oo, sm.oo) for a in p(b).free_symbols}
+        reads = [f"    {n} = {PARAMETER_ARRAY}[{k}]" for k, n in enumerate(names) if n in used]
+        lines += [
+            "",
+            f"def interval_{i}({PARAMETER_ARRAY}):",
+            '    """(lo, hi): the interval of x on which this wall is the curve (m)."""',
+            *reads,
+            f"    return ({lo}, {hi})",
+            "",
+        ]
         lines.append(
-            codegen.function_source(
-                f"f_{i}", [x], p(w.f.subs(fx)), "Height of the wall (m).", "    "
+            "\n"
+            + codegen.function_source(
+                f"f_{i}", [x], p(w.f.subs(fx)), "Height of the wall (m).", array=array
             )
         )
         lines.append(
-            codegen.function_source(f"df_{i}", [x], p(w.df.subs(fx)), "Slope f'(x).", "    ")
+            "\n"
+            + codegen.function_source(f"df_{i}", [x], p(w.df.subs(fx)), "Slope f'(x).", array=array)
         )
         lines.append(
-            codegen.function_source(
-                f"d2f_{i}", [x], p(w.d2f.subs(fx)), "Second derivative f''(x) (1/m).", "    "
+            "\n"
+            + codegen.function_source(
+                f"d2f_{i}", [x], p(w.d2f.subs(fx)), "Second derivative f''(x) (1/m).", array=array
             )
         )
         lines.append(
-            codegen.function_source(
+            "\n"
+            + codegen.function_source(
                 f"near_{i}",
                 [s, px, py],
                 p(w.near),
                 "Nearest-point condition g(s) = (s - px) + (f(s) - py) f'(s) (m).",
-                "    ",
+                array=array,
             )
         )
         lines.append(
-            codegen.function_source(
-                f"dnear_{i}", [s, px, py], p(w.dnear), "Derivative dg/ds.", "    "
+            "\n"
+            + codegen.function_source(
+                f"dnear_{i}", [s, px, py], p(w.dnear), "Derivative dg/ds.", array=array
             )
         )
         if w.poly is not None:
             lines.append(
-                codegen.function_source(
+                "\n"
+                + codegen.function_source(
                     f"poly_{i}",
                     [px, py],
                     [p(c) for c in w.poly],
                     f"Coefficients (highest power first) of the degree-{len(w.poly) - 1} "
                     "polynomial whose real roots are the candidate nearest points.",
-                    "    ",
+                    array=array,
                 )
             )
-        lo = "-math.inf" if w.lo == -sm.oo else f"float({codegen.pyexpr(p(w.lo))})"
-        hi = "math.inf" if w.hi == sm.oo else f"float({codegen.pyexpr(p(w.hi))})"
         poly = f"poly_{i}" if w.poly is not None else "None"
-        walls.append(
-            f'        {{"lo": {lo}, "hi": {hi}, "f": f_{i}, "df": df_{i}, "d2f": d2f_{i}, '
-            f'"near": near_{i}, "dnear": dnear_{i}, "poly": {poly}}},'
-        )
-    lines.append("    return (\n" + "\n".join(walls) + "\n    )")
+        walls.append(f"    (interval_{i}, f_{i}, df_{i}, d2f_{i}, near_{i}, dnear_{i}, {poly}),")
+    lines += ["", "WALLS = (\n" + "\n".join(walls) + "\n)", ""]
     bps = ", ".join(f"float({codegen.pyexpr(p(b))})" for b in cd.breakpoints)
+    used = {a.name for b in cd.breakpoints for a in p(b).free_symbols}
+    reads = [f"    {n} = {PARAMETER_ARRAY}[{k}]" for k, n in enumerate(names) if n in used]
     lines += [
         "",
-        "",
-        f"def breakpoints({params}):",
+        f"def breakpoints({PARAMETER_ARRAY}):",
         '    """x positions of the kinks (m)."""',
+        *reads,
         f"    return ({bps}{',' if len(cd.breakpoints) == 1 else ''})",
         "",
     ]

@@ -36,13 +36,35 @@ def pyexpr(expr: sm.Basic) -> str:
     return _printer.doprint(expr)
 
 
-def function_source(name: str, args: list[sm.Symbol], outputs, doc: str, indent: str = "") -> str:
-    """Source of ``def name(args): ... return outputs`` with common subexpressions."""
+def function_source(
+    name: str,
+    args: list[sm.Symbol],
+    outputs,
+    doc: str,
+    indent: str = "",
+    array: tuple[str, list[str]] | None = None,
+) -> str:
+    """Source of ``def name(args): ... return outputs`` with common subexpressions.
+
+    ``array = (ARG, names)`` adds a last argument ARG, an array of the values of the
+    symbols ``names`` in that order; the function reads the ones it uses from it first
+    (``a = ARG[0]``). Compiled code can take such an array where it cannot take a closure.
+    """
     single = not isinstance(outputs, (list, tuple, sm.MatrixBase))
     exprs = [outputs] if single else list(outputs)
     replacements, reduced = sm.cse(exprs, symbols=sm.numbered_symbols("_c"), order="canonical")
-    lines = [f"{indent}def {name}({', '.join(a.name for a in args)}):"]
+    arg_names = [a.name for a in args]
+    prelude = []
+    if array is not None:
+        arg_names.append(array[0])
+        used = set().union(*(sm.sympify(e).free_symbols for e in exprs))
+        used_names = {sym.name for sym in used}
+        prelude = [
+            f"{indent}    {n} = {array[0]}[{i}]" for i, n in enumerate(array[1]) if n in used_names
+        ]
+    lines = [f"{indent}def {name}({', '.join(arg_names)}):"]
     lines.append(f'{indent}    """{doc}"""')
+    lines += prelude
     for sym, value in replacements:
         lines.append(f"{indent}    {sym.name} = {pyexpr(value)}")
     if single:

@@ -4,71 +4,103 @@
 # Curve 'hyperbola': f(x) = sqrt(alpha*(1 + beta*x**2)) - delta
 # Parameters: alpha = 0.00403, beta = 800, delta = 0.0445
 # Walls: 1; nearest-point polynomial degree: 4
-# content sha256: ecbf65bbc50e565b482dbb663f68a2ea96a1a84dbb614110cef724d45f1ab0fc
-"""Boundary curve 'hyperbola': f(x) = sqrt(alpha*(1 + beta*x**2)) - delta (x and f in metres)."""
+# content sha256: 1ad206aff7a36e9b2942daf6fd73543279101e42ecadce8753efb2627565331b
+"""Boundary curve 'hyperbola': f(x) = sqrt(alpha*(1 + beta*x**2)) - delta (x and f in metres).
+
+Every function takes the curve's parameters as its last argument, an array in the
+order of PARAMETER_NAMES. WALLS lists, per smooth wall, the functions
+(interval, f, df, d2f, near, dnear, poly); poly is None where the nearest-point
+condition is not a polynomial."""
 
 import math
 
+FORMAT = 2
 NAME = 'hyperbola'
 EXPRESSION = 'sqrt(alpha*(1 + beta*x**2)) - delta'
+PARAMETER_NAMES = ('alpha', 'beta', 'delta')
 PARAMETERS = {'alpha': 0.00403, 'beta': 800.0, 'delta': 0.0445}
 
 
-def make(alpha=0.00403, beta=800.0, delta=0.0445):
-    """Numeric functions of each smooth wall, with the parameters bound."""
-    def f_0(x):
-        """Height of the wall (m)."""
-        return -delta + math.sqrt(alpha*(beta*x**2 + 1))
+def interval_0(_p):
+    """(lo, hi): the interval of x on which this wall is the curve (m)."""
+    return (-math.inf, math.inf)
 
-    def df_0(x):
-        """Slope f'(x)."""
-        _c0 = beta*x**2 + 1
-        return beta*x*math.sqrt(_c0*alpha)/_c0
 
-    def d2f_0(x):
-        """Second derivative f''(x) (1/m)."""
-        _c0 = x**2
-        _c1 = _c0*beta + 1
-        _c2 = math.sqrt(_c1*alpha)
-        return -_c0*_c2*beta**2/_c1**2 + _c2*beta/_c1
+def f_0(x, _p):
+    """Height of the wall (m)."""
+    alpha = _p[0]
+    beta = _p[1]
+    delta = _p[2]
+    return -delta + math.sqrt(alpha*(beta*x**2 + 1))
 
-    def near_0(s, px, py):
-        """Nearest-point condition g(s) = (s - px) + (f(s) - py) f'(s) (m)."""
-        _c0 = beta*s**2 + 1
-        _c1 = math.sqrt(_c0*alpha)
-        return -px + s + _c1*beta*s*(_c1 - delta - py)/_c0
 
-    def dnear_0(s, px, py):
-        """Derivative dg/ds."""
-        _c0 = s**2
-        _c1 = _c0*beta + 1
-        _c2 = 1/_c1
-        _c3 = _c0*beta**2
-        _c4 = math.sqrt(_c1*alpha)
-        _c5 = _c4*(_c4 - delta - py)
-        return _c2*_c3*alpha + _c2*_c5*beta + 1 - _c3*_c5/_c1**2
+def df_0(x, _p):
+    """Slope f'(x)."""
+    alpha = _p[0]
+    beta = _p[1]
+    _c0 = beta*x**2 + 1
+    return beta*x*math.sqrt(_c0*alpha)/_c0
 
-    def poly_0(px, py):
-        """Coefficients (highest power first) of the degree-4 polynomial whose real roots are the candidate nearest points."""
-        _c0 = alpha*beta
-        _c1 = beta**2
-        _c2 = 2*_c0 + _c1*alpha**2 + 1
-        _c3 = 2*px*(_c0 + 1)
-        _c4 = px**2
-        _c5 = _c1*alpha
-        return (
-            _c2*beta,
-            -_c3*beta,
-            _c2 + _c4*beta - _c5*delta**2 - 2*_c5*delta*py - _c5*py**2,
-            -_c3,
-            _c4,
-        )
 
+def d2f_0(x, _p):
+    """Second derivative f''(x) (1/m)."""
+    alpha = _p[0]
+    beta = _p[1]
+    _c0 = x**2
+    _c1 = _c0*beta + 1
+    _c2 = math.sqrt(_c1*alpha)
+    return -_c0*_c2*beta**2/_c1**2 + _c2*beta/_c1
+
+
+def near_0(s, px, py, _p):
+    """Nearest-point condition g(s) = (s - px) + (f(s) - py) f'(s) (m)."""
+    alpha = _p[0]
+    beta = _p[1]
+    delta = _p[2]
+    _c0 = beta*s**2 + 1
+    _c1 = math.sqrt(_c0*alpha)
+    return -px + s + _c1*beta*s*(_c1 - delta - py)/_c0
+
+
+def dnear_0(s, px, py, _p):
+    """Derivative dg/ds."""
+    alpha = _p[0]
+    beta = _p[1]
+    delta = _p[2]
+    _c0 = s**2
+    _c1 = _c0*beta + 1
+    _c2 = 1/_c1
+    _c3 = _c0*beta**2
+    _c4 = math.sqrt(_c1*alpha)
+    _c5 = _c4*(_c4 - delta - py)
+    return _c2*_c3*alpha + _c2*_c5*beta + 1 - _c3*_c5/_c1**2
+
+
+def poly_0(px, py, _p):
+    """Coefficients (highest power first) of the degree-4 polynomial whose real roots are the candidate nearest points."""
+    alpha = _p[0]
+    beta = _p[1]
+    delta = _p[2]
+    _c0 = alpha*beta
+    _c1 = beta**2
+    _c2 = 2*_c0 + _c1*alpha**2 + 1
+    _c3 = 2*px*(_c0 + 1)
+    _c4 = px**2
+    _c5 = _c1*alpha
     return (
-        {"lo": -math.inf, "hi": math.inf, "f": f_0, "df": df_0, "d2f": d2f_0, "near": near_0, "dnear": dnear_0, "poly": poly_0},
+        _c2*beta,
+        -_c3*beta,
+        _c2 + _c4*beta - _c5*delta**2 - 2*_c5*delta*py - _c5*py**2,
+        -_c3,
+        _c4,
     )
 
 
-def breakpoints(alpha=0.00403, beta=800.0, delta=0.0445):
+WALLS = (
+    (interval_0, f_0, df_0, d2f_0, near_0, dnear_0, poly_0),
+)
+
+
+def breakpoints(_p):
     """x positions of the kinks (m)."""
     return ()

@@ -4,54 +4,80 @@
 # Curve 'parabola': f(x) = a*x**2 + c
 # Parameters: a = 26, c = 0.0063
 # Walls: 1; nearest-point polynomial degree: 3
-# content sha256: 55e7465ed9d2885a5d26e618ca2ab99e2558865a946dc6994f4db0672a426fe4
-"""Boundary curve 'parabola': f(x) = a*x**2 + c (x and f in metres)."""
+# content sha256: af733c84c19169bd09f57e806284f93da20a630fbe3296dafb76631a00d8385b
+"""Boundary curve 'parabola': f(x) = a*x**2 + c (x and f in metres).
+
+Every function takes the curve's parameters as its last argument, an array in the
+order of PARAMETER_NAMES. WALLS lists, per smooth wall, the functions
+(interval, f, df, d2f, near, dnear, poly); poly is None where the nearest-point
+condition is not a polynomial."""
 
 import math
 
+FORMAT = 2
 NAME = 'parabola'
 EXPRESSION = 'a*x**2 + c'
+PARAMETER_NAMES = ('a', 'c')
 PARAMETERS = {'a': 26.0, 'c': 0.0063}
 
 
-def make(a=26.0, c=0.0063):
-    """Numeric functions of each smooth wall, with the parameters bound."""
-    def f_0(x):
-        """Height of the wall (m)."""
-        return a*x**2 + c
+def interval_0(_p):
+    """(lo, hi): the interval of x on which this wall is the curve (m)."""
+    return (-math.inf, math.inf)
 
-    def df_0(x):
-        """Slope f'(x)."""
-        return 2*a*x
 
-    def d2f_0(x):
-        """Second derivative f''(x) (1/m)."""
-        return 2*a
+def f_0(x, _p):
+    """Height of the wall (m)."""
+    a = _p[0]
+    c = _p[1]
+    return a*x**2 + c
 
-    def near_0(s, px, py):
-        """Nearest-point condition g(s) = (s - px) + (f(s) - py) f'(s) (m)."""
-        return 2*a*s*(a*s**2 + c - py) - px + s
 
-    def dnear_0(s, px, py):
-        """Derivative dg/ds."""
-        _c0 = s**2
-        return 4*_c0*a**2 + 2*a*(_c0*a + c - py) + 1
+def df_0(x, _p):
+    """Slope f'(x)."""
+    a = _p[0]
+    return 2*a*x
 
-    def poly_0(px, py):
-        """Coefficients (highest power first) of the degree-3 polynomial whose real roots are the candidate nearest points."""
-        _c0 = 2*a
-        return (
-            2*a**2,
-            0.0,
-            _c0*c - _c0*py + 1,
-            -px,
-        )
 
+def d2f_0(x, _p):
+    """Second derivative f''(x) (1/m)."""
+    a = _p[0]
+    return 2*a
+
+
+def near_0(s, px, py, _p):
+    """Nearest-point condition g(s) = (s - px) + (f(s) - py) f'(s) (m)."""
+    a = _p[0]
+    c = _p[1]
+    return 2*a*s*(a*s**2 + c - py) - px + s
+
+
+def dnear_0(s, px, py, _p):
+    """Derivative dg/ds."""
+    a = _p[0]
+    c = _p[1]
+    _c0 = s**2
+    return 4*_c0*a**2 + 2*a*(_c0*a + c - py) + 1
+
+
+def poly_0(px, py, _p):
+    """Coefficients (highest power first) of the degree-3 polynomial whose real roots are the candidate nearest points."""
+    a = _p[0]
+    c = _p[1]
+    _c0 = 2*a
     return (
-        {"lo": -math.inf, "hi": math.inf, "f": f_0, "df": df_0, "d2f": d2f_0, "near": near_0, "dnear": dnear_0, "poly": poly_0},
+        2*a**2,
+        0.0,
+        _c0*c - _c0*py + 1,
+        -px,
     )
 
 
-def breakpoints(a=26.0, c=0.0063):
+WALLS = (
+    (interval_0, f_0, df_0, d2f_0, near_0, dnear_0, poly_0),
+)
+
+
+def breakpoints(_p):
     """x positions of the kinks (m)."""
     return ()

@@ -4,78 +4,121 @@
 # Curve 'wedge': f(x) = b*abs(x) + c
 # Parameters: b = 1.85, c = 0.0063
 # Walls: 2; nearest-point polynomial degree: 1, 1
-# content sha256: 65fca2705066690cffa5ca698f7f12d3120fea9298a51531c7e37279602072d6
-"""Boundary curve 'wedge': f(x) = b*abs(x) + c (x and f in metres)."""
+# content sha256: 192ca22e0ae007fb172eff84f3a7cebfcd30ea29143babf1ce6b6ed0d4d868e8
+"""Boundary curve 'wedge': f(x) = b*abs(x) + c (x and f in metres).
+
+Every function takes the curve's parameters as its last argument, an array in the
+order of PARAMETER_NAMES. WALLS lists, per smooth wall, the functions
+(interval, f, df, d2f, near, dnear, poly); poly is None where the nearest-point
+condition is not a polynomial."""
 
 import math
 
+FORMAT = 2
 NAME = 'wedge'
 EXPRESSION = 'b*abs(x) + c'
+PARAMETER_NAMES = ('b', 'c')
 PARAMETERS = {'b': 1.85, 'c': 0.0063}
 
 
-def make(b=1.85, c=0.0063):
-    """Numeric functions of each smooth wall, with the parameters bound."""
-    def f_0(x):
-        """Height of the wall (m)."""
-        return -b*x + c
+def interval_0(_p):
+    """(lo, hi): the interval of x on which this wall is the curve (m)."""
+    return (-math.inf, float(0.0))
 
-    def df_0(x):
-        """Slope f'(x)."""
-        return -b
 
-    def d2f_0(x):
-        """Second derivative f''(x) (1/m)."""
-        return 0.0
+def f_0(x, _p):
+    """Height of the wall (m)."""
+    b = _p[0]
+    c = _p[1]
+    return -b*x + c
 
-    def near_0(s, px, py):
-        """Nearest-point condition g(s) = (s - px) + (f(s) - py) f'(s) (m)."""
-        return -b*(-b*s + c - py) - px + s
 
-    def dnear_0(s, px, py):
-        """Derivative dg/ds."""
-        return b**2 + 1
+def df_0(x, _p):
+    """Slope f'(x)."""
+    b = _p[0]
+    return -b
 
-    def poly_0(px, py):
-        """Coefficients (highest power first) of the degree-1 polynomial whose real roots are the candidate nearest points."""
-        return (
-            b**2 + 1,
-            -b*c + b*py - px,
-        )
 
-    def f_1(x):
-        """Height of the wall (m)."""
-        return b*x + c
+def d2f_0(x, _p):
+    """Second derivative f''(x) (1/m)."""
+    return 0.0
 
-    def df_1(x):
-        """Slope f'(x)."""
-        return b
 
-    def d2f_1(x):
-        """Second derivative f''(x) (1/m)."""
-        return 0.0
+def near_0(s, px, py, _p):
+    """Nearest-point condition g(s) = (s - px) + (f(s) - py) f'(s) (m)."""
+    b = _p[0]
+    c = _p[1]
+    return -b*(-b*s + c - py) - px + s
 
-    def near_1(s, px, py):
-        """Nearest-point condition g(s) = (s - px) + (f(s) - py) f'(s) (m)."""
-        return b*(b*s + c - py) - px + s
 
-    def dnear_1(s, px, py):
-        """Derivative dg/ds."""
-        return b**2 + 1
+def dnear_0(s, px, py, _p):
+    """Derivative dg/ds."""
+    b = _p[0]
+    return b**2 + 1
 
-    def poly_1(px, py):
-        """Coefficients (highest power first) of the degree-1 polynomial whose real roots are the candidate nearest points."""
-        return (
-            b**2 + 1,
-            b*c - b*py - px,
-        )
 
+def poly_0(px, py, _p):
+    """Coefficients (highest power first) of the degree-1 polynomial whose real roots are the candidate nearest points."""
+    b = _p[0]
+    c = _p[1]
     return (
-        {"lo": -math.inf, "hi": float(0.0), "f": f_0, "df": df_0, "d2f": d2f_0, "near": near_0, "dnear": dnear_0, "poly": poly_0},
-        {"lo": float(0.0), "hi": math.inf, "f": f_1, "df": df_1, "d2f": d2f_1, "near": near_1, "dnear": dnear_1, "poly": poly_1},
+        b**2 + 1,
+        -b*c + b*py - px,
     )
 
 
-def breakpoints(b=1.85, c=0.0063):
+def interval_1(_p):
+    """(lo, hi): the interval of x on which this wall is the curve (m)."""
+    return (float(0.0), math.inf)
+
+
+def f_1(x, _p):
+    """Height of the wall (m)."""
+    b = _p[0]
+    c = _p[1]
+    return b*x + c
+
+
+def df_1(x, _p):
+    """Slope f'(x)."""
+    b = _p[0]
+    return b
+
+
+def d2f_1(x, _p):
+    """Second derivative f''(x) (1/m)."""
+    return 0.0
+
+
+def near_1(s, px, py, _p):
+    """Nearest-point condition g(s) = (s - px) + (f(s) - py) f'(s) (m)."""
+    b = _p[0]
+    c = _p[1]
+    return b*(b*s + c - py) - px + s
+
+
+def dnear_1(s, px, py, _p):
+    """Derivative dg/ds."""
+    b = _p[0]
+    return b**2 + 1
+
+
+def poly_1(px, py, _p):
+    """Coefficients (highest power first) of the degree-1 polynomial whose real roots are the candidate nearest points."""
+    b = _p[0]
+    c = _p[1]
+    return (
+        b**2 + 1,
+        b*c - b*py - px,
+    )
+
+
+WALLS = (
+    (interval_0, f_0, df_0, d2f_0, near_0, dnear_0, poly_0),
+    (interval_1, f_1, df_1, d2f_1, near_1, dnear_1, poly_1),
+)
+
+
+def breakpoints(_p):
     """x positions of the kinks (m)."""
     return (float(0.0),)
