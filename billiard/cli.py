@@ -25,7 +25,7 @@ def _user_errors() -> tuple[type[BaseException], ...]:
     """
     errors: list[type[BaseException]] = [UserError]
     for module, names in (
-        ("billiard.expr", ["CurveExpressionError"]),
+        ("billiard.derivation.expr", ["CurveExpressionError"]),
         ("billiard.curves", ["CurveNotFoundError"]),
         ("billiard.scene", ["SceneError"]),
         ("billiard.errors", ["GeometryError", "SimulationError"]),
