@@ -7,8 +7,9 @@ The usable range is found by walking outward from x = 0 (where the runtime start
 search for the container) on each side until the curve has risen ``RISE`` above the lowest
 point met, within ``REACH`` of x = 0. On that range, widened by ``MARGIN``, every wall (each
 smooth piece, continued past its kinks as the runtime evaluates it) must give a real,
-finite height, slope and second derivative; and the curve must be convex there. A curve
-that is exactly flat (a floor, as for a ball bouncing on a shaken plate) is accepted.
+finite height, slope and second derivative; and the curve must be convex there. A plane
+(one straight wall: a floor, as for a ball bouncing on a shaken plate, or a tilted plane,
+as in the impact validation) has no bottom but is accepted: the ball bounces on it.
 """
 
 from __future__ import annotations
@@ -65,7 +66,7 @@ def _piece(wall: dict) -> str:
 class _Curve:
     def __init__(self, walls: Sequence[dict]):
         self.walls = walls
-        self.flat = True
+        self.straight = len(walls) == 1  # until a curved point is met
 
     def height(self, x: float) -> float | str:
         """max of the walls at x, or a one-line problem."""
@@ -83,8 +84,8 @@ class _Curve:
                         )
                     return f"its {label} is not real and finite at x = {x:.6g} m"
                 values[key] = value
-            if values["df"] != 0.0 or values["d2f"] != 0.0:
-                self.flat = False
+            if values["d2f"] != 0.0:
+                self.straight = False
             heights.append(values["f"])
         return max(heights)
 
@@ -121,7 +122,7 @@ def shape_problem(walls: Sequence[dict]) -> str | None:
         else:
             ends.append(end)
     if failure is not None:
-        return None if curve.flat else failure
+        return None if curve.straight else failure
     return _convexity_problem(walls, ends[0] - MARGIN, ends[1] + MARGIN)
 
 

@@ -296,7 +296,7 @@ def _derive(capsys, *args):
         ("1/x", "not real and finite at x = 0"),
         ("log(x)", "not real and finite at x = 0"),
         ("tan(x)", "not convex"),
-        ("x", "does not open upward on the left"),
+        ("exp(x)", "does not open upward on the left"),
         ("-x**2", "does not open upward"),
         ("1 - x**2", "does not open upward"),
         ("x**4 - x**2", "not convex at x = 0"),
@@ -313,7 +313,8 @@ def test_derive_refuses_curves_that_cannot_hold_a_ball(text, reason, tmp_path, m
 
 
 @pytest.mark.parametrize(
-    "text", ["0.001", "-0.001 + 30*x**4", "cosh(x) - 1", "2*abs(x) + 0.001*x**2"]
+    "text",
+    ["0.001", "0.5*x + 0.001", "-0.001 + 30*x**4", "cosh(x) - 1", "2*abs(x) + 0.001*x**2"],
 )
 def test_derive_accepts_curves_that_hold_a_ball(text, tmp_path, monkeypatch, capsys):
     monkeypatch.setenv("BILLIARD_HOME", str(tmp_path))
