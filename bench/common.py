@@ -18,6 +18,7 @@ from typing import Any
 import numpy as np
 from billiard.generated import ball as _ball
 
+from billiard.errors import SimulationError
 from billiard.record import MemoryRecorder
 from billiard.scene import Scene, load_scene, with_values
 from billiard.simulate import BallState, Simulation, simulate
@@ -178,11 +179,12 @@ def post_impact_state(c: dict, i: int, drive: Any, theta0: float | None = None) 
 def one_flight(sim: Simulation, state: BallState) -> dict | None:
     """The engine's next impact from ``state``: the record of that impact (scalars), or
     None when the run stopped instead."""
-    sim.initial = state
-    recorder = MemoryRecorder()
-    if sim.run(1, recorder) or len(recorder) == 0:
+    sim.reset(state)
+    try:
+        record = sim.step()
+    except SimulationError:
         return None
-    return {name: v[0] for name, v in recorder.columns().items()}
+    return None if record is None else record._asdict()
 
 
 def first_difference(a: np.ndarray, b: np.ndarray, k: int) -> float:

@@ -59,7 +59,7 @@ def vertex_states(cfg: Config) -> tuple[Scene, list[BallState]]:
         q1, q2 = sim.drive.to_lab_frame(theta, x, sim.boundary.offset_height(x) + h)
         drop = BallState(0.0, theta, q1, q2, 0.0, 0.0, 0.0)
         states.append(drop)
-        sim.initial = drop
+        sim.reset(drop)
         recorder = MemoryRecorder()
         sim.run(15, recorder)
         c = recorder.columns()

@@ -46,18 +46,22 @@ class SolveIvpPeer:
         self.m, self.g = scene.ball.mass, scene.run.gravity
         self.c_lin, self.c_quad = scene.air.coefficients
         self.theta0 = 0.0
-        self.events = [self._event(surface) for surface in self.sim.boundary.surfaces]
+        self.events = [
+            self._event(surface, warm)
+            for surface, warm in zip(self.sim.boundary.surfaces, self.sim.warm, strict=True)
+        ]
 
     def _rhs(self, t: float, y: np.ndarray) -> tuple[float, float, float, float]:
         a1, a2 = _ball.flight_rhs_drag(y[2], y[3], self.m, self.g, self.c_lin, self.c_quad)
         return y[2], y[3], a1, a2
 
-    def _event(self, surface):
+    def _event(self, surface, warm):
         drive = self.sim.drive
 
         def gap(t: float, y: np.ndarray) -> float:
             theta = self.theta0 + drive.omega * t
-            return surface.gap_rate(*drive.to_boundary_frame(theta, y[0], y[1], y[2], y[3]))[0]
+            rel = drive.to_boundary_frame(theta, y[0], y[1], y[2], y[3])
+            return surface.gap_rate(*rel, warm)[0]
 
         gap.terminal = True
         gap.direction = -1
@@ -113,11 +117,11 @@ class SolveIvpPeer:
             if surface.kind == "escape":
                 raise _Stop("ball escaped", rows)
             px, py, vx, vy = drive.to_boundary_frame(theta, q1, q2, v1, v2)
-            s, z, _ = surface.contact(px)
+            s, z, _ = surface.contact(px, sim.warm[j])
             a1, a2 = self._rhs(tau, (q1, q2, v1, v2))[2:]
             ab = drive.acceleration(theta)
             ax, ay = (a1 - ab, a2) if drive.horizontal else (a1, a2 - ab)
-            pressing = surface.gap_accel(px, py, vx, vy, ax, ay) < 0.0
+            pressing = surface.gap_accel(px, py, vx, vy, ax, ay, sim.warm[j]) < 0.0
             vb1, vb2 = drive.boundary_velocity(theta)
             before = BallState(t, theta, q1, q2, v1, v2, u3)
             res = law.apply(before, Contact(z, vb1, vb2, pressing))

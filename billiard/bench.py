@@ -8,23 +8,68 @@ of the installed package); this module is the command's entry point.
 from __future__ import annotations
 
 import argparse
+import importlib
+import importlib.util
 import sys
+import tomllib
 from pathlib import Path
+from types import ModuleType
+
+from billiard.cli import UserError
 
 _SECTIONS = ("workprecision", "failures", "ladder", "throughput", "profile")
+_PROJECT = "realworld-billiard"
 
 
-def _bench_package():
-    root = Path(__file__).resolve().parent.parent
-    if not (root / "bench" / "run.py").exists():
-        raise SystemExit(
-            "billiard bench: needs a source checkout (the bench/ folder beside billiard/)"
+class BenchError(UserError):
+    """``billiard bench`` cannot run here (no source checkout): the command line prints
+    it in one line and exits with status 2."""
+
+
+def _is_checkout(root: Path) -> bool:
+    """True if ``root`` holds this project's pyproject.toml beside ``bench/run.py``."""
+    try:
+        with open(root / "pyproject.toml", "rb") as handle:
+            name = tomllib.load(handle).get("project", {}).get("name")
+    except (OSError, tomllib.TOMLDecodeError):
+        return False
+    return name == _PROJECT and (root / "bench" / "run.py").is_file()
+
+
+def find_checkout(start: Path | None = None) -> Path | None:
+    """The source checkout to measure: the first directory, from ``start`` (default the
+    current directory) upward, that is a checkout of this project; else the checkout the
+    package is installed from (an editable install); else None."""
+    here = (start or Path.cwd()).resolve()
+    for root in (here, *here.parents):
+        if _is_checkout(root):
+            return root
+    beside = Path(__file__).resolve().parent.parent
+    return beside if _is_checkout(beside) else None
+
+
+def _bench_package(root: Path | None = None) -> ModuleType:
+    """Import ``bench.run`` from the checkout's ``bench/`` folder (no ``sys.path`` edits)."""
+    root = root or find_checkout()
+    if root is None:
+        raise BenchError(
+            "bench needs a source checkout of realworld-billiard (its bench/ folder is not "
+            "installed): run `billiard bench` inside the cloned repository"
         )
-    if str(root) not in sys.path:
-        sys.path.insert(0, str(root))
-    import bench.run
-
-    return bench.run
+    folder = root / "bench"
+    loaded = sys.modules.get("bench")
+    if loaded is None or [str(folder)] != list(getattr(loaded, "__path__", [])):
+        spec = importlib.util.spec_from_file_location(
+            "bench", folder / "__init__.py", submodule_search_locations=[str(folder)]
+        )
+        if spec is None or spec.loader is None:  # pragma: no cover - a .py file always loads
+            raise BenchError(f"cannot load the bench package in {folder}")
+        package = importlib.util.module_from_spec(spec)
+        for name in [m for m in sys.modules if m == "bench" or m.startswith("bench.")]:
+            del sys.modules[name]  # another checkout's bench: do not mix the two
+        sys.modules["bench"] = package
+        spec.loader.exec_module(package)
+    return importlib.import_module("bench.run")
 
 
 def _sections(text: str) -> tuple[str, ...]:
@@ -65,7 +110,7 @@ def add_bench_arguments(parser: argparse.ArgumentParser) -> None:
 
 def run_bench(args: argparse.Namespace) -> int:
     run = _bench_package()
-    from bench.common import Config
+    Config = importlib.import_module("bench.common").Config
 
     cfg = Config.quick_mode() if args.quick else Config.full()
     out = Path(args.out) if args.out else Path("runs/bench-quick" if args.quick else "docs")
@@ -78,7 +123,11 @@ def run_bench(args: argparse.Namespace) -> int:
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(prog="billiard bench", description=__doc__)
     add_bench_arguments(parser)
-    return run_bench(parser.parse_args(argv))
+    try:
+        return run_bench(parser.parse_args(argv))
+    except BenchError as exc:
+        print(f"billiard bench: error: {exc}", file=sys.stderr)
+        return 2
 
 
 if __name__ == "__main__":  # pragma: no cover

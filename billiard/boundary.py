@@ -83,6 +83,7 @@ class Boundary:
         drive: the boundary's motion.
         ceiling: height of a flat lid (m), or None for an open container.
         escape_height: height (m) above which a ball in an open container is lost.
+        curve: the curve's name or expression, for messages.
     """
 
     def __init__(
@@ -92,6 +93,7 @@ class Boundary:
         drive: Drive,
         ceiling: float | None = None,
         escape_height: float = 1.0,
+        curve: str = "",
     ):
         if not walls:
             raise GeometryError("the boundary curve has no walls")
@@ -101,13 +103,18 @@ class Boundary:
         self.ceiling = None if ceiling is None else float(ceiling)
         self.escape_height = float(escape_height)
         self.top = self.ceiling if self.ceiling is not None else self.escape_height
-        self.x_range = self._container_range()
-        self.validate_radius()
-        self.offsets: tuple[OffsetWall, ...] = tuple(
-            OffsetLine(w, radius, i) if self._is_straight(w) else OffsetWall(w, radius, i)
-            for i, w in enumerate(self.walls)
-        )
-        self._bound_offset_curvature()
+        try:
+            self.x_range = self._container_range()
+            self.validate_radius()
+            self.offsets: tuple[OffsetWall, ...] = tuple(
+                OffsetLine(w, radius, i) if self._is_straight(w) else OffsetWall(w, radius, i)
+                for i, w in enumerate(self.walls)
+            )
+            self._bound_offset_curvature()
+        except GeometryError:
+            raise
+        except (ArithmeticError, ValueError, TypeError) as exc:
+            raise GeometryError(_undefined_curve(self.walls, curve, exc)) from None
         self.lid: FlatLid | None = (
             FlatLid(self.ceiling, self.radius) if self.ceiling is not None else None
         )
@@ -126,6 +133,7 @@ class Boundary:
             Drive.from_scene(scene.drive),
             scene.boundary.ceiling,
             scene.boundary.escape_height,
+            curve=scene.boundary.curve,
         )
 
     # ------------------------------------------------------------------ curve helpers
@@ -375,6 +383,30 @@ class Boundary:
             near = self.nearest_point(px, py)
             depth = self.radius + near.distance if near.below else self.radius - near.distance
             raise GeometryError(f"{where} puts the ball {depth:.3g} m into the wall")
+
+
+def _undefined_curve(walls: Sequence[dict], curve: str, exc: BaseException) -> str:
+    """One line for a curve that cannot be evaluated where the ball can go: the first x,
+    walking outward from 0, where a wall's height or derivatives are not real and finite."""
+    name = f"boundary curve {curve!r}" if curve else "the boundary curve"
+    xs = [0.0]
+    for e in range(-48, 25):  # 1e-6 m ... 1e3 m, 8 points per factor of ten
+        xs += [-(10.0 ** (e / 8)), 10.0 ** (e / 8)]
+    for x in xs:
+        for wall in walls:
+            for key in ("f", "df", "d2f"):
+                try:
+                    value = wall[key](x)
+                    ok = isinstance(value, (int, float)) and math.isfinite(value)
+                except (ArithmeticError, ValueError, TypeError):
+                    ok = False
+                if not ok:
+                    return (
+                        f"{name} is not real and finite at x = {x:.6g} m, where the ball can "
+                        "go (check its expression and parameters)"
+                    )
+    detail = " ".join(str(exc).split()) or type(exc).__name__
+    return f"{name} cannot be evaluated where the ball can go: {detail}"
 
 
 def _bisect(fn: Callable[[float], float], a: float, b: float) -> float:

@@ -34,7 +34,14 @@ from importlib import resources
 from pathlib import Path
 from typing import Any
 
-from billiard.expr import CurveExpression, CurveExpressionError, is_parameter_name, parse_curve
+from billiard.derivation.expr import (
+    BUILTIN_CURVES,
+    CurveExpression,
+    CurveExpressionError,
+    is_curve_name,
+    is_parameter_name,
+    parse_curve,
+)
 
 __all__ = [
     "BUILTIN_CURVES",
@@ -63,8 +70,6 @@ __all__ = [
     "with_values",
 ]
 
-#: Curves whose generated modules ship with the package.
-BUILTIN_CURVES: tuple[str, ...] = ("parabola", "wedge", "hyperbola")
 #: Accepted values of ``drive.direction``.
 DRIVE_DIRECTIONS: tuple[str, ...] = ("horizontal", "vertical")
 #: Accepted values of ``air.drag``.
@@ -72,7 +77,6 @@ DRAG_MODELS: tuple[str, ...] = ("fowles", "none")
 #: Accepted values of ``run.method``.
 METHODS: tuple[str, ...] = ("event", "rk4")
 
-_CURVE_NAME_RE = re.compile(r"[A-Za-z][A-Za-z0-9_-]*")
 _BARE_KEY_RE = re.compile(r"[A-Za-z0-9_-]+")
 _MAX_SHOWN = 60
 
@@ -112,13 +116,14 @@ def curve_kind(curve: str) -> str:
     """Classify a ``boundary.curve`` string.
 
     Returns:
-        ``"builtin"`` for one of :data:`BUILTIN_CURVES`, ``"named"`` for any other name
-        matching ``[A-Za-z][A-Za-z0-9_-]*`` (a generated curve, looked up by the engine)
-        and ``"expression"`` otherwise (to be parsed by :func:`billiard.expr.parse_curve`).
+        ``"builtin"`` for one of :data:`BUILTIN_CURVES`, ``"named"`` for any other curve
+        name (:func:`billiard.derivation.expr.is_curve_name`; a generated curve, looked up
+        by the engine) and ``"expression"`` otherwise (to be parsed by
+        :func:`billiard.derivation.expr.parse_curve`).
     """
     if curve in BUILTIN_CURVES:
         return "builtin"
-    if _CURVE_NAME_RE.fullmatch(curve):
+    if is_curve_name(curve):
         return "named"
     return "expression"
 

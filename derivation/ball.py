@@ -159,8 +159,8 @@ def derive_ball() -> BallDerivation:
     km_free = kane([gravity])
     M = km_drag.mass_matrix
     F_drag = km_drag.forcing
-    # M is solved numerically by LU, never inverted: for this ball it is diagonal, so the
-    # LU solve reduces to divisions, but nothing below relies on that.
+    # The right-hand side M^-1 F is solved symbolically by LU (no inverse is formed): for
+    # this ball M is diagonal, so the solve reduces to divisions, but nothing relies on that.
     rhs_drag = M.LUsolve(F_drag)
     rhs_magnus = km_magnus.mass_matrix.LUsolve(km_magnus.forcing)
     steps.append(
@@ -168,9 +168,10 @@ def derive_ball() -> BallDerivation:
             "Equations of motion in flight",
             "Kane's equations Fr + Fr* = 0 with gravity, Fowles drag -(c_lin + c_quad |v|) v "
             "acting at the centre, and an optional Magnus force c_magnus (omega x v), give "
-            "M(q) du/dt = F(q, u). The mass matrix and forcing vector are kept apart; the "
-            "runtime solves the linear system, nothing is inverted symbolically. No load has "
-            "a moment about C, so the spin is constant in flight.",
+            "M(q) du/dt = F(q, u). The right-hand side du/dt = M^-1 F is solved symbolically "
+            "by LU, without forming an inverse (M is diagonal here), and generated as "
+            "flight_rhs_drag and flight_rhs_magnus. No load has a moment about C, so the "
+            "spin is constant in flight.",
             [
                 (r"M", M),
                 (r"F_{\mathrm{drag}}", F_drag),

@@ -8,21 +8,19 @@ a curve expression in a scene.
 from __future__ import annotations
 
 import functools
-import re
+import importlib.machinery
+import importlib.util
+import os
+import tempfile
 from pathlib import Path
 
 import sympy as sm
 
-from billiard.expr import parse_curve
-
-from . import codegen, curve, report
+from . import codegen, curve, report, shape
 from .ball import BallDerivation, derive_ball, plain
-from .ball import c_lin as C_LIN
-from .ball import c_magnus as C_MAGNUS
-from .ball import c_quad as C_QUAD
+from .expr import PAPER_CURVES, curve_name_problem, parse_curve
 
 GENERATED = Path(__file__).resolve().parent.parent / "generated"
-_NAME = re.compile(r"^[A-Za-z][A-Za-z0-9_]{0,40}$")
 
 
 def _sym(name: str) -> sm.Symbol:
@@ -110,8 +108,6 @@ def ball_module(d: BallDerivation) -> str:
             "Mechanical energy (J): translation + rotation + gravity, zero at q2 = 0.",
         ),
     ]
-    # Symbols the derivation treats as loads must all be arguments somewhere.
-    assert {C_LIN.name, C_QUAD.name, C_MAGNUS.name} <= {"c_lin", "c_quad", "c_magnus"}
     body = "\n\n".join(parts)
     header = codegen.generated_notice("derivation/ball.py (Kane's method)") + [
         "Functions: mass_matrix, forcing_drag, flight_rhs_drag, flight_rhs_magnus, "
@@ -134,7 +130,19 @@ def curve_from_text(name: str, text: str, parameters: dict[str, str]) -> curve.C
         )
     psyms = [sm.Symbol(n, real=True) for n in sorted(parameters)]
     expr = parsed.to_sympy(x_symbol=curve.x, parameter_symbols={p.name: p for p in psyms})
-    return curve.derive_curve(name, text, expr, parameters, psyms)
+    if expr.has(sm.zoo, sm.nan, sm.oo, -sm.oo):
+        raise curve.CurveDerivationError(
+            f"curve {text!r} divides by zero or is otherwise undefined (sympy reduces it to {expr})"
+        )
+    try:
+        return curve.derive_curve(name, text, expr, parameters, psyms)
+    except curve.CurveDerivationError:
+        raise
+    except (TypeError, ValueError, ArithmeticError, NotImplementedError) as exc:
+        # sympy failing on a whitelisted expression: say so in one line, not a traceback
+        raise curve.CurveDerivationError(
+            f"curve {text!r} cannot be derived ({type(exc).__name__}: {exc})"
+        ) from None
 
 
 #: Version of the generated curve modules' layout; the runtime refuses other layouts.
@@ -267,7 +275,7 @@ def _expected_texts() -> tuple[tuple[str, str], ...]:
     d = derive_ball()
     files = [("generated/ball.py", ball_module(d))]
     curves = []
-    for name, (text, params) in curve.PAPER_CURVES.items():
+    for name, (text, params) in PAPER_CURVES.items():
         cd = curve_from_text(name, text, params)
         curves.append(cd)
         files.append((f"generated/curves/{name}.py", curve_module(cd)))
@@ -321,19 +329,83 @@ def check(generated_dir: Path = GENERATED) -> list[str]:
 
 
 def derive_user_curve(
-    name: str, text: str, parameters: dict[str, float | str] | None, directory: Path
+    name: str,
+    text: str,
+    parameters: dict[str, float | str] | None,
+    directory: Path,
+    *,
+    force: bool = False,
 ) -> Path:
-    """Derive a user's curve into ``directory/<name>.py`` and return the path."""
-    if not _NAME.match(name):
+    """Derive a user's curve into ``directory/<name>.py`` and return the path.
+
+    The curve must be able to hold a ball (:mod:`billiard.derivation.shape`, with the
+    parameters at their given values). The module is written to a temporary file in
+    ``directory``, checked, and renamed into place: another process never sees a partial
+    module. An existing module is replaced only with ``force``. Names starting with
+    ``expr_`` are the cache of scene expressions (derived with ``force``).
+
+    Raises:
+        CurveDerivationError: a bad name, an existing curve, or a curve that cannot be
+            derived or cannot hold a ball (one line).
+        OSError: ``directory`` cannot be written.
+    """
+    problem = curve_name_problem(name)
+    if problem is not None and not (force and name.startswith("expr_")):
+        raise curve.CurveDerivationError(problem)
+    path = directory / f"{name}.py"
+    if path.exists() and not force:
         raise curve.CurveDerivationError(
-            f"curve name {name!r} must start with a letter and use letters, digits and _"
+            f"curve {name!r} already exists ({path}); add --force to replace it"
         )
     params = {k: _exact(v) for k, v in (parameters or {}).items()}
     cd = curve_from_text(name, text, params)
+    try:
+        source = curve_module(cd)
+    except codegen.NonFiniteConstantError as exc:
+        raise curve.CurveDerivationError(f"curve {text!r}: {exc}") from None
     directory.mkdir(parents=True, exist_ok=True)
-    path = directory / f"{name}.py"
-    path.write_text(curve_module(cd))
+    handle, temp_name = tempfile.mkstemp(prefix=f".{name}-", suffix=".py.tmp", dir=directory)
+    temp = Path(temp_name)
+    try:
+        with os.fdopen(handle, "w") as out:
+            out.write(source)
+        os.chmod(temp, 0o666 & ~_umask())  # mkstemp makes it private; a module is not
+        problem = shape.shape_problem(_load_walls(temp, name, params))
+        if problem is not None:
+            raise curve.CurveDerivationError(f"curve {text!r} cannot hold a ball: {problem}")
+        os.replace(temp, path)
+    finally:
+        temp.unlink(missing_ok=True)
     return path
+
+
+def _umask() -> int:
+    mask = os.umask(0)
+    os.umask(mask)
+    return mask
+
+
+def _load_walls(path: Path, name: str, params: dict[str, str]) -> list[dict]:
+    """The walls of a freshly written curve module, parameters at their given values."""
+    module_name = f"billiard_curve_check.{name}"
+    loader = importlib.machinery.SourceFileLoader(module_name, str(path))
+    spec = importlib.util.spec_from_file_location(module_name, path, loader=loader)
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    p = tuple(float(params[n]) for n in module.PARAMETER_NAMES)
+    walls = []
+    for interval, f, df, d2f, *_ in module.WALLS:
+        lo, hi = interval(p)
+        walls.append(
+            {
+                "lo": lo,
+                "hi": hi,
+                "f": lambda x, f=f: f(x, p),
+                "df": lambda x, df=df: df(x, p),
+                "d2f": lambda x, d2f=d2f: d2f(x, p),
+            }
+        )
+    return walls
 
 
 def _exact(value) -> str:

@@ -7,12 +7,35 @@ the header carries no timestamp, only the source, the sympy version and a conten
 
 from __future__ import annotations
 
-import hashlib
-
 import sympy as sm
 from sympy.printing.pycode import PythonCodePrinter
 
-HASH_PREFIX = "# content sha256: "
+from .contenthash import HASH_PREFIX, content_hash, hash_matches, split_module
+
+__all__ = [
+    "HASH_PREFIX",
+    "NonFiniteConstantError",
+    "function_source",
+    "generated_notice",
+    "hash_matches",
+    "module_text",
+    "pyexpr",
+    "split_module",
+]
+
+
+class NonFiniteConstantError(ValueError):
+    """An expression holds a constant that is not a finite real number (``zoo`` from a
+    division by zero, ``nan``, an infinity, ``I``): there is no code to print for it."""
+
+
+def _refuse(what: str):
+    def method(self, expr):
+        raise NonFiniteConstantError(
+            f"the derived expression contains {what}, which has no finite real value"
+        )
+
+    return method
 
 
 class _Printer(PythonCodePrinter):
@@ -26,12 +49,34 @@ class _Printer(PythonCodePrinter):
     def _print_Half(self, expr):
         return "0.5"
 
+    def _print_Float(self, expr):
+        if not expr.is_finite:
+            raise NonFiniteConstantError(
+                f"the derived expression contains the constant {expr}, which is not finite"
+            )
+        return super()._print_Float(expr)
+
+    # Printed as names (math.nan, math.inf, 1j) these would give code that computes
+    # nonsense, or in pyexpr's number branch a bare undefined name: refuse them.
+    _print_NaN = _refuse("nan (an undefined value, e.g. 0/0)")
+    _print_ComplexInfinity = _refuse("zoo (a division by zero)")
+    _print_Infinity = _refuse("an infinity")
+    _print_NegativeInfinity = _refuse("an infinity")
+    _print_ImaginaryUnit = _refuse("the imaginary unit I")
+
 
 _printer = _Printer()
 
 
 def pyexpr(expr: sm.Basic) -> str:
+    """Python source of a sympy expression (``math`` functions, float literals).
+
+    Raises NonFiniteConstantError for zoo, nan, infinities and complex constants: the
+    output never names anything but ``math`` and the function's arguments.
+    """
     if isinstance(expr, sm.Basic) and expr.is_Number:
+        if not (expr.is_real and expr.is_finite):
+            return _printer.doprint(expr)  # raises NonFiniteConstantError
         return repr(float(expr))  # a constant output is a float, like every other output
     return _printer.doprint(expr)
 
@@ -79,23 +124,9 @@ def function_source(
 
 def module_text(header_lines: list[str], body: str) -> str:
     """Assemble a module: header comments, a content hash of the body, then the body."""
-    digest = hashlib.sha256(body.encode()).hexdigest()
+    digest = content_hash(body)
     header = "".join(f"# {line}\n" if line else "#\n" for line in header_lines)
     return header + HASH_PREFIX + digest + "\n" + body
-
-
-def split_module(text: str) -> tuple[str, str]:
-    """Return (recorded hash, body) of a generated module; ('', text) if it has none."""
-    head, sep, rest = text.partition(HASH_PREFIX)
-    if not sep:
-        return "", text
-    digest, _, body = rest.partition("\n")
-    return digest.strip(), body
-
-
-def hash_matches(text: str) -> bool:
-    digest, body = split_module(text)
-    return bool(digest) and hashlib.sha256(body.encode()).hexdigest() == digest
 
 
 def generated_notice(source: str) -> list[str]:

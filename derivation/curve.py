@@ -24,6 +24,8 @@ from dataclasses import dataclass
 import sympy as sm
 from sympy.solvers.solvers import unrad
 
+from .expr import PAPER_CURVES
+
 x = sm.Symbol("x", real=True)
 s = sm.Symbol("s", real=True)
 px, py = sm.symbols("px py", real=True)
@@ -100,14 +102,34 @@ def split_walls(expr: sm.Basic, defaults: dict) -> tuple[list[sm.Basic], list[tu
         pieces.append((edges[i], edges[i + 1], expr.xreplace(repl)))
     # Convex kinks only: slope must not drop across a breakpoint.
     for i, b in enumerate(numeric):
-        left = sm.diff(pieces[i][2], x).subs(defaults).subs(x, b)
-        right = sm.diff(pieces[i + 1][2], x).subs(defaults).subs(x, b)
-        if float(left) > float(right):
+        left = _slope(pieces[i][2], defaults, b, "-")
+        right = _slope(pieces[i + 1][2], defaults, b, "+")
+        if left is None or right is None:
             raise CurveDerivationError(
-                f"concave kink at x = {b:g} m (slope {float(left):g} -> {float(right):g}): "
+                f"cusp at x = {b:g} m: the slope is infinite or undefined there, so the "
+                "contact direction at the bottom is not defined"
+            )
+        if left > right:
+            raise CurveDerivationError(
+                f"concave kink at x = {b:g} m (slope {left:g} -> {right:g}): "
                 "the ball could touch the corner point, which the contact model excludes"
             )
     return breakpoints, pieces
+
+
+def _slope(piece: sm.Basic, defaults: dict, at: float, side: str) -> float | None:
+    """Slope of a piece at a kink, approached from ``side`` ('-' or '+'), or None if it
+    is not real and finite there (a cusp)."""
+    slope = sm.diff(piece, x).subs(defaults)
+    value = slope.subs(x, at)
+    if not (value.is_real and value.is_finite):  # e.g. 0/0 as written: take the limit
+        try:
+            value = sm.limit(slope, x, sm.nsimplify(at), side)
+        except (NotImplementedError, ValueError, TypeError):
+            return None
+    if not (value.is_real and value.is_finite):
+        return None
+    return float(value)
 
 
 def nearest_polynomial(near: sm.Basic) -> list[sm.Basic] | None:
@@ -156,17 +178,6 @@ def derive_curve(
         name, text, expression, parameters, parameter_symbols, breakpoints, walls
     )
 
-
-# The paper's boundaries (Hartl, Miller and Mazzoleni, eqs. 1-3), in metres:
-# a = 0.26 /cm, b = 1.85, c = 0.63 cm, alpha = 40.3 cm^2, beta = 0.08 /cm^2, delta = 4.45 cm.
-PAPER_CURVES: dict[str, tuple[str, dict[str, str]]] = {
-    "parabola": ("a*x**2 + c", {"a": "26", "c": "0.0063"}),
-    "wedge": ("b*abs(x) + c", {"b": "1.85", "c": "0.0063"}),
-    "hyperbola": (
-        "sqrt(alpha*(1 + beta*x**2)) - delta",
-        {"alpha": "0.00403", "beta": "800", "delta": "0.0445"},
-    ),
-}
 
 __all__ = [
     "derive_curve",

@@ -188,7 +188,9 @@ def test_nearest_point_polynomial_against_brute_force(name):
     curve = load_curve(name)
     rng = np.random.default_rng(17)
     s_grid = np.linspace(-0.12, 0.12, 240_001)
-    heights = np.max([np.vectorize(w["f"])(s_grid) for w in curve.walls], axis=0)
+    heights = np.max(
+        [np.vectorize(lambda x, w=w: w.f(x, w.p))(s_grid) for w in curve.walls], axis=0
+    )
     for trial in range(60):
         px = rng.uniform(-0.05, 0.05)
         if trial < 20:  # near the symmetry axis, above the evolute's cusp: several roots
@@ -199,12 +201,12 @@ def test_nearest_point_polynomial_against_brute_force(name):
         best_brute = math.sqrt(d2[i])
         candidates = []
         for w in curve.walls:
-            roots = np.roots(w["poly"](px, py))
+            roots = np.roots(w.poly(px, py, w.p))
             for root in roots[np.abs(roots.imag) < 1e-9].real:
                 # Squaring away a square root (hyperbola) adds extraneous roots: a
                 # candidate counts only if it satisfies the unsquared condition.
-                if w["lo"] <= root <= w["hi"] and abs(w["near"](root, px, py)) < 1e-9:
-                    candidates.append(math.hypot(root - px, w["f"](root) - py))
+                if w.lo <= root <= w.hi and abs(w.near(root, px, py, w.p)) < 1e-9:
+                    candidates.append(math.hypot(root - px, w.f(root, w.p) - py))
         assert candidates, (px, py)
         best = min(candidates)
         # Grid spacing 1e-6 m bounds the brute force's excess distance.
@@ -243,10 +245,10 @@ def test_derive_user_curve_and_use_it(tmp_path, monkeypatch):
     curve = load_curve("bowl")
     wall = curve.walls[0]
     for x in (-0.03, 0.0, 0.02):
-        assert wall["f"](x) == pytest.approx(30 * x**4 + 0.0063, rel=1e-15)
-        assert wall["df"](x) == pytest.approx(120 * x**3, rel=1e-15, abs=1e-300)
-        assert wall["d2f"](x) == pytest.approx(360 * x**2, rel=1e-15, abs=1e-300)
-    assert len(wall["poly"](0.01, 0.05)) == 8  # degree 7: (s - px) + (f - py) f'
+        assert wall.f(x, wall.p) == pytest.approx(30 * x**4 + 0.0063, rel=1e-15)
+        assert wall.df(x, wall.p) == pytest.approx(120 * x**3, rel=1e-15, abs=1e-300)
+        assert wall.d2f(x, wall.p) == pytest.approx(360 * x**2, rel=1e-15, abs=1e-300)
+    assert len(wall.poly(0.01, 0.05, wall.p)) == 8  # degree 7: (s - px) + (f - py) f'
 
 
 @pytest.mark.parametrize(
@@ -274,3 +276,148 @@ def test_derive_refuses_bad_curves_in_one_line(text, tmp_path):
     assert len(lines) == 1 and lines[0].startswith("billiard: error:"), proc.stderr
     assert "Traceback" not in proc.stderr
     assert not list(tmp_path.rglob("*.py"))
+
+
+# --- billiard derive: what a user hits -----------------------------------------------------
+
+
+def _derive(capsys, *args):
+    from billiard.cli import main
+
+    code = main(["derive", *args])
+    captured = capsys.readouterr()
+    return code, captured.out, captured.err.strip().splitlines()
+
+
+@pytest.mark.parametrize(
+    ("text", "reason"),
+    [
+        ("sqrt(abs(x))", "cusp at x = 0"),
+        ("abs(x)**0.5", "cusp at x = 0"),
+        ("1/0*x", "divides by zero"),
+        ("1/x", "not real and finite at x = 0"),
+        ("log(x)", "not real and finite at x = 0"),
+        ("tan(x)", "not convex"),
+        ("exp(x)", "does not open upward on the left"),
+        ("-x**2", "does not open upward"),
+        ("1 - x**2", "does not open upward"),
+        ("x**4 - x**2", "not convex at x = 0"),
+        ("abs(x)**1.5", "piece for x < 0 m"),
+        ("sqrt(0.0025 - x**2)", "not real and finite"),
+    ],
+)
+def test_derive_refuses_curves_that_cannot_hold_a_ball(text, reason, tmp_path, monkeypatch, capsys):
+    monkeypatch.setenv("BILLIARD_HOME", str(tmp_path))
+    code, _, err = _derive(capsys, "--name", "c", "--curve", text)
+    assert code == 2 and len(err) == 1 and err[0].startswith("billiard: error:"), err
+    assert reason in err[0]
+    assert not list(tmp_path.rglob("*.py*"))
+
+
+@pytest.mark.parametrize(
+    "text",
+    ["0.001", "0.5*x + 0.001", "-0.001 + 30*x**4", "cosh(x) - 1", "2*abs(x) + 0.001*x**2"],
+)
+def test_derive_accepts_curves_that_hold_a_ball(text, tmp_path, monkeypatch, capsys):
+    monkeypatch.setenv("BILLIARD_HOME", str(tmp_path))
+    code, out, err = _derive(capsys, "--name", "ok", "--curve", text)
+    assert code == 0 and not err and "a scene can now use" in out
+
+
+def test_printer_never_emits_an_undefined_name():
+    import sympy as sm
+    from billiard.derivation import codegen
+
+    x = sm.Symbol("x")
+    for bad in (sm.nan, sm.zoo, sm.oo, -sm.oo, sm.zoo * x, x + sm.nan, sm.I * x):
+        with pytest.raises(codegen.NonFiniteConstantError):
+            codegen.pyexpr(bad)
+    assert codegen.pyexpr(sm.Integer(2)) == "2.0"
+
+
+def test_derive_refuses_builtin_names_and_replaces_only_with_force(tmp_path, monkeypatch, capsys):
+    monkeypatch.setenv("BILLIARD_HOME", str(tmp_path))
+    code, _, err = _derive(capsys, "--name", "parabola", "--curve", "30*x**4 + 0.0063")
+    assert code == 2 and len(err) == 1 and "built-in curve" in err[0]
+    assert _derive(capsys, "--name", "bowl2", "--curve", "30*x**4 + 0.0063")[0] == 0
+    code, _, err = _derive(capsys, "--name", "bowl2", "--curve", "40*x**4 + 0.0063")
+    assert code == 2 and len(err) == 1 and "already exists" in err[0] and "--force" in err[0]
+    assert load_curve("bowl2").f(0.1) == pytest.approx(30e-4 + 0.0063, rel=1e-14)
+    assert _derive(capsys, "--name", "bowl2", "--curve", "40*x**4 + 0.0063", "--force")[0] == 0
+    code, _, err = _derive(capsys, "--name", "expr_1", "--curve", "40*x**4 + 0.0063")
+    assert code == 2 and "kept for cached expressions" in err[0]
+
+
+def test_derive_accepts_a_curve_starting_with_minus(tmp_path, monkeypatch, capsys):
+    monkeypatch.setenv("BILLIARD_HOME", str(tmp_path))
+    code, _, err = _derive(capsys, "--name", "low", "--curve", "-0.001+30*x**4")
+    assert code == 0, err
+    assert load_curve("low").f(0.0) == pytest.approx(-0.001, rel=1e-15)
+    code, _, err = _derive(capsys, "--name", "hill", "--curve", "-x**2")
+    assert code == 2 and len(err) == 1 and "does not open upward" in err[0]
+
+
+def test_derive_dir_problems_are_one_line(tmp_path, monkeypatch, capsys):
+    import os
+
+    from billiard.derivation import build
+
+    monkeypatch.setenv("BILLIARD_HOME", str(tmp_path))
+    curve = ["--name", "d", "--curve", "30*x**4 + 0.0063"]
+    a_file = tmp_path / "file"
+    a_file.write_text("")
+    code, _, err = _derive(capsys, *curve, "--dir", str(a_file))
+    assert code == 2 and len(err) == 1 and "not a directory" in err[0]
+    code, _, err = _derive(capsys, *curve, "--dir", str(tmp_path / "no" / "such"))
+    assert code == 2 and len(err) == 1 and "does not exist" in err[0]
+    read_only = tmp_path / "ro"
+    read_only.mkdir()
+    if os.geteuid() != 0:  # root writes anyway; the monkeypatched case below covers it
+        read_only.chmod(0o500)
+        code, _, err = _derive(capsys, *curve, "--dir", str(read_only))
+        assert code == 2 and len(err) == 1 and f"cannot write the curve to {read_only}" in err[0]
+        read_only.chmod(0o700)
+
+    def refuse(*args, **kwargs):
+        raise PermissionError(13, "Permission denied")
+
+    monkeypatch.setattr(build.tempfile, "mkstemp", refuse)
+    code, _, err = _derive(capsys, *curve, "--dir", str(read_only))
+    assert code == 2 and len(err) == 1
+    assert f"cannot write the curve to {read_only}: Permission denied" in err[0]
+
+
+def test_derive_says_which_directory_it_acts_on(capsys, monkeypatch):
+    from billiard.derivation import build
+
+    code, out, _ = _derive(capsys, "--check")
+    assert code == 0 and f"checking {build.GENERATED} (source checkout" in out
+    monkeypatch.setattr(build, "repo_root", lambda: None)
+    monkeypatch.setattr(build, "check", lambda: [])
+    code, out, _ = _derive(capsys, "--check")
+    assert code == 0 and "the installed package, not a source checkout" in out
+
+
+# --- billiard bench finds the checkout without sys.path edits ----------------------------
+
+
+def test_bench_finds_the_checkout_from_inside_it(tmp_path, monkeypatch, capsys):
+    from pathlib import Path
+
+    from billiard import bench
+
+    root = Path(bench.__file__).resolve().parent.parent
+    # as after a non-editable install: nothing beside the installed package
+    monkeypatch.setattr(bench, "__file__", str(tmp_path / "site" / "billiard" / "bench.py"))
+    assert bench.find_checkout(root / "docs") == root
+    path = list(sys.path)
+    run = bench._bench_package(root)
+    assert sys.path == path and Path(run.__file__).resolve() == root / "bench" / "run.py"
+
+    monkeypatch.chdir(tmp_path)
+    assert bench.find_checkout() is None
+    from billiard.cli import main
+
+    assert main(["bench", "--quick"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "needs a source checkout" in err[0]

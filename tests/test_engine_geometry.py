@@ -62,13 +62,14 @@ def test_gap_sign_and_rate(name):
         d, _ = brute_distance(CURVES[name], x, y, lo=x - 0.02, hi=x + 0.02, n=40001)
         below = y < CURVES[name](x)
         clearance = (-d if below else d) - R
-        gap = min(o.gap_rate(x, y, 0.0, 0.0)[0] for o in b.offsets)
+        gap = min(o.gap_rate(x, y, 0.0, 0.0, o.initial_warm())[0] for o in b.offsets)
         assert np.sign(gap) == np.sign(clearance)
     # dG/dt = v_y - F'(x) v_x with F' the slope at the contact point
     for o in b.offsets:
         x, vx, vy, h = 0.03, 0.7, -0.2, 1e-7
-        g0, rate = o.gap_rate(x, o.height(x) + 1e-3, vx, vy)
-        g1, _ = o.gap_rate(x + vx * h, o.height(x) + 1e-3 + vy * h, vx, vy)
+        warm = o.initial_warm()
+        g0, rate = o.gap_rate(x, o.height(x, warm) + 1e-3, vx, vy, warm)
+        g1, _ = o.gap_rate(x + vx * h, o.height(x, warm) + 1e-3 + vy * h, vx, vy, warm)
         assert rate == pytest.approx((g1 - g0) / h, rel=1e-6)
 
 

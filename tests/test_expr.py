@@ -1,4 +1,4 @@
-"""Tests of the whitelist parser for curve expressions (billiard.expr)."""
+"""Tests of the whitelist parser for curve expressions (billiard.derivation.expr)."""
 
 from __future__ import annotations
 
@@ -8,10 +8,7 @@ import time
 
 import pytest
 import sympy
-from hypothesis import given, settings
-from hypothesis import strategies as st
-
-from billiard.expr import (
+from billiard.derivation.expr import (
     FUNCTIONS,
     MAX_LENGTH,
     CurveExpression,
@@ -19,6 +16,8 @@ from billiard.expr import (
     is_parameter_name,
     parse_curve,
 )
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 X = sympy.Symbol("x", real=True)
 

@@ -103,7 +103,7 @@ def test_root_solver_failure_in_the_offset_inversion(tmp_path):
     broken = [False]
     for wall in sim.boundary.offsets:
         good = wall.df
-        wall.df = lambda s, good=good: math.nan if broken[0] else good(s)
+        wall.df = lambda s, p, good=good: math.nan if broken[0] else good(s, p)
 
     def progress(done: int, total: int) -> None:
         broken[0] = broken[0] or done >= 100
@@ -191,8 +191,8 @@ def hopping_in_place(monkeypatch) -> None:
         self.flight.begin(q1, q2, u1, u2, u3)
         surface = self.surfaces[0]
         px = self._relative(0.0, (q1, q2, u1, u2))[0]
-        s, z, _ = surface.contact(px)
-        return Event(1e-12, surface, q1, q2, u1, u2, theta0, s, z)
+        s, z, _ = surface.contact(px, self.warm[0])
+        return Event(1e-12, surface, q1, q2, u1, u2, theta0, s, z, 0)
 
     monkeypatch.setattr(EventLocator, "locate", locate)
 

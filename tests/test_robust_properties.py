@@ -24,11 +24,11 @@ import pytest
 from hypothesis import HealthCheck, event, given, settings
 from hypothesis import strategies as st
 
+from bench.soak import CURVES, ImpactAudit, scene_from_draw, stop_kind
 from billiard.curves import load_curve
 from billiard.errors import GeometryError
 from billiard.record import MemoryRecorder, read_checkpoint
 from billiard.simulate import CHECKPOINT_NAME, Simulation, simulate
-from billiard.soak import CURVES, ImpactAudit, scene_from_draw, stop_kind
 
 DOCUMENTED_STOPS = [
     re.compile(p)
@@ -55,7 +55,7 @@ DOCUMENTED_GEOMETRY = re.compile(
 
 
 def draws(elastic_below=(0.0, 1e-3, 1e-2, 3e-2), amplitude=None):
-    """The primitive choices of :func:`billiard.soak.scene_from_draw`."""
+    """The primitive choices of :func:`bench.soak.scene_from_draw`."""
     two_pi = 2.0 * math.pi
     unit = st.floats(0.0, 1.0)
     return st.fixed_dictionaries(
@@ -273,7 +273,7 @@ def test_soak_jobs_audit_runs_and_resumes():
     also interrupted (a real SIGTERM), resumed and compared byte for byte."""
     import random
 
-    from billiard.soak import Job, random_draw, run_job
+    from bench.soak import Job, random_draw, run_job
 
     paper = run_job(Job("wedge-6.6hz", 300, scene_name="wedge-6.6hz"))
     rng = random.Random(7)

@@ -1,8 +1,11 @@
 """Soak test: many impacts across the paper's scenes and random valid scenes, every impact
 audited.
 
-    python -m billiard.soak --impacts 1000000     # the full soak (a few minutes, 2 cores)
-    python -m billiard.soak --quick               # 20,000 impacts (seconds)
+    python -m bench.soak --impacts 1000000     # the full soak (a few minutes, 2 cores)
+    python -m bench.soak --quick               # 20,000 impacts (seconds)
+
+Run from the root of a source checkout (it is a test harness, not part of the installed
+package).
 
 Every run is streamed to a temporary directory exactly as ``billiard run`` streams it
 (CSV, scene file, checkpoints), with the impact law wrapped by :class:`ImpactAudit`;
@@ -153,11 +156,11 @@ def radius_limit(curve: str, top: float) -> float:
         xl, xr = probe.x_range
         rho = math.inf
         for wall in walls:
-            lo, hi = max(wall["lo"], xl), min(wall["hi"], xr)
+            lo, hi = max(wall.lo, xl), min(wall.hi, xr)
             for x in np.linspace(lo, hi, 4001) if hi > lo else ():
-                f2 = float(wall["d2f"](float(x)))
+                f2 = float(wall.d2f(float(x), wall.p))
                 if f2 > 0.0:
-                    fp = float(wall["df"](float(x)))
+                    fp = float(wall.df(float(x), wall.p))
                     rho = min(rho, (1.0 + fp * fp) ** 1.5 / f2)
         _RADIUS_LIMITS[key] = rho
     return _RADIUS_LIMITS[key]
@@ -581,7 +584,7 @@ def format_summary(s: dict[str, Any]) -> str:
 
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(
-        prog="python -m billiard.soak",
+        prog="python -m bench.soak",
         description="Soak test: impacts on the paper scenes and random valid scenes, "
         "each audited for penetration, non-finite values, energy creation "
         "and resume equality.",
