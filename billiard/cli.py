@@ -343,6 +343,8 @@ def cmd_sweep(args: argparse.Namespace) -> int:
     }
     if args.lyapunov:
         settings["lyapunov"] = True
+    if args.skip_invalid:
+        settings["skip_invalid"] = True
     try:
         if args.resume is not None:
             given = args.scene or args.file or args.vary or args.set or args.out or settings
@@ -381,7 +383,6 @@ def cmd_sweep(args: argparse.Namespace) -> int:
             workers=args.workers,
             dask=args.dask,
             resume=args.resume is not None,
-            skip_invalid=args.skip_invalid,
             plots=not args.no_plot,
         )
     except SweepError as exc:
@@ -409,13 +410,11 @@ def cmd_sweep(args: argparse.Namespace) -> int:
         f"wrote {outcome.result} (open with xarray.open_dataset or scipy.io.netcdf_file)"
         + (f"; plots: {', '.join(p.name for p in outcome.plots)}" if outcome.plots else "")
     )
-    for record in outcome.failed[:5]:
-        print(
-            f"billiard: point {record['index']} {record['status']}: {record['reason']}",
-            file=sys.stderr,
-        )
-    if len(outcome.failed) > 5:
-        print(f"billiard: ... {len(outcome.failed) - 5} more (see status, reason)", file=sys.stderr)
+    failed = [r for r in outcome.records if r["status"] == "failed"]
+    for record in failed[:5]:
+        print(f"billiard: point {record['index']} failed: {record['reason']}", file=sys.stderr)
+    if len(failed) > 5:
+        print(f"billiard: ... {len(failed) - 5} more failed (see status, reason)", file=sys.stderr)
     return 0
 
 
@@ -479,7 +478,7 @@ def _add_sweep_parser(sub: argparse._SubParsersAction) -> None:
         "--skip-invalid",
         action="store_true",
         help="record points whose scene is invalid (e.g. a start inside the wall) as "
-        "invalid instead of refusing the sweep",
+        "invalid instead of refusing the sweep (kept for --resume)",
     )
     p.add_argument("--no-plot", action="store_true", help="do not draw the plots")
     p.set_defaults(func=cmd_sweep)

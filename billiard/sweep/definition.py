@@ -52,6 +52,7 @@ DEFAULTS: dict[str, Any] = {
     "rest_band": 0.01,
     "max_period": 64,
     "chaos_threshold": 0.01,
+    "skip_invalid": False,
 }
 _SETTINGS = tuple(DEFAULTS)
 _FILE_KEYS = ("scene", "set", "vary", *_SETTINGS)
@@ -98,6 +99,8 @@ class Sweep:
         max_period: longest period looked for (impacts).
         chaos_threshold: a non-periodic point with a Lyapunov exponent above this (per
             impact) is chaotic, otherwise quasi-periodic.
+        skip_invalid: record points whose scene is invalid as ``invalid`` instead of
+            refusing the sweep (kept in the sweep file, so a resumed sweep does the same).
     """
 
     scene: Scene
@@ -111,6 +114,7 @@ class Sweep:
     rest_band: float = DEFAULTS["rest_band"]
     max_period: int = DEFAULTS["max_period"]
     chaos_threshold: float = DEFAULTS["chaos_threshold"]
+    skip_invalid: bool = DEFAULTS["skip_invalid"]
     settings_order: tuple[str, ...] = field(default=_SETTINGS, repr=False, compare=False)
 
     def __post_init__(self) -> None:
@@ -118,10 +122,11 @@ class Sweep:
         _check_int("transient", self.transient, 0)
         _check_int("keep", self.keep, 1)
         _check_int("max_period", self.max_period, 1)
-        if not isinstance(self.lyapunov, bool):
-            raise SweepError(
-                f"sweep setting 'lyapunov' must be true or false, got {self.lyapunov!r}"
-            )
+        for name in ("lyapunov", "skip_invalid"):
+            if not isinstance(getattr(self, name), bool):
+                raise SweepError(
+                    f"sweep setting '{name}' must be true or false, got {getattr(self, name)!r}"
+                )
         if self.duration is not None:
             _check_positive("duration", self.duration)
         _check_positive("tolerance", self.tolerance)

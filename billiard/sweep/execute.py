@@ -284,7 +284,7 @@ def run_sweep(
         raise SweepError("no sweep given")
     if workers is not None and workers < 1:
         raise SweepError(f"--workers {workers}: needs at least 1 worker")
-    tasks = prepare(sweep, skip_invalid=skip_invalid)  # before anything is written
+    tasks = prepare(sweep, skip_invalid=skip_invalid or sweep.skip_invalid)  # nothing written yet
     try:
         stored, _ = read_points(directory / POINTS_NAME) if resume else ([], 0)
     except StoreError as exc:

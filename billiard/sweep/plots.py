@@ -2,9 +2,9 @@
 
 * one numeric axis: ``bifurcation.png``, the last K impact heights and times of flight
   against the swept key (and the Lyapunov exponent when computed);
-* two numeric axes: ``heatmaps.png``, period, mean impact height and (when computed) the
-  Lyapunov exponent over the two keys; and when a swept key is a starting state
-  (``initial.*``), ``basins.png``, each start coloured by the attractor it reaches.
+* two numeric axes (the first one horizontal): ``heatmaps.png``, period, mean impact
+  height and (when computed) the Lyapunov exponent; and when a swept key is a starting
+  state (``initial.*``), ``basins.png``, each start coloured by the attractor it reaches.
 
 Other sweeps (three or more axes, or text-valued keys) get no plots; the result file
 holds everything.
@@ -126,7 +126,7 @@ def heatmaps(sweep: Sweep, records: Sequence[dict[str, Any]], path: Path) -> Pat
     import matplotlib.pyplot as plt
     from matplotlib.colors import TwoSlopeNorm
 
-    ya, xa = sweep.axes  # first key on the vertical axis, second (fastest) horizontal
+    xa, ya = sweep.axes  # first key horizontal, second vertical
     xe, ye = _edges(xa.values), _edges(ya.values)
     period = _grid(sweep, records, "period")
     period[period == 0] = np.nan
@@ -146,7 +146,7 @@ def heatmaps(sweep: Sweep, records: Sequence[dict[str, Any]], path: Path) -> Pat
         panels.append(("Lyapunov exponent (1/impact)", lyap, "coolwarm", norm))
     fig, axes = plt.subplots(1, len(panels), figsize=(4.6 * len(panels), 4.0), dpi=100)
     for ax, (title, data, cmap, norm) in zip(np.atleast_1d(axes), panels, strict=True):
-        mesh = ax.pcolormesh(xe, ye, np.ma.masked_invalid(data), cmap=cmap, norm=norm)
+        mesh = ax.pcolormesh(xe, ye, np.ma.masked_invalid(data).T, cmap=cmap, norm=norm)
         fig.colorbar(mesh, ax=ax)
         ax.set_title(title, fontsize=9)
         ax.set_xlabel(axis_label(xa.key))
@@ -177,10 +177,10 @@ def basins(sweep: Sweep, records: Sequence[dict[str, Any]], path: Path) -> Path:
             k += 1
     cmap = ListedColormap(colours)
     norm = BoundaryNorm(np.arange(len(labels) + 1) - 0.5, len(labels))
-    ya, xa = sweep.axes
+    xa, ya = sweep.axes  # first key horizontal, second vertical
     grid = np.array(ids).reshape(sweep.shape)
     fig, ax = plt.subplots(figsize=(7.5, 5.0), dpi=100)
-    ax.pcolormesh(_edges(xa.values), _edges(ya.values), grid, cmap=cmap, norm=norm)
+    ax.pcolormesh(_edges(xa.values), _edges(ya.values), grid.T, cmap=cmap, norm=norm)
     counts = np.bincount(grid.ravel(), minlength=len(labels))
     handles = [
         Patch(facecolor=c, edgecolor="black", label=f"{lab} ({n} starts)")
