@@ -1,0 +1,43 @@
+"""Parameter sweeps: many scenes, one varied key or more, measured in parallel.
+
+>>> from billiard import load_scene
+>>> from billiard.sweep import Sweep, parse_vary, run_sweep
+>>> sweep = Sweep(load_scene("parabola-5.4hz"), (parse_vary("drive.frequency=4:7:31"),),
+...               impacts=2000, transient=500)
+>>> outcome = run_sweep(sweep, "runs/my-sweep")  # doctest: +SKIP
+>>> outcome.result  # doctest: +SKIP
+PosixPath('runs/my-sweep/sweep.nc')
+
+One concept per module: :mod:`~billiard.sweep.definition` (axes, settings, sweep
+files), :mod:`~billiard.sweep.attractor` (period and class of one trajectory),
+:mod:`~billiard.sweep.measure` (one point, in a worker), :mod:`~billiard.sweep.store`
+(the folder and its durable points file), :mod:`~billiard.sweep.execute` (executors,
+resume, interruption), :mod:`~billiard.sweep.netcdf` (the result file),
+:mod:`~billiard.sweep.basins` and :mod:`~billiard.sweep.plots` (figures). See
+docs/sweeps.md.
+"""
+
+from billiard.sweep.definition import Axis, Sweep, SweepError, parse_vary, read_sweep_file
+from billiard.sweep.execute import (
+    StopSweep,
+    SweepInterrupted,
+    SweepOutcome,
+    load_sweep_dir,
+    run_sweep,
+)
+from billiard.sweep.netcdf import RESULT_NAME, read_result
+
+__all__ = [
+    "RESULT_NAME",
+    "Axis",
+    "StopSweep",
+    "Sweep",
+    "SweepError",
+    "SweepInterrupted",
+    "SweepOutcome",
+    "load_sweep_dir",
+    "parse_vary",
+    "read_result",
+    "read_sweep_file",
+    "run_sweep",
+]

@@ -1,0 +1,165 @@
+"""One point of a sweep: simulate its scene and measure the attractor it reaches.
+
+:func:`measure_point` runs in a worker process (local or on a Dask cluster) and returns
+a plain dict of numbers, strings and lists (JSON-ready, no timings): the same scene gives
+the same dict bit for bit wherever it runs.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from billiard.sweep.attractor import classify, find_period
+
+__all__ = ["PointTask", "measure_point"]
+
+
+@dataclass(frozen=True)
+class PointTask:
+    """Everything a worker needs for one point.
+
+    Attributes:
+        index: the point's index in the sweep (C order of the axes).
+        values: the swept keys' values at this point.
+        scene: the point's validated scene.
+        settings: the sweep's measurement settings (see :class:`Sweep`).
+    """
+
+    index: int
+    values: dict[str, Any]
+    scene: Any
+    settings: dict[str, Any]
+
+
+def _finite(value: float) -> float | None:
+    value = float(value)
+    return value if math.isfinite(value) else None
+
+
+def _rest_height(scene: Any) -> float:
+    """Centre height (m) of the ball at rest at the bottom of the point's container."""
+    from billiard import simulate, with_values
+
+    at_rest = with_values(
+        scene,
+        {"initial.q1": None, "initial.q2": None, "initial.v1": 0.0, "initial.v2": 0.0}
+        | {"initial.omega": 0.0, "run.duration": None},
+    )
+    return float(simulate(at_rest, collisions=1).scene.initial.q2)
+
+
+def _failed(task: PointTask, reason: str, total: int = 0) -> dict[str, Any]:
+    record = empty_record(task.index, task.values, "failed", reason)
+    record["total_impacts"] = total
+    return record
+
+
+def empty_record(index: int, values: dict[str, Any], status: str, reason: str) -> dict[str, Any]:
+    """The record of a point without measurements (failed, or invalid and skipped)."""
+    return {
+        "index": index,
+        "values": values,
+        "status": status,
+        "reason": " ".join(reason.split()),
+        "attractor": status,
+        "period": 0,
+        "drive_periods": 0,
+        "impacts": 0,
+        "total_impacts": 0,
+        "rest_height": None,
+        "height_mean": None,
+        "height_std": None,
+        "height_max": None,
+        "tof_mean": None,
+        "tof_std": None,
+        "elastic_share": None,
+        "lid_share": None,
+        "lyapunov": None,
+        "lyapunov_per_second": None,
+        "last_height": [],
+        "last_tof": [],
+    }
+
+
+def measure_point(task: PointTask) -> dict[str, Any]:
+    """Simulate one point and measure it; never raises for a point that fails."""
+    try:
+        return _measure(task)
+    except Exception as exc:  # a fault in one point must not end the sweep
+        return _failed(task, f"{type(exc).__name__}: {exc}")
+
+
+def _measure(task: PointTask) -> dict[str, Any]:
+    from billiard import simulate
+
+    s = task.settings
+    scene = task.scene
+    transient, impacts = int(s["transient"]), int(s["impacts"])
+    result = simulate(scene, collisions=transient + impacts, duration=s["duration"])
+    cols = result.columns
+    total = len(cols["n"])
+    if result.stop_reason:
+        return _failed(task, result.stop_reason, total)
+    post = {name: np.asarray(col[transient:]) for name, col in cols.items()}
+    n = len(post["n"])
+    if n == 0:
+        return _failed(
+            task, f"no impacts after the transient: the duration limit came after {total}", total
+        )
+    q2, tof = post["q2"].astype(float), post["tof"].astype(float)
+    elastic_share = float(np.mean(post["regime"] == "elastic"))
+    lid_share = float(np.mean(post["wall"] == "lid"))
+    rest = _rest_height(scene)
+    period = find_period(
+        post,
+        frequency=scene.drive.frequency,
+        phase=scene.drive.phase,
+        radius=scene.ball.radius,
+        g=scene.run.gravity,
+        tolerance=s["tolerance"],
+        max_period=s["max_period"],
+    )
+    drive_periods = 0
+    if period and scene.drive.frequency > 0.0:
+        drive_periods = round(float(np.sum(tof[-period:])) * scene.drive.frequency)
+    lyap = lyap_s = None
+    if s["lyapunov"]:
+        from billiard.analysis import lyapunov_exponent
+
+        estimate = lyapunov_exponent(scene, impacts=impacts, transient=transient)
+        lyap, lyap_s = _finite(estimate.per_impact), _finite(estimate.per_second)
+    attractor = classify(
+        failed=False,
+        period=period,
+        rise=float(np.max(q2)) - rest,
+        elastic_share=elastic_share,
+        rest_band=s["rest_band"],
+        lyapunov=lyap,
+        chaos_threshold=s["chaos_threshold"],
+    )
+    keep = int(s["keep"])
+    record = empty_record(task.index, task.values, "ok", "")
+    record.update(
+        attractor=attractor,
+        period=int(period),
+        drive_periods=int(drive_periods),
+        impacts=n,
+        total_impacts=total,
+        rest_height=rest,
+        height_mean=float(np.mean(q2)),
+        height_std=float(np.std(q2)),
+        height_max=float(np.max(q2)),
+        tof_mean=float(np.mean(tof)),
+        tof_std=float(np.std(tof)),
+        elastic_share=elastic_share,
+        lid_share=lid_share,
+        lyapunov=lyap,
+        lyapunov_per_second=lyap_s,
+        last_height=[float(x) for x in q2[-keep:]],
+        last_tof=[float(x) for x in tof[-keep:]],
+    )
+    return record

@@ -1,0 +1,55 @@
+"""Units of the scene keys a sweep can vary (for axis labels and the result file)."""
+
+from __future__ import annotations
+
+__all__ = ["axis_label", "key_unit", "variable_name"]
+
+_UNITS = {
+    "boundary.ceiling": "m",
+    "boundary.escape_height": "m",
+    "drive.amplitude": "m",
+    "drive.frequency": "Hz",
+    "drive.phase": "rad",
+    "ball.radius": "m",
+    "ball.mass": "kg",
+    "ball.inertia_factor": "1",
+    "contact.restitution": "1",
+    "contact.mu_static": "1",
+    "contact.mu_kinetic": "1",
+    "contact.elastic_below": "m/s",
+    "air.c_lin": "N s/m",
+    "air.c_quad": "N s^2/m^2",
+    "air.magnus": "kg",
+    "initial.q1": "m",
+    "initial.q2": "m",
+    "initial.v1": "m/s",
+    "initial.v2": "m/s",
+    "initial.omega": "rad/s",
+    "initial.t": "s",
+    "run.collisions": "1",
+    "run.rtol": "1",
+    "run.step": "s",
+    "run.gravity": "m/s^2",
+    "run.duration": "s",
+}
+
+
+def key_unit(key: str) -> str:
+    """The SI unit of a scene key ("1" for dimensionless; curve parameters take the
+    units of their curve expression, in which x and f are metres)."""
+    if key.startswith("boundary.parameters."):
+        return "as in the curve expression (x, f in m)"
+    return _UNITS.get(key, "1")
+
+
+def axis_label(key: str) -> str:
+    """``drive.frequency (Hz)``; dimensionless keys are labelled ``(1)``."""
+    unit = key_unit(key)
+    if key.startswith("boundary.parameters."):
+        unit = "curve units"
+    return f"{key} ({unit})"
+
+
+def variable_name(key: str) -> str:
+    """The result file's name for a swept key: dots become underscores."""
+    return key.replace(".", "_").replace("-", "_")

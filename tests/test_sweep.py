@@ -1,0 +1,266 @@
+"""``billiard sweep``: measured attractors, the result file, determinism across workers,
+interruption and resume, a Dask cluster, and bad input.
+
+The sweeps are tiny (a few points of a few hundred impacts); most of the time goes into
+starting worker processes.
+"""
+
+from __future__ import annotations
+
+import io
+import json
+import sys
+
+import numpy as np
+import pytest
+
+from billiard import load_scene, with_values
+from billiard.cli import main
+from billiard.sweep import (
+    StopSweep,
+    Sweep,
+    SweepInterrupted,
+    parse_vary,
+    read_result,
+    run_sweep,
+)
+from billiard.sweep.progress import SweepProgress
+
+
+def _sweep(**settings) -> Sweep:
+    axes = (parse_vary("drive.amplitude=0.015,0.02543"), parse_vary("drive.frequency=5.0:5.4:2"))
+    args = {"impacts": 80, "transient": 150, "keep": 12} | settings
+    return Sweep(load_scene("parabola-5.4hz"), axes, **args)
+
+
+def _quiet(sweep: Sweep) -> SweepProgress:
+    return SweepProgress(sweep.size, stream=io.StringIO())
+
+
+@pytest.fixture(scope="module")
+def reference(tmp_path_factory):
+    """An uninterrupted sweep on one worker process."""
+    sweep = _sweep()
+    directory = tmp_path_factory.mktemp("reference")
+    outcome = run_sweep(sweep, directory, workers=1, progress=_quiet(sweep))
+    return sweep, outcome
+
+
+def test_measures_the_calibrated_orbit_and_the_resting_ball(reference):
+    sweep, outcome = reference
+    data = read_result(outcome.result)
+    assert list(data["drive_amplitude"]) == [0.015, 0.02543]
+    assert list(data["drive_frequency"]) == [5.0, 5.4]
+    # 25.43 mm at 5.4 Hz: the paper's orbit, one impact per half drive period, alternating
+    # sides: the state repeats after two impacts, one drive period
+    assert data["attractor"][1, 1] == "periodic"
+    assert data["period"][1, 1] == 2
+    assert data["drive_periods"][1, 1] == 1
+    assert data["height_mean"][1, 1] == pytest.approx(0.07499, abs=2e-5)
+    assert data["height_std"][1, 1] < 1e-6
+    assert data["tof_mean"][1, 1] == pytest.approx(1 / (2 * 5.4), rel=1e-6)
+    assert data["elastic_share"][1, 1] == 0.0
+    assert data["lid_share"][1, 1] == 0.0
+    # 15 mm at 5.4 Hz: chattering in the bottom, mostly low-velocity-rule impacts
+    assert data["attractor"][0, 1] == "resting"
+    assert data["elastic_share"][0, 1] > 0.5
+    assert data["height_max"][0, 1] - data["rest_height"][0, 1] < 0.01
+    assert data["rest_height"][0, 1] == pytest.approx(0.0063 + 1.55e-3)
+    # the last K impacts are the run's last K heights
+    assert data["last_height"].shape == (2, 2, 12)
+    assert np.all(data["last_height"][1, 1] == pytest.approx(0.07499, abs=2e-5))
+    assert list(data["impact"]) == list(range(-12, 0))
+    assert set(data["status"].ravel()) == {"ok"}
+    assert np.isnan(data["lyapunov"]).all()  # not asked for
+    assert [p.name for p in outcome.plots] == ["heatmaps.png"]
+
+
+def test_result_file_is_self_describing(reference):
+    from scipy.io import netcdf_file
+
+    _, outcome = reference
+    with netcdf_file(outcome.result, "r", mmap=False) as f:
+        freq = f.variables["drive_frequency"]
+        assert freq.units == b"Hz"
+        assert freq.scene_key == b"drive.frequency"
+        assert f.variables["height_mean"].units == b"m"
+        assert f.variables["tof_mean"].units == b"s"
+        assert f.variables["height_mean"].dimensions == ("drive_amplitude", "drive_frequency")
+        assert f.variables["last_tof"].dimensions[-1] == "impact"
+        assert b'"drive.amplitude" = [0.015, 0.02543]' in f.sweep_definition
+        assert b'curve = "parabola"' in f.base_scene
+    text = outcome.result.read_bytes()
+    assert b"points/s" not in text and b"impacts/s" not in text  # no timings inside
+    log = (outcome.directory / "sweep.log").read_text()
+    assert "impacts/s" in log
+
+
+def test_two_workers_give_the_same_bytes(reference, tmp_path):
+    sweep, outcome = reference
+    other = run_sweep(_sweep(), tmp_path / "two", workers=2, progress=_quiet(sweep))
+    assert other.result.read_bytes() == outcome.result.read_bytes()
+
+
+def test_interrupted_sweep_resumes_to_the_same_bytes_without_recomputing(reference, tmp_path):
+    sweep, outcome = reference
+    directory = tmp_path / "cut"
+    first: list[int] = []
+
+    def stop_after_two(record):
+        first.append(record["index"])
+        if len(first) == 2:
+            raise StopSweep
+
+    with pytest.raises(SweepInterrupted) as caught:
+        run_sweep(_sweep(), directory, workers=1, on_point=stop_after_two, progress=_quiet(sweep))
+    assert caught.value.done == 2
+    assert not (directory / "sweep.nc").exists()
+    lines = (directory / "points.jsonl").read_text().splitlines()
+    assert sorted(json.loads(line)["index"] for line in lines) == sorted(first)
+    with open(directory / "points.jsonl", "a") as f:  # a kill in the middle of a write
+        f.write('{"index": 3, "values": {"drive.amp')
+    second: list[int] = []
+    resumed = run_sweep(
+        None,
+        directory,
+        resume=True,
+        workers=2,
+        on_point=lambda r: second.append(r["index"]),
+        progress=_quiet(sweep),
+    )
+    assert sorted(first + second) == list(range(sweep.size))
+    assert resumed.computed == second
+    assert resumed.result.read_bytes() == outcome.result.read_bytes()
+    again = run_sweep(None, directory, resume=True, progress=_quiet(sweep))
+    assert again.computed == []
+
+
+def test_dask_local_cluster_gives_the_same_bytes(reference, tmp_path):
+    distributed = pytest.importorskip("distributed")
+    sweep, outcome = reference
+    with distributed.LocalCluster(
+        n_workers=2, processes=False, threads_per_worker=1, dashboard_address=None
+    ) as cluster:
+        other = run_sweep(
+            _sweep(), tmp_path / "dask", dask=cluster.scheduler_address, progress=_quiet(sweep)
+        )
+    assert "Dask scheduler" in other.where
+    assert other.result.read_bytes() == outcome.result.read_bytes()
+
+
+def test_failed_point_is_recorded_and_the_sweep_goes_on(tmp_path):
+    scene = with_values(load_scene("parabola-5.4hz"), {"boundary.ceiling": None})
+    sweep = Sweep(
+        scene, (parse_vary("boundary.escape_height=0.05,1.0"),), impacts=40, transient=100
+    )
+    outcome = run_sweep(sweep, tmp_path / "esc", workers=1, progress=_quiet(sweep))
+    data = read_result(outcome.result)
+    assert list(data["status"]) == ["failed", "ok"]
+    assert data["reason"][0].startswith("ball escaped above escape_height = 0.05 m")
+    assert data["reason"][1] == ""
+    assert np.isnan(data["height_mean"][0]) and np.isnan(data["last_height"][0]).all()
+    assert data["attractor"][1] == "periodic"
+    assert [p.name for p in outcome.plots] == ["bifurcation.png"]
+
+
+def test_lyapunov_on_request(tmp_path):
+    sweep = Sweep(
+        load_scene("wedge-6.6hz", overrides=["air.drag=none"]),
+        (parse_vary("drive.frequency=6.6"),),
+        impacts=150,
+        transient=50,
+        lyapunov=True,
+    )
+    outcome = run_sweep(sweep, tmp_path / "lyap", workers=1, progress=_quiet(sweep))
+    data = read_result(outcome.result)
+    assert np.isfinite(data["lyapunov"][0]) and np.isfinite(data["lyapunov_per_second"][0])
+    expected = "chaotic" if data["lyapunov"][0] > 0.01 else "quasi-periodic"
+    assert data["attractor"][0] == expected
+
+
+# --- command line ------------------------------------------------------------------------
+
+
+def _cli(capsys, *argv):
+    code = main(["sweep", *argv])
+    captured = capsys.readouterr()
+    return code, captured.out, captured.err
+
+
+def test_cli_basin_map_with_sweep_file_and_skip_invalid(tmp_path, capsys):
+    sweep_file = tmp_path / "basin.toml"
+    sweep_file.write_text(
+        'scene = "parabola-5.4hz"\nimpacts = 30\ntransient = 60\nkeep = 5\n'
+        '[vary]\n"initial.q1" = "0.0:0.04:2"\n"initial.q2" = [0.02, 0.06]\n'
+    )
+    out = tmp_path / "basin"
+    code, stdout, err = _cli(
+        capsys, str(sweep_file), "--out", str(out), "--workers", "1", "--skip-invalid"
+    )
+    assert code == 0, err
+    assert "4 points" in stdout and "1 invalid" in stdout
+    data = read_result(out / "sweep.nc")
+    # q1 = 0.04 m, q2 = 0.02 m is inside the parabola's wall (f(0.04) = 0.048 m)
+    assert data["status"][1, 0] == "invalid" and "into the wall" in data["reason"][1, 0]
+    assert {p.name for p in out.glob("*.png")} == {"heatmaps.png", "basins.png"}
+    # the folder's sweep.toml is a sweep file that runs the same sweep again
+    code, _, err = _cli(capsys, str(out / "sweep.toml"), "--out", str(tmp_path / "again"),
+                        "--workers", "1", "--skip-invalid")  # fmt: skip
+    assert code == 0, err
+    assert (tmp_path / "again" / "sweep.nc").read_bytes() == (out / "sweep.nc").read_bytes()
+
+
+BAD_INPUT = {
+    "misspelt key": (["--vary", "drive.frequncy=4:7:3"], "did you mean 'drive.frequency'?"),
+    "misspelt section": (["--vary", "drvie.frequency=4:7:3"], "unknown scene section 'drvie'"),
+    "empty values": (["--vary", "drive.frequency="], "drive.frequency=: no values"),
+    "N < 1": (["--vary", "drive.frequency=4:7:0"], "N = 0 points; it must be >= 1"),
+    "empty range": (["--vary", "drive.frequency=4:4:3"], "empty range (START = STOP)"),
+    "not a number": (["--vary", "drive.frequency=4:x:3"], "START and STOP must be numbers"),
+    "repeated value": (["--vary", "drive.frequency=4,5,4"], "the value 4 is given twice"),
+    "no impacts": (
+        ["--vary", "drive.frequency=4:7:3", "--impacts", "0"],
+        "'impacts' must be an integer >= 1",
+    ),
+    "invalid scene": (
+        ["--vary", "drive.amplitude=0.01:-0.01:3"],
+        "point 2 (drive.amplitude = -0.01): scene key 'drive.amplitude' = -0.01 is out of range",
+    ),
+    "start inside the wall": (
+        ["--vary", "initial.q2=0.03,0.004", "--set", "initial.q1=0"],
+        "point 1 (initial.q2 = 0.004): initial position q1 = 0 m, q2 = 0.004 m puts the ball",
+    ),
+    "no distributed": (
+        ["--vary", "drive.frequency=5", "--dask", "tcp://127.0.0.1:1"],
+        'pip install "realworld-billiard[dask]"',
+    ),
+    "nothing to vary": ([], "nothing to vary"),
+}
+
+
+@pytest.mark.parametrize("case", BAD_INPUT)
+def test_cli_bad_input_is_one_line_and_writes_nothing(case, tmp_path, capsys, monkeypatch):
+    argv, message = BAD_INPUT[case]
+    if "--dask" in argv:
+        monkeypatch.setitem(sys.modules, "distributed", None)  # not installed
+    out = tmp_path / "out"
+    code, stdout, err = _cli(capsys, "parabola-5.4hz", *argv, "--out", str(out))
+    assert code == 2
+    assert err.startswith("billiard: error: ") and err.count("\n") == 1, err
+    assert message in err
+    assert not out.exists()
+
+
+def test_descending_range_runs_downwards():
+    axis = parse_vary("drive.frequency=7:4:4")
+    assert axis.values == (7.0, 6.0, 5.0, 4.0)
+
+
+def test_progress_lines_when_not_a_terminal():
+    stream = io.StringIO()
+    progress = SweepProgress(10, done=4, stream=stream, interval=0.0)
+    progress.point({"total_impacts": 500})
+    progress.tick()
+    lines = stream.getvalue().splitlines()
+    assert lines and lines[-1].startswith("billiard sweep: 5/10 points")
+    assert "impacts/s" in lines[-1] and "ETA" in lines[-1]
