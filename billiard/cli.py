@@ -31,7 +31,8 @@ def _user_errors() -> tuple[type[BaseException], ...]:
         ("billiard.errors", ["GeometryError", "SimulationError"]),
         ("billiard.derivation.curve", ["CurveDerivationError"]),
         ("billiard.calibrate", ["CalibrationError"]),
-        ("billiard.record", ["RunDataError", "CheckpointError"]),
+        ("billiard.record", ["RunDataError"]),
+        ("billiard.checkpoint", ["CheckpointError"]),
     ):
         mod = sys.modules.get(module)
         if mod is not None:
@@ -188,7 +189,7 @@ def cmd_run(args: argparse.Namespace) -> int:
     import shlex
     import signal
 
-    from .record import CheckpointError
+    from .checkpoint import CheckpointError
     from .simulate import CSV_NAME, SCENE_NAME, RunInterrupted, resume, simulate
 
     bar = ProgressBar()

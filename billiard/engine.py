@@ -23,6 +23,7 @@ from collections.abc import Callable
 from typing import Any
 
 from billiard.boundary import Boundary, Drive
+from billiard.checkpoint import CheckpointError
 from billiard.curves import load_curve
 from billiard.errors import GeometryError, SimulationError
 from billiard.events import Event
@@ -31,7 +32,7 @@ from billiard.generated import ball as _ball
 from billiard.impact import Contact, ImpactLaw, impact_law
 from billiard.interrupt import RunInterrupted, StopRequest
 from billiard.locators import LOCATORS
-from billiard.record import COLUMNS, CheckpointError, ImpactRecord
+from billiard.record import COLUMNS, ImpactRecord
 from billiard.scene import SceneError, with_values
 from billiard.state import BallState, EngineState
 from billiard.status import Status

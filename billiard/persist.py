@@ -36,17 +36,15 @@ from collections.abc import Callable, Mapping
 from pathlib import Path
 from typing import Any
 
-from billiard.engine import COLLAPSE_COUNT, Progress, Simulation
-from billiard.interrupt import RunInterrupted, StopRequest, signals_deferred
-from billiard.record import (
+from billiard.checkpoint import (
     CheckpointError,
-    CsvMark,
-    CsvRecorder,
-    Truncation,
     read_checkpoint,
     write_checkpoint,
     write_text_atomic,
 )
+from billiard.engine import COLLAPSE_COUNT, Progress, Simulation
+from billiard.interrupt import RunInterrupted, StopRequest, signals_deferred
+from billiard.record import CsvMark, CsvRecorder, Truncation
 from billiard.result import Result, RunFile
 from billiard.scene import scene_from_toml, scene_to_toml
 from billiard.state import EngineState

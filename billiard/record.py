@@ -31,11 +31,8 @@ checkpoint's row.
 
 from __future__ import annotations
 
-import contextlib
 import csv
-import hashlib
 import io
-import json
 import os
 import shutil
 import time
@@ -46,29 +43,25 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
+from billiard.checkpoint import CheckpointError
+
 try:  # advisory file locks (POSIX); elsewhere two processes are not kept apart
     import fcntl
 except ImportError:  # pragma: no cover
     fcntl = None  # type: ignore[assignment]
 
 __all__ = [
-    "CHECKPOINT_FORMAT",
-    "CHECKPOINT_VERSION",
     "COLUMNS",
     "REQUIRED_COLUMNS",
     "TEXT_COLUMNS",
-    "CheckpointError",
     "ImpactRecord",
     "RunDataError",
     "CsvMark",
     "CsvRecorder",
     "MemoryRecorder",
     "RunBusyError",
-    "read_checkpoint",
     "read_collisions",
     "write_collisions",
-    "write_checkpoint",
-    "write_text_atomic",
 ]
 
 
@@ -106,18 +99,9 @@ _TEXT = TEXT_COLUMNS
 _INTEGER = frozenset({"n"})
 FLUSH_INTERVAL = 1.0  # s of wall-clock time between flushes of a streamed file
 
-#: ``format`` and ``version`` fields of a checkpoint file.
-CHECKPOINT_FORMAT = "billiard-checkpoint"
-CHECKPOINT_VERSION = 2
-
 
 class RunDataError(ValueError):
     """A run's files cannot be read; the message is one line naming the file."""
-
-
-class CheckpointError(ValueError):
-    """A run directory cannot be resumed: the checkpoint is missing, corrupt or does not
-    match the CSV file or the scene. The message is one line."""
 
 
 def _as_arrays(columns: dict[str, list[Any]]) -> dict[str, np.ndarray]:
@@ -514,90 +498,3 @@ def write_collisions(path: str | os.PathLike[str], columns: Mapping[str, Sequenc
         for row in zip(*(columns[name] for name in names), strict=True):
             writer.writerow([_format(v) for v in row])
     return path
-
-
-# ----------------------------------------------------------------------------------
-# atomic files and checkpoints
-
-
-def _fsync_directory(directory: Path) -> None:
-    """Make a rename in ``directory`` durable (best effort: not every platform or file
-    system lets a directory be opened)."""
-    with contextlib.suppress(OSError):
-        fd = os.open(directory, os.O_RDONLY)
-        try:
-            os.fsync(fd)
-        finally:
-            os.close(fd)
-
-
-def write_text_atomic(path: str | os.PathLike[str], text: str) -> None:
-    """Replace ``path`` by ``text`` atomically: a reader (or a crash) sees the old file
-    or the new one, never a mixture (temporary file in the same directory, synced, then
-    ``os.replace``)."""
-    path = Path(path)
-    temp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
-    try:
-        with open(temp, "w", encoding="utf-8", newline="") as handle:
-            handle.write(text)
-            handle.flush()
-            os.fsync(handle.fileno())
-        os.replace(temp, path)
-    except BaseException:
-        with contextlib.suppress(OSError):
-            temp.unlink()
-        raise
-    _fsync_directory(path.parent)
-
-
-def _checksum(body: Mapping[str, Any]) -> str:
-    canonical = json.dumps(body, sort_keys=True, allow_nan=False, separators=(",", ":"))
-    return hashlib.sha256(canonical.encode("utf-8")).hexdigest()
-
-
-def write_checkpoint(path: str | os.PathLike[str], body: Mapping[str, Any]) -> None:
-    """Write a checkpoint atomically: ``body`` plus format, version and a checksum.
-
-    Floats are written by :mod:`json` with :func:`repr`, which reads back to the same
-    double, so an engine state survives the round trip bit for bit. Non-finite floats
-    are refused (``ValueError``): they have no JSON spelling.
-    """
-    data = {"format": CHECKPOINT_FORMAT, "version": CHECKPOINT_VERSION, **body}
-    data["sha256"] = _checksum(data)
-    text = json.dumps(data, indent=1, allow_nan=False) + "\n"
-    write_text_atomic(path, text)
-
-
-def read_checkpoint(path: str | os.PathLike[str]) -> dict[str, Any]:
-    """Read and verify a checkpoint written by :func:`write_checkpoint`.
-
-    Raises:
-        CheckpointError: the file is missing, unreadable, not JSON, of another format
-            or version, or fails its checksum.
-    """
-    path = Path(path)
-    try:
-        text = path.read_text(encoding="utf-8")
-    except FileNotFoundError:
-        raise CheckpointError(f"{path} is missing") from None
-    except (OSError, UnicodeDecodeError) as exc:
-        raise CheckpointError(f"{path} cannot be read: {exc}") from None
-    try:
-        data = json.loads(text)
-    except json.JSONDecodeError as exc:
-        raise CheckpointError(f"{path} is corrupt (not valid JSON: {exc})") from None
-    if not isinstance(data, dict) or data.get("format") != CHECKPOINT_FORMAT:
-        raise CheckpointError(f"{path} is not a billiard checkpoint")
-    if data.get("version") != CHECKPOINT_VERSION:
-        raise CheckpointError(
-            f"{path} has checkpoint version {data.get('version')!r}; this version of "
-            f"billiard reads version {CHECKPOINT_VERSION}"
-        )
-    stored = data.pop("sha256", None)
-    try:
-        expected = _checksum(data)
-    except ValueError:
-        expected = None
-    if stored != expected:
-        raise CheckpointError(f"{path} is corrupt (its checksum does not match its content)")
-    return data

@@ -7,7 +7,7 @@ import math
 from dataclasses import dataclass, fields
 from typing import Any
 
-from billiard.record import CheckpointError
+from billiard.checkpoint import CheckpointError
 
 __all__ = ["MOTION_STATES", "BallState", "EngineState"]
 

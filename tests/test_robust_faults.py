@@ -11,11 +11,12 @@ import types
 import pytest
 from billiard.generated import ball as generated_ball
 
+from billiard.checkpoint import read_checkpoint
 from billiard.cli import main
 from billiard.errors import SimulationError
 from billiard.events import Event, EventLocator
 from billiard.interrupt import signal_after
-from billiard.record import MemoryRecorder, read_checkpoint, read_collisions
+from billiard.record import MemoryRecorder, read_collisions
 from billiard.scene import load_scene, with_values
 from billiard.simulate import (
     CHECKPOINT_NAME,

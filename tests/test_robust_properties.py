@@ -25,9 +25,10 @@ from hypothesis import HealthCheck, event, given, settings
 from hypothesis import strategies as st
 
 from bench.soak import CURVES, ImpactAudit, scene_from_draw, stop_kind
+from billiard.checkpoint import read_checkpoint
 from billiard.curves import load_curve
 from billiard.errors import GeometryError
-from billiard.record import MemoryRecorder, read_checkpoint
+from billiard.record import MemoryRecorder
 from billiard.simulate import CHECKPOINT_NAME, Simulation, simulate
 
 DOCUMENTED_STOPS = [

@@ -17,9 +17,10 @@ from pathlib import Path
 
 import pytest
 
+from billiard.checkpoint import CheckpointError, read_checkpoint
 from billiard.cli import main
 from billiard.interrupt import signal_after
-from billiard.record import CheckpointError, read_checkpoint, read_collisions
+from billiard.record import read_collisions
 from billiard.scene import Initial, load_scene, replace, with_values
 from billiard.simulate import (
     CHECKPOINT_NAME,
