@@ -14,9 +14,12 @@ import time
 from pathlib import Path
 
 from bench import charts, failures, ladder, report, throughput, workprecision
+from bench import sweep as sweep_bench
 from bench.common import Config, start_scene
 
-SECTIONS = ("workprecision", "failures", "ladder", "throughput", "profile")
+#: The sections of the page; ``sweep`` keeps its own results (docs/figures/sweeps/bench.json)
+#: and its own part of the page, between markers.
+SECTIONS = ("workprecision", "failures", "ladder", "throughput", "profile", "sweep")
 
 
 class Starts(dict):
@@ -150,6 +153,8 @@ def main(cfg: Config, out: Path, only: tuple[str, ...] = SECTIONS) -> Path:
     starts = Starts(cfg)
     command = "billiard bench --quick" if cfg.quick else "billiard bench"
     for section in only:
+        if section == "sweep":
+            continue  # measured after the page is written, into its own section
         began = time.perf_counter()
         print(f"bench: {section} ...", flush=True)
         results["sections"][section] = measure(section, cfg, starts)
@@ -161,4 +166,6 @@ def main(cfg: Config, out: Path, only: tuple[str, ...] = SECTIONS) -> Path:
     draw(results, figures, command)
     path = out / "performance.md"
     path.write_text(report.render(results, command))
+    # the page is written whole: put the sweep section back (measured again if asked)
+    sweep_bench.publish(out, sweep_bench.measure(cfg.quick) if "sweep" in only else None)
     return path

@@ -1,6 +1,7 @@
 """Sweep throughput: 1 and 2 worker processes, and a measured 10^6-impact sweep.
 
-Run from a source checkout::
+Run as a section of the benchmark (``billiard bench --only sweep``), or alone from a
+source checkout::
 
     python -m bench.sweep            # about 10 minutes on 2 cores
     python -m bench.sweep --quick    # about 1 minute, smaller sizes
@@ -227,6 +228,48 @@ def write_section(doc: Path, section: str) -> None:
     doc.write_text(text)
 
 
+def measure(quick: bool) -> dict:
+    """All the sweep measurements (throughput on 1 and 2 workers, the 10^6-impact sweep,
+    memory per impact)."""
+    load = ", ".join(f"{x:.1f}" for x in os.getloadavg())
+    if quick:
+        sizes = {"throughput": (8, 1500, 2), "million": (40, 2500)}
+    else:
+        sizes = {"throughput": (16, 4500, 3), "million": (200, 5000)}
+    print("bench.sweep: 1 and 2 workers ...", flush=True)
+    t = throughput(*sizes["throughput"])
+    print(f"bench.sweep: speed-up {t['speedup']:.2f}x; the 10^6-impact sweep ...", flush=True)
+    m = million(*sizes["million"])
+    print("bench.sweep: memory per impact ...", flush=True)
+    per_impact = memory_per_impact()
+    return {
+        "bytes_per_impact": per_impact,
+        "command": "billiard bench --only sweep" + (" --quick" if quick else ""),
+        "date": time.strftime("%Y-%m-%d %H:%M"),
+        "machine": f"Python {platform.python_version()}, {os.cpu_count()} CPUs",
+        "load": load,
+        "throughput": t,
+        "million": m,
+    }
+
+
+def saved_results(docs: Path) -> Path:
+    return docs / "figures" / "sweeps" / "bench.json"
+
+
+def publish(docs: Path, results: dict | None = None) -> bool:
+    """Save ``results`` (when given) and write the sweep section of
+    ``docs/performance.md`` from the saved results; False when there are none."""
+    saved = saved_results(docs)
+    if results is not None:
+        saved.parent.mkdir(parents=True, exist_ok=True)
+        saved.write_text(json.dumps(results, indent=1))
+    elif not saved.exists():
+        return False
+    write_section(docs / "performance.md", render(json.loads(saved.read_text())))
+    return True
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(prog="python -m bench.sweep", description=__doc__)
     parser.add_argument("--quick", action="store_true", help="small sizes, about a minute")
@@ -238,34 +281,8 @@ def main(argv: list[str] | None = None) -> int:
     )
     args = parser.parse_args(argv)
     docs = Path(args.docs or ("runs/bench-quick" if args.quick else "docs"))
-    saved = docs / "figures" / "sweeps" / "bench.json"
-    if args.render:
-        results = json.loads(saved.read_text())
-    else:
-        load = ", ".join(f"{x:.1f}" for x in os.getloadavg())
-        if args.quick:
-            sizes = {"throughput": (8, 1500, 2), "million": (40, 2500)}
-        else:
-            sizes = {"throughput": (16, 4500, 3), "million": (200, 5000)}
-        print("bench.sweep: 1 and 2 workers ...", flush=True)
-        t = throughput(*sizes["throughput"])
-        print(f"bench.sweep: speed-up {t['speedup']:.2f}x; the 10^6-impact sweep ...", flush=True)
-        m = million(*sizes["million"])
-        print("bench.sweep: memory per impact ...", flush=True)
-        per_impact = memory_per_impact()
-        results = {
-            "bytes_per_impact": per_impact,
-            "command": "python -m bench.sweep" + (" --quick" if args.quick else ""),
-            "date": time.strftime("%Y-%m-%d %H:%M"),
-            "machine": f"Python {platform.python_version()}, {os.cpu_count()} CPUs",
-            "load": load,
-            "throughput": t,
-            "million": m,
-        }
-        saved.parent.mkdir(parents=True, exist_ok=True)
-        saved.write_text(json.dumps(results, indent=1))
-    write_section(docs / "performance.md", render(results))
-    print(f"bench.sweep: wrote {saved} and the sweep section of {docs / 'performance.md'}")
+    publish(docs, None if args.render else measure(args.quick))
+    print(f"bench.sweep: wrote the sweep section of {docs / 'performance.md'}")
     return 0
 
 

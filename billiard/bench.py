@@ -17,7 +17,8 @@ from types import ModuleType
 
 from billiard.cli import UserError
 
-_SECTIONS = ("workprecision", "failures", "ladder", "throughput", "profile")
+# the sections of bench/run.py (checked before the checkout's bench package is imported)
+_SECTIONS = ("workprecision", "failures", "ladder", "throughput", "profile", "sweep")
 _PROJECT = "realworld-billiard"
 
 
