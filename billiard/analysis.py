@@ -34,7 +34,7 @@ __all__ = [
     "lyapunov_exponent",
 ]
 
-#: Largest d0 as a fraction of the ball radius, the smallest length of a scene.
+#: Largest d0 as a fraction of the container's width (at its lid, or at the escape height).
 D0_MAX_FRACTION = 1e-3
 #: Smallest d0 (m): positions of ~0.1 m are rounded to ~1e-17 m and flights integrated
 #: with drag to ~rtol x 1 m; a separation must stay well above both.
@@ -186,6 +186,8 @@ def lyapunov_exponent(
         A :class:`LyapunovResult`. A run that ends early (escape, inelastic collapse)
         gives the estimate over what was simulated and the reason in ``stop_reason``.
     """
+    ref = Simulation(scene, method)
+    xl, xr = ref.boundary.x_range
     check_arguments(
         scene,
         impacts=impacts,
@@ -194,13 +196,13 @@ def lyapunov_exponent(
         renormalize_every=renormalize_every,
         min_flight=min_flight,
         time_scale=time_scale,
+        width=xr - xl,
     )
     g = scene.run.gravity
     scale = math.sqrt(0.01 / g) if time_scale is None else float(time_scale)
     radius = scene.ball.radius
     weights = np.array([1.0, 1.0, scale, scale, scale * radius])
 
-    ref = Simulation(scene, method)
     pert = Simulation(scene, method)
     rng = np.random.default_rng(seed)
     direction = rng.normal(size=5)
@@ -346,12 +348,13 @@ def check_arguments(
     renormalize_every: int = 10,
     min_flight: float = 1e-3,
     time_scale: float | None = None,
+    width: float | None = None,
 ) -> None:
     """Check the arguments of :func:`lyapunov_exponent` before any work.
 
-    ``d0`` (m) must be small against the scene's lengths: at most ``D0_MAX_FRACTION``
-    of the ball radius (the smallest length in a scene; the container is larger), and at
-    least :data:`D0_MIN`.
+    ``d0`` (m) must be small against the scene's lengths: at most :data:`D0_MAX_FRACTION`
+    of the container's width ``width`` (m; default: measured on the scene's boundary at
+    its lid, or at the escape height of an open container), and at least :data:`D0_MIN`.
 
     Raises:
         LyapunovError: (a ValueError) the first argument that is wrong, in one line.
@@ -364,10 +367,13 @@ def check_arguments(
         _seconds("time_scale", time_scale)
     if isinstance(d0, bool) or not isinstance(d0, (int, float)) or not math.isfinite(d0):
         raise LyapunovError(f"d0 must be a finite number of metres, got {d0!r}")
-    largest = D0_MAX_FRACTION * scene.ball.radius
+    if width is None:
+        xl, xr = Simulation(scene).boundary.x_range
+        width = xr - xl
+    largest = D0_MAX_FRACTION * width
     if not D0_MIN <= d0 <= largest:
         raise LyapunovError(
             f"d0 = {d0!r} m must be small against the scene's lengths yet above rounding: "
-            f"between {D0_MIN:g} m and {largest:.3g} m ({D0_MAX_FRACTION:g} of the ball "
-            f"radius {scene.ball.radius:g} m)"
+            f"between {D0_MIN:g} m and {largest:.3g} m ({D0_MAX_FRACTION:g} of the "
+            f"container's width {width:.4g} m)"
         )

@@ -75,10 +75,10 @@ LIMITS: dict[str, Limit] = {
     "drive.frequency": Limit(0.0, 1000.0, "Hz"),
     # one turn either way gives every phase; 90 is degrees typed as radians
     "drive.phase": Limit(-math.tau, math.tau, "rad"),
-    # from a micron (below: dust, where adhesion and Brownian motion rule, not rigid
-    # single-point contact) to 0.1 m (a bowling ball); the heaviest 0.1 m ball
+    # up to 0.1 m (a bowling ball), down to the point-particle limit (validation runs
+    # compare a 0.1 um ball with the billiard map of a point); the heaviest 0.1 m ball
     # (tungsten) has 80 kg
-    "ball.radius": Limit(1e-6, 0.1, "m"),
+    "ball.radius": Limit(0.0, 0.1, "m", low_open=True),
     "ball.mass": Limit(0.0, 100.0, "kg", low_open=True),
     # I = k m r^2: 0 < k <= 1 (all the mass on the surface of a sphere is 2/3; a ring 1)
     "ball.inertia_factor": Limit(0.0, 1.0, "", low_open=True),

@@ -233,8 +233,9 @@ def _remove_plots(folder: Path) -> list[str]:
 
 
 def _checkpoint_clock(folder: Path):
-    """A clock for the progress line of a resumed run: the simulated time (s) of the
-    run's last checkpoint (at most a second behind), or None while there is none."""
+    """A clock for the progress line of a streamed run: the simulated time (s) of the
+    run's last checkpoint (written every second, so at most a second behind), or None
+    while there is none."""
     import json
 
     from .persist import CHECKPOINT_NAME
@@ -253,10 +254,9 @@ def cmd_run(args: argparse.Namespace) -> int:
     import shlex
     import signal
 
-    from .engine import Simulation
-    from .persist import CSV_NAME, SCENE_NAME, resume, run_streamed
+    from .persist import CSV_NAME, SCENE_NAME, resume
     from .record import CheckpointError
-    from .simulate import RunInterrupted
+    from .simulate import RunInterrupted, simulate
 
     # every argument is checked before any work
     frame_interval = _frame_interval(args.frame_interval)
@@ -279,7 +279,7 @@ def cmd_run(args: argparse.Namespace) -> int:
 
         scene = load_scene(args.scene, overrides=args.set, notify=_note)
         if args.duration is not None:
-            scene = with_values(scene, {"run.duration": args.duration})
+            with_values(scene, {"run.duration": args.duration})  # checks it
         out = Path(args.out) if args.out else Path("runs") / scene.name
         if _holds_run(out) and not args.overwrite:
             again = shlex.quote(str(out))
@@ -287,14 +287,12 @@ def cmd_run(args: argparse.Namespace) -> int:
                 f"run: {out} already holds a run; give --overwrite to replace it, or "
                 f"continue it with `billiard run --resume {again}`"
             )
-        sim = Simulation(scene, args.method)
-        total = scene.run.collisions if args.collisions is None else args.collisions
-        sim.resolved_scene(total)  # checks the impact count
-        bar.clock = lambda: sim.ball.t
+        if args.collisions is not None:
+            with_values(scene, {"run.collisions": args.collisions})  # checks it
+    bar.clock = _checkpoint_clock(out)
     try:
         try:
             if args.resume is not None:
-                bar.clock = _checkpoint_clock(out)
                 try:
                     result = resume(
                         out,
@@ -321,7 +319,14 @@ def cmd_run(args: argparse.Namespace) -> int:
             else:
                 changed = True
                 try:
-                    result = run_streamed(sim, out, collisions=total, progress=bar)
+                    result = simulate(
+                        scene,
+                        collisions=args.collisions,
+                        method=args.method,
+                        out_dir=out,
+                        progress=bar,
+                        duration=args.duration,
+                    )
                 except CheckpointError as exc:  # another process is writing a run in DIR
                     changed = False
                     raise UserError(f"cannot run in {out}: {exc}") from None

@@ -192,7 +192,7 @@ def test_a_run_in_a_batch_job_logs_its_progress(in_tmp, capsys, monkeypatch):
         (["--impacts", "-5"], "impacts must be a whole number >= 1, got -5"),
         (["--transient", "-3"], "transient must be a whole number >= 0, got -3"),
         (["--d0", "0"], "d0 = 0.0 m must be small against the scene's lengths"),
-        (["--d0", "1"], "between 1e-13 m and 1.55e-06 m (0.001 of the ball radius"),
+        (["--d0", "1"], "between 1e-13 m and 0.000209 m (0.001 of the container's width 0.2094 m)"),
         (["--d0", "nan"], "d0 must be a finite number of metres"),
     ],
 )
@@ -339,8 +339,8 @@ def _interrupt(*args, **kwargs):
         ),
         (
             ["run", "wedge-6.6hz", "--collisions", "5"],
-            "billiard.engine",
-            "Simulation",
+            "billiard.simulate",
+            "simulate",
             "billiard: interrupted; the run had not started; nothing was written",
         ),
     ],
