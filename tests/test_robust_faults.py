@@ -11,12 +11,13 @@ import types
 import pytest
 from billiard.generated import ball as generated_ball
 
+from billiard.checks import LIMITS, Limit
 from billiard.cli import main
 from billiard.errors import SimulationError
 from billiard.events import Event, EventLocator
 from billiard.interrupt import signal_after
 from billiard.record import MemoryRecorder, read_checkpoint, read_collisions
-from billiard.scene import load_scene
+from billiard.scene import load_scene, with_values
 from billiard.simulate import (
     CHECKPOINT_NAME,
     COLLAPSE_COUNT,
@@ -164,11 +165,11 @@ def test_flight_integrator_failure(tmp_path, monkeypatch):
     assert len(rows) == K - 1
 
 
-def test_overflow_is_a_numerical_failure():
-    # a scene refuses such a start (initial.v1 is at most 100 m/s); set it past the
-    # scene's checks to test the engine's own guard
-    scene = load_scene("parabola-5.4hz")
-    object.__setattr__(scene.initial, "v1", 1e200)
+def test_overflow_is_a_numerical_failure(monkeypatch):
+    # a scene refuses such a start (initial.v1 is at most 100 m/s); lift the scene's
+    # limit to test the engine's own guard
+    monkeypatch.setitem(LIMITS, "initial.v1", Limit(-math.inf, math.inf, "m/s"))
+    scene = with_values(load_scene("parabola-5.4hz"), {"initial.v1": 1e200})
     result = simulate(scene, collisions=10)
     assert result.stop_reason.startswith("numerical failure after impact 0 (t = 0 s): ")
     assert "OverflowError" in result.stop_reason and len(result) == 0
