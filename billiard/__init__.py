@@ -9,8 +9,11 @@ generated code (``billiard.generated``). The Python API::
     result = simulate(scene, collisions=2000)
     heights = result.columns["q2"]   # numpy array, m
 
-The scene and simulation API is imported eagerly (``billiard.simulate`` the function must
-shadow the module of the same name); plotting and calibration on first use.
+The scene, simulation and calibration API is imported eagerly: ``billiard.simulate`` and
+``billiard.calibrate`` are functions named like the modules that define them, and binding
+them here, after those modules are imported, keeps them the functions however often the
+modules are imported later. Plotting, curves and run files are imported on first use
+(none of their names is a module's).
 """
 
 from __future__ import annotations
@@ -18,6 +21,7 @@ from __future__ import annotations
 import importlib
 from typing import Any
 
+from .calibrate import calibrate
 from .engine import Simulation
 from .scene import (
     Scene,
@@ -37,7 +41,6 @@ _EXPORTS = {
     "load_curve": "billiard.curves",
     "read_collisions": "billiard.record",
     "camera_filter": "billiard.camera",
-    "calibrate": "billiard.calibrate",
     "plot_run": "billiard.plot",
 }
 
@@ -65,7 +68,9 @@ def __getattr__(name: str) -> Any:
     module = _EXPORTS.get(name)
     if module is None:
         raise AttributeError(f"module 'billiard' has no attribute {name!r}")
-    return getattr(importlib.import_module(module), name)
+    value = getattr(importlib.import_module(module), name)
+    globals()[name] = value  # later look-ups skip this function
+    return value
 
 
 def __dir__() -> list[str]:

@@ -26,7 +26,23 @@ from billiard.engine import Simulation
 from billiard.errors import SimulationError
 from billiard.state import BallState
 
-__all__ = ["LyapunovResult", "format_lyapunov", "lyapunov_exponent"]
+__all__ = [
+    "LyapunovError",
+    "LyapunovResult",
+    "check_arguments",
+    "format_lyapunov",
+    "lyapunov_exponent",
+]
+
+#: Largest d0 as a fraction of the container's width (at its lid, or at the escape height).
+D0_MAX_FRACTION = 1e-3
+#: Smallest d0 (m): positions of ~0.1 m are rounded to ~1e-17 m and flights integrated
+#: with drag to ~rtol x 1 m; a separation must stay well above both.
+D0_MIN = 1e-13
+
+
+class LyapunovError(ValueError):
+    """Arguments of :func:`lyapunov_exponent` that cannot give an exponent; one line."""
 
 
 @dataclass(frozen=True)
@@ -52,6 +68,9 @@ class LyapunovResult:
             plots: ``running[:, 2] / running[:, 0]`` is the running per-impact estimate).
         stop_reason: None, or why the reference or perturbed run ended early (the
             exponent is then averaged over what was simulated).
+        undefined: None, or why the exponent is undefined (then ``per_impact`` and
+            ``per_second`` are NaN): the reference trajectory never flies, e.g. a ball
+            lying on the wall whose every impact is a relaunch of a resting ball.
     """
 
     per_impact: float
@@ -63,10 +82,15 @@ class LyapunovResult:
     largest_stretch: float
     running: np.ndarray
     stop_reason: str | None = None
+    undefined: str | None = None
 
 
 class _Stopped(Exception):
     """A run ended early; the message is the engine's stop reason."""
+
+
+class _NeverFlies(_Stopped):
+    """The reference trajectory has no flight long enough to compare states in."""
 
 
 def _fly(sim: Simulation, state: BallState, tau: float) -> BallState:
@@ -162,18 +186,23 @@ def lyapunov_exponent(
         A :class:`LyapunovResult`. A run that ends early (escape, inelastic collapse)
         gives the estimate over what was simulated and the reason in ``stop_reason``.
     """
-    if impacts < 1:
-        raise ValueError(f"impacts must be >= 1, got {impacts!r}")
-    if renormalize_every < 1:
-        raise ValueError(f"renormalize_every must be >= 1, got {renormalize_every!r}")
-    if not d0 > 0.0:
-        raise ValueError(f"d0 must be > 0, got {d0!r}")
+    ref = Simulation(scene, method)
+    xl, xr = ref.boundary.x_range
+    check_arguments(
+        scene,
+        impacts=impacts,
+        transient=transient,
+        d0=d0,
+        renormalize_every=renormalize_every,
+        min_flight=min_flight,
+        time_scale=time_scale,
+        width=xr - xl,
+    )
     g = scene.run.gravity
     scale = math.sqrt(0.01 / g) if time_scale is None else float(time_scale)
     radius = scene.ball.radius
     weights = np.array([1.0, 1.0, scale, scale, scale * radius])
 
-    ref = Simulation(scene, method)
     pert = Simulation(scene, method)
     rng = np.random.default_rng(seed)
     direction = rng.normal(size=5)
@@ -192,8 +221,13 @@ def lyapunov_exponent(
     counted = 0
     largest = -math.inf
     t_start = math.nan
+    undefined: str | None = None
+    regimes = ref.impact.regimes
+    impacts_before = resting_before = 0
     try:
         state = _advance(ref, ref.initial, transient)
+        impacts_before = sum(ref.counts.get(r, 0) for r in regimes)
+        resting_before = ref.counts.get("resting", 0)
         # first comparison instant: the middle of the next long enough flight
         x_state, _ = _comparison_state(ref, state, min_flight)
         t_start = x_state.t
@@ -225,11 +259,22 @@ def lyapunov_exponent(
             running.append((counted, x_next.t - t_start, total))
             x_state, x = x_next, xv
             y = xv + (yv - xv) * (d0 / d)
+    except _NeverFlies as exc:
+        undefined = f"the ball never flies: {exc}"
     except _Stopped as exc:
         stop_reason = str(exc)
+    n_ref = sum(ref.counts.get(r, 0) for r in regimes) - impacts_before
+    resting = ref.counts.get("resting", 0) - resting_before
+    if undefined is None and n_ref > 0 and resting == n_ref:
+        undefined = (
+            f"the ball rests on the wall: each of the reference's {n_ref} impacts "
+            "relaunched a resting ball (hops standing in for rolling contact)"
+        )
     table = np.array(running, dtype=float).reshape(-1, 3)
     n = int(table[-1, 0]) if len(table) else 0
     duration = float(table[-1, 1]) if len(table) else 0.0
+    if undefined is not None:
+        total = math.nan
     return LyapunovResult(
         per_impact=total / n if n else math.nan,
         per_second=total / duration if duration > 0.0 else math.nan,
@@ -240,6 +285,7 @@ def lyapunov_exponent(
         largest_stretch=largest,
         running=table,
         stop_reason=stop_reason,
+        undefined=undefined,
     )
 
 
@@ -257,12 +303,17 @@ def _comparison_state(
             return _fly(sim, state, 0.5 * tau), extra
         state = nxt
         extra += 1
-    raise _Stopped(f"no flight longer than min_flight = {min_flight!r} s in 100000 impacts")
+    raise _NeverFlies(f"no flight lasts min_flight = {min_flight!r} s in 100000 impacts")
 
 
 def format_lyapunov(result: LyapunovResult) -> str:
     """One line for humans: the exponent per impact and per second, and what it is
-    averaged over."""
+    averaged over; or why it is undefined."""
+    if result.undefined is not None:
+        return (
+            f"largest Lyapunov exponent undefined: {result.undefined}; give the ball "
+            "energy to fly (a stronger drive, or a start above the wall: initial.q2, m)"
+        )
     text = (
         f"largest Lyapunov exponent {result.per_impact:+.4g} per impact "
         f"({result.per_second:+.4g} 1/s) over {result.impacts} impacts, "
@@ -272,3 +323,57 @@ def format_lyapunov(result: LyapunovResult) -> str:
     if result.stop_reason:
         text += f"; stopped early: {result.stop_reason}"
     return text
+
+
+def _whole(name: str, value: Any, low: int) -> int:
+    if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < low:
+        raise LyapunovError(f"{name} must be a whole number >= {low}, got {value!r}")
+    return int(value)
+
+
+def _seconds(name: str, value: Any) -> float:
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        raise LyapunovError(f"{name} must be a number of seconds, got {value!r}")
+    if not (math.isfinite(value) and value > 0.0):
+        raise LyapunovError(f"{name} must be a positive number of seconds, got {value!r}")
+    return float(value)
+
+
+def check_arguments(
+    scene: Any,
+    *,
+    impacts: int,
+    transient: int = 0,
+    d0: float = 1e-9,
+    renormalize_every: int = 10,
+    min_flight: float = 1e-3,
+    time_scale: float | None = None,
+    width: float | None = None,
+) -> None:
+    """Check the arguments of :func:`lyapunov_exponent` before any work.
+
+    ``d0`` (m) must be small against the scene's lengths: at most :data:`D0_MAX_FRACTION`
+    of the container's width ``width`` (m; default: measured on the scene's boundary at
+    its lid, or at the escape height of an open container), and at least :data:`D0_MIN`.
+
+    Raises:
+        LyapunovError: (a ValueError) the first argument that is wrong, in one line.
+    """
+    _whole("impacts", impacts, 1)
+    _whole("transient", transient, 0)
+    _whole("renormalize_every", renormalize_every, 1)
+    _seconds("min_flight", min_flight)
+    if time_scale is not None:
+        _seconds("time_scale", time_scale)
+    if isinstance(d0, bool) or not isinstance(d0, (int, float)) or not math.isfinite(d0):
+        raise LyapunovError(f"d0 must be a finite number of metres, got {d0!r}")
+    if width is None:
+        xl, xr = Simulation(scene).boundary.x_range
+        width = xr - xl
+    largest = D0_MAX_FRACTION * width
+    if not D0_MIN <= d0 <= largest:
+        raise LyapunovError(
+            f"d0 = {d0!r} m must be small against the scene's lengths yet above rounding: "
+            f"between {D0_MIN:g} m and {largest:.3g} m ({D0_MAX_FRACTION:g} of the "
+            f"container's width {width:.4g} m)"
+        )

@@ -21,7 +21,6 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.optimize import brentq
 
 from .errors import GeometryError
 from .scene import Scene, SceneError, with_values
@@ -171,6 +170,8 @@ def calibrate(
                 f"period-one orbit within {impacts} impacts"
             )
         return orbit.height - target_height
+
+    from scipy.optimize import brentq  # here: scipy costs 0.4 s to import
 
     value = float(brentq(miss, *bracket, xtol=xtol))
     orbit = orbit_for(scene, parameter, value, impacts)

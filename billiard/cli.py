@@ -7,6 +7,7 @@ line and exit with status 2; no traceback.
 from __future__ import annotations
 
 import argparse
+import math
 import sys
 import time
 from collections.abc import Sequence
@@ -31,6 +32,8 @@ def _user_errors() -> tuple[type[BaseException], ...]:
         ("billiard.errors", ["GeometryError", "SimulationError"]),
         ("billiard.derivation.curve", ["CurveDerivationError"]),
         ("billiard.calibrate", ["CalibrationError"]),
+        ("billiard.analysis", ["LyapunovError"]),
+        ("billiard.reproduce", ["ReproduceError"]),
         ("billiard.record", ["RunDataError"]),
         ("billiard.checkpoint", ["CheckpointError"]),
     ):
@@ -152,32 +155,63 @@ def cmd_scenes(args: argparse.Namespace) -> int:
 
 
 class ProgressBar:
-    """A one-line progress bar on a terminal; silent when stderr is not a terminal."""
+    """Progress of a run on stderr.
 
-    def __init__(self, stream=sys.stderr, width: int = 30):
-        self.stream = stream
+    On a terminal: a one-line bar, redrawn ten times a second. Otherwise (a log file, a
+    batch job): one line every ``interval`` seconds with the impacts done, the simulated
+    time (s, when ``clock`` is given: a callable returning it), the rate and the
+    estimated time left.
+    """
+
+    def __init__(self, stream=None, width: int = 30, interval: float = 5.0, clock=None):
+        self.stream = sys.stderr if stream is None else stream
         self.width = width
-        self.enabled = stream.isatty()
+        self.interval = interval
+        self.clock = clock
+        self.enabled = _isatty(self.stream)
         self.started = time.perf_counter()
-        self.last = 0.0
+        self.last = 0.0 if self.enabled else self.started
+        self.first_done: int | None = None
+        self.first_time = self.started
 
     def __call__(self, done: int, total: int) -> None:
-        if not self.enabled:
-            return
         now = time.perf_counter()
-        if done < total and now - self.last < 0.1:
+        if self.first_done is None:  # a resumed run starts counting where it was
+            self.first_done, self.first_time = done, now
+        if self.enabled:
+            if done < total and now - self.last < 0.1:
+                return
+            self.last = now
+            frac = done / total if total else 1.0
+            filled = int(self.width * frac)
+            rate = (done - self.first_done) / max(now - self.first_time, 1e-9)
+            self.stream.write(
+                f"\r[{'#' * filled}{'.' * (self.width - filled)}] "
+                f"{done}/{total} impacts, {rate:,.0f}/s "
+            )
+            if done >= total:
+                self.stream.write("\n")
+            self.stream.flush()
+            return
+        if done >= total or now - self.last < self.interval:
             return
         self.last = now
-        frac = done / total if total else 1.0
-        filled = int(self.width * frac)
-        rate = done / max(now - self.started, 1e-9)
-        self.stream.write(
-            f"\r[{'#' * filled}{'.' * (self.width - filled)}] "
-            f"{done}/{total} impacts, {rate:,.0f}/s "
-        )
-        if done >= total:
-            self.stream.write("\n")
+        self.stream.write(self.line(done, total, now) + "\n")
         self.stream.flush()
+
+    def line(self, done: int, total: int, now: float) -> str:
+        """The log line: impacts, simulated time, rate and estimated time left."""
+        elapsed = max(now - self.first_time, 1e-9)
+        rate = (done - (self.first_done or 0)) / elapsed
+        parts = [f"billiard: {done:,}/{total:,} impacts"]
+        if self.clock is not None:
+            simulated = self.clock()
+            if simulated is not None:
+                parts.append(f"t = {simulated:.6g} s simulated")
+        parts.append(f"{rate:,.0f} impacts/s")
+        if rate > 0:
+            parts.append(f"about {_duration((total - done) / rate)} left")
+        return ", ".join(parts)
 
     def close(self) -> None:
         if self.enabled:
@@ -185,23 +219,128 @@ class ProgressBar:
             self.stream.flush()
 
 
+def _isatty(stream) -> bool:
+    try:
+        return bool(stream.isatty())
+    except (AttributeError, ValueError):
+        return False
+
+
+def _duration(seconds: float) -> str:
+    """A wall-clock duration for humans: 42 s, 3 min 5 s, 2 h 10 min."""
+    seconds = max(0.0, seconds)
+    if seconds < 60:
+        return f"{seconds:.0f} s"
+    if seconds < 3600:
+        return f"{seconds // 60:.0f} min {seconds % 60:.0f} s"
+    return f"{seconds // 3600:.0f} h {seconds % 3600 // 60:.0f} min"
+
+
+def _note(line: str) -> None:
+    print(f"billiard: note: {line}", file=sys.stderr)
+
+
+def _frame_interval(text: str | None) -> float | None:
+    """``--frame-interval`` in seconds: a number (0.0333) or a fraction (1/30), > 0."""
+    if text is None:
+        return None
+    from fractions import Fraction
+
+    try:
+        value = float(Fraction(text.strip())) if "/" in text else float(text)
+    except (ValueError, ZeroDivisionError):
+        value = math.nan
+    if not (math.isfinite(value) and value > 0):
+        raise UserError(
+            f"--frame-interval {text!r} must be a positive number of seconds (e.g. 0.0333 or 1/30)"
+        )
+    return value
+
+
+def _holds_run(folder: Path) -> bool:
+    """Whether a folder holds a run's files (CSV, scene or checkpoint)."""
+    from .persist import CHECKPOINT_NAME, CSV_NAME, SCENE_NAME
+
+    return folder.is_dir() and any(
+        (folder / name).exists() for name in (CSV_NAME, SCENE_NAME, CHECKPOINT_NAME)
+    )
+
+
+def _remove_plots(folder: Path) -> list[str]:
+    """Delete the figures ``plot_run`` wrote into a run folder (they no longer match its
+    data); returns the names removed."""
+    from .plot.run import FIGURE_NAMES
+
+    removed = []
+    for name in FIGURE_NAMES:
+        path = folder / name
+        if path.is_file():
+            path.unlink()
+            removed.append(name)
+    return removed
+
+
+def _checkpoint_clock(folder: Path):
+    """A clock for the progress line of a streamed run: the simulated time (s) of the
+    run's last checkpoint (written every second, so at most a second behind), or None
+    while there is none."""
+    import json
+
+    from .persist import CHECKPOINT_NAME
+
+    def clock() -> float | None:
+        try:
+            data = json.loads((folder / CHECKPOINT_NAME).read_text(encoding="utf-8"))
+            return float(data["engine"]["ball"]["t"])
+        except (OSError, ValueError, KeyError, TypeError):
+            return None
+
+    return clock
+
+
 def cmd_run(args: argparse.Namespace) -> int:
     import shlex
     import signal
 
     from .checkpoint import CheckpointError
-    from .simulate import CSV_NAME, SCENE_NAME, RunInterrupted, resume, simulate
+    from .persist import CSV_NAME, SCENE_NAME, resume
+    from .simulate import RunInterrupted, simulate
 
+    # every argument is checked before any work
+    frame_interval = _frame_interval(args.frame_interval)
     bar = ProgressBar()
+    stale: list[str] = []  # plots removed because the data changed under them
+    changed = False  # whether the run folder's data was changed
+    if args.resume is not None:
+        if args.scene or args.set or args.method or args.out or args.duration or args.overwrite:
+            raise UserError(
+                "run --resume DIR continues a run as it was set up: give no "
+                "SCENE, --out, --set, --method, --duration or --overwrite with it"
+            )
+        out = Path(args.resume)
+        if args.collisions is not None and args.collisions < 1:
+            raise UserError(f"run: --collisions must be >= 1, got {args.collisions}")
+    else:
+        if not args.scene:
+            raise UserError("run: give a SCENE (a built-in name or a .toml file), or --resume DIR")
+        from .scene import load_scene, with_values
+
+        scene = load_scene(args.scene, overrides=args.set, notify=_note)
+        if args.duration is not None:
+            with_values(scene, {"run.duration": args.duration})  # checks it
+        out = Path(args.out) if args.out else Path("runs") / scene.name
+        if _holds_run(out) and not args.overwrite:
+            again = shlex.quote(str(out))
+            raise UserError(
+                f"run: {out} already holds a run; give --overwrite to replace it, or "
+                f"continue it with `billiard run --resume {again}`"
+            )
+        if args.collisions is not None:
+            with_values(scene, {"run.collisions": args.collisions})  # checks it
+    bar.clock = _checkpoint_clock(out)
     try:
         try:
             if args.resume is not None:
-                if args.scene or args.set or args.method or args.out or args.duration:
-                    raise UserError(
-                        "run --resume DIR continues a run as it was set up: give no "
-                        "SCENE, --out, --set or --method with it"
-                    )
-                out = Path(args.resume)
                 try:
                     result = resume(
                         out,
@@ -224,15 +363,9 @@ def cmd_run(args: argparse.Namespace) -> int:
                         f"nothing to resume (--collisions N extends it)"
                     )
                     return 0
+                changed = True
             else:
-                if not args.scene:
-                    raise UserError(
-                        "run: give a SCENE (a built-in name or a .toml file), or --resume DIR"
-                    )
-                from .scene import load_scene
-
-                scene = load_scene(args.scene, overrides=args.set)
-                out = Path(args.out) if args.out else Path("runs") / scene.name
+                changed = True
                 try:
                     result = simulate(
                         scene,
@@ -243,10 +376,13 @@ def cmd_run(args: argparse.Namespace) -> int:
                         duration=args.duration,
                     )
                 except CheckpointError as exc:  # another process is writing a run in DIR
+                    changed = False
                     raise UserError(f"cannot run in {out}: {exc}") from None
         finally:  # end the progress bar's line before anything else is printed
             if bar.enabled:
                 bar.stream.write("\n")
+            if changed and out.is_dir():
+                stale = _remove_plots(out)
     except RunInterrupted as exc:
         where = exc.out_dir or Path(".")
         again = f"billiard run --resume {shlex.quote(str(where))}"
@@ -256,9 +392,10 @@ def cmd_run(args: argparse.Namespace) -> int:
             else f" (it restarts after impact {exc.checkpoint_rows}, the last checkpoint)"
         )
         name = signal.Signals(exc.signum).name
+        removed = f"; removed its outdated plots ({', '.join(stale)})" if stale else ""
         print(
             f"billiard: interrupted ({name}): {exc.rows} impacts kept in "
-            f"{where / CSV_NAME}; continue with `{again}`{after}",
+            f"{where / CSV_NAME}; continue with `{again}`{after}{removed}",
             file=sys.stderr,
         )
         return 128 + exc.signum
@@ -270,8 +407,21 @@ def cmd_run(args: argparse.Namespace) -> int:
     if not args.no_plot and len(result) > 1:
         from .plot import plot_run
 
-        paths = plot_run(out, frame_interval=args.frame_interval)
+        try:
+            paths = plot_run(out, frame_interval=frame_interval)
+        except KeyboardInterrupt:
+            print(
+                f"billiard: interrupted while drawing the plots; the run is complete in "
+                f"{out}; draw them with `billiard plot {shlex.quote(str(out))}`",
+                file=sys.stderr,
+            )
+            return 130
         print(f"plots: {', '.join(p.name for p in paths)} in {out}")
+    elif stale:
+        print(
+            f"removed the plots of the earlier data ({', '.join(stale)}) from {out}; "
+            f"draw new ones with `billiard plot {shlex.quote(str(out))}`"
+        )
     if result.stop_reason:
         print(f"billiard: stopped: {result.stop_reason}", file=sys.stderr)
         return 3
@@ -287,7 +437,9 @@ def cmd_calibrate(args: argparse.Namespace) -> int:
     from .calibrate import calibrate
     from .scene import load_scene
 
-    scene = load_scene(args.scene, overrides=args.set)
+    if args.impacts < 1:
+        raise UserError(f"calibrate: --impacts must be >= 1, got {args.impacts}")
+    scene = load_scene(args.scene, overrides=args.set, notify=_note)
     started = time.perf_counter()
     result = calibrate(
         scene,
@@ -342,15 +494,16 @@ def cmd_plot(args: argparse.Namespace) -> int:
 
 
 def cmd_lyapunov(args: argparse.Namespace) -> int:
-    from .analysis import format_lyapunov, lyapunov_exponent
+    from .analysis import check_arguments, format_lyapunov, lyapunov_exponent
     from .scene import load_scene
 
-    scene = load_scene(args.scene, overrides=args.set)
+    scene = load_scene(args.scene, overrides=args.set, notify=_note)
+    check_arguments(scene, impacts=args.impacts, transient=args.transient, d0=args.d0)
     result = lyapunov_exponent(
         scene, impacts=args.impacts, transient=args.transient, d0=args.d0, method=args.method
     )
     print(format_lyapunov(result))
-    return 0
+    return 3 if result.undefined is not None else 0
 
 
 def cmd_bench(args: argparse.Namespace) -> int:
@@ -619,12 +772,21 @@ def build_parser() -> argparse.ArgumentParser:
         metavar="KEY=VALUE",
         help="override a scene key, e.g. --set drive.frequency=6.0 (repeatable)",
     )
-    p.add_argument("--no-plot", action="store_true", help="do not draw the plots afterwards")
+    p.add_argument(
+        "--overwrite",
+        action="store_true",
+        help="replace the run already in the output directory (default: refuse)",
+    )
+    p.add_argument(
+        "--no-plot",
+        action="store_true",
+        help="do not draw the plots afterwards (plots of earlier data in DIR are removed)",
+    )
     p.add_argument(
         "--frame-interval",
-        type=float,
         metavar="S",
-        help="also plot what a camera with this frame interval (s) would record",
+        help="also plot what a camera with this frame interval (s, e.g. 0.0333 or 1/30) "
+        "would record",
     )
     p.set_defaults(func=cmd_run)
 
@@ -691,10 +853,14 @@ def build_parser() -> argparse.ArgumentParser:
         "from two nearby trajectories with renormalization.",
     )
     p.add_argument("scene", help="built-in scene name or a .toml file")
-    p.add_argument("--impacts", type=int, default=5000, help="impacts to average over")
-    p.add_argument("--transient", type=int, default=0, help="impacts skipped first")
+    p.add_argument("--impacts", type=int, default=5000, help="impacts to average over (>= 1)")
+    p.add_argument("--transient", type=int, default=0, help="impacts skipped first (>= 0)")
     p.add_argument(
-        "--d0", type=float, default=1e-9, help="initial separation of the two trajectories (m)"
+        "--d0",
+        type=float,
+        default=1e-9,
+        help="initial separation of the two trajectories (m; at most 1e-3 of the ball "
+        "radius). Exit status 3 when the exponent is undefined (a ball that never flies)",
     )
     p.add_argument("--method", choices=["event", "rk4"], help="default: the scene's")
     p.add_argument(
@@ -723,9 +889,16 @@ def build_parser() -> argparse.ArgumentParser:
         description="Calibrate, run the four paper scenes, draw the paper's "
         "figures and write docs/paper-reproduction.md.",
     )
-    p.add_argument("--docs", default="docs", help="documentation folder (default docs)")
-    p.add_argument("--runs", default="runs/paper", help="where the runs go")
-    p.add_argument("--collisions", type=int, default=25000, help="impacts per scene")
+    p.add_argument(
+        "--docs",
+        metavar="DIR",
+        help="where the report and its figures go (default: docs for the full reproduction "
+        "with the default settings, else the --runs folder)",
+    )
+    p.add_argument("--runs", default="runs/paper", help="where the runs go (default runs/paper)")
+    p.add_argument(
+        "--collisions", type=int, default=25000, help="impacts per scene (default 25000)"
+    )
     p.add_argument(
         "--lyapunov",
         type=int,
@@ -750,8 +923,26 @@ def main(argv: Sequence[str] | None = None) -> int:
         print(f"billiard: error: {message}", file=sys.stderr)
         return 2
     except KeyboardInterrupt:
-        print("billiard: interrupted; rows written so far are kept", file=sys.stderr)
+        print(f"billiard: interrupted; {_interrupted(args)}", file=sys.stderr)
         return 130
+
+
+def _interrupted(args: argparse.Namespace) -> str:
+    """What is true of the files after Ctrl-C in a command (``billiard run`` reports its
+    own interruptions while it writes rows; this is any other moment)."""
+    command = args.command
+    if command == "run":
+        return "the run had not started; nothing was written"
+    if command in ("calibrate", "lyapunov", "scenes"):
+        return "nothing was written"
+    if command == "plot":
+        where = args.out or args.dir
+        return f"the figures in {where} may be missing or partly drawn; draw them again"
+    if command == "derive":
+        return "`billiard derive --check` names any generated file left out of date"
+    if command == "reproduce":
+        return "the report was not finished; runs and figures so far may be partly written"
+    return "files being written may be incomplete"
 
 
 if __name__ == "__main__":  # pragma: no cover

@@ -8,6 +8,8 @@ from __future__ import annotations
 
 import argparse
 import math
+import os
+import sys
 import time
 from dataclasses import dataclass
 from pathlib import Path
@@ -288,8 +290,58 @@ the experiment is judged only through the paper's statements above.
 """
 
 
+class ReproduceError(ValueError):
+    """Arguments of ``billiard reproduce`` that cannot work; the message is one line."""
+
+
+#: The full reproduction, the only one whose report goes into the committed docs.
+FULL_COLLISIONS = 25000
+FULL_LYAPUNOV = 2000
+
+
+def check_writable(folder: Path, what: str) -> None:
+    """Refuse, before any work, a folder that cannot be created or written.
+
+    Raises:
+        ReproduceError: the folder, or the nearest existing folder above it, is not a
+            writable folder (or an existing report or figure in it is read-only).
+    """
+    probe = folder
+    while not probe.exists() and probe != probe.parent:
+        probe = probe.parent
+    if not probe.is_dir():
+        raise ReproduceError(f"{what} {folder}: {probe} is not a folder")
+    if not os.access(probe, os.W_OK | os.X_OK):
+        raise ReproduceError(f"{what} {folder}: cannot write in {probe} (read-only)")
+
+
 def run_reproduce(args: argparse.Namespace) -> int:
+    if isinstance(args.collisions, bool) or args.collisions < 1:
+        raise ReproduceError(f"reproduce: --collisions must be >= 1, got {args.collisions}")
+    if args.lyapunov < 0:
+        raise ReproduceError(f"reproduce: --lyapunov must be >= 0 (0 skips), got {args.lyapunov}")
+    full = args.collisions == FULL_COLLISIONS and args.lyapunov == FULL_LYAPUNOV
+    runs = Path(args.runs)
+    if args.docs is not None:
+        docs = Path(args.docs)
+    elif full:
+        docs = Path("docs")
+    else:
+        docs = runs
+    check_writable(runs, "--runs")
+    check_writable(docs, "--docs")
+    for path in (docs / "paper-reproduction.md", docs / "figures" / "paper"):
+        if path.exists() and not os.access(path, os.W_OK):
+            raise ReproduceError(f"--docs {docs}: {path} is read-only")
+    if args.docs is None and not full:
+        print(
+            f"billiard: note: not the full reproduction (--collisions {args.collisions}, "
+            f"--lyapunov {args.lyapunov}): the report goes to {docs / 'paper-reproduction.md'} "
+            f"and its figures to {docs / 'figures' / 'paper'}, not to docs/ "
+            "(give --docs DIR to choose)",
+            file=sys.stderr,
+        )
     started = time.perf_counter()
-    path = reproduce(Path(args.docs), Path(args.runs), args.collisions, args.lyapunov)
+    path = reproduce(docs, runs, args.collisions, args.lyapunov)
     print(f"wrote {path} ({time.perf_counter() - started:.0f} s)")
     return 0

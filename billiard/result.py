@@ -116,11 +116,23 @@ class Result:
         c = self.counts
         done = n - (self.resumed_from or 0)
         rate = done / self.wall_time if self.wall_time > 0 else math.inf
-        regimes = ", ".join(f"{c.get(name, 0)} {name}" for name in self.regimes)
+        parts = [f"{c.get(name, 0)} {name}" for name in self.regimes]
+        resting = c.get("resting", 0)
+        if resting:
+            # relaunches of a lying ball are impacts of the low-velocity rule (elastic)
+            at = self.regimes.index("elastic") if "elastic" in self.regimes else -1
+            parts[at] += f", of which {resting} relaunches of a resting ball"
         text = (
-            f"{n} impacts ({regimes}) up to t = {self.final_time:.6g} s "
+            f"{n} impacts ({', '.join(parts)}) up to t = {self.final_time:.6g} s "
             f"in {self.wall_time:.3g} s ({rate:,.0f} impacts/s)"
         )
+        if n and resting >= 0.9 * n:
+            text += (
+                "; the ball lies on the wall nearly all the time, hopping at "
+                "contact.elastic_below "
+                "(the low-velocity rule standing in for rolling): a stronger drive "
+                "(drive.amplitude, m) or a start above the wall (initial.q2, m) makes it fly"
+            )
         if self.resumed_from is not None:
             text += f"; resumed after impact {self.resumed_from}"
         if self.status is Status.TIME_LIMIT:

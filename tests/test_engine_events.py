@@ -16,8 +16,9 @@ import numpy as np
 import pytest
 from scipy.optimize import brentq
 
-from billiard.scene import Drive, Initial, load_scene, replace, with_values
+from billiard.scene import load_scene, replace, with_values
 from billiard.simulate import simulate
+from billiard.spec import DriveSpec, InitialSpec
 
 G = 9.81
 CURVES = {
@@ -173,7 +174,7 @@ def test_grazing_lid_contact_is_found():
     q2 = 0.02
     apex = ceiling - r + 1e-7
     v2 = math.sqrt(2 * G * (apex - q2))
-    scene = replace(scene, initial=Initial(q1=0.0, q2=q2, v2=v2))
+    scene = replace(scene, initial=InitialSpec(q1=0.0, q2=q2, v2=v2))
     c = simulate(scene, collisions=1).columns
     t_apex = v2 / G
     # fine-step reference: first time the lid clearance drops to zero
@@ -206,7 +207,7 @@ def test_grazing_wall_contact_with_moving_boundary_is_found():
     t_star = 0.25 / scene.drive.frequency  # the wall at its highest point
     v2 = G * t_star
     q2 = f0 + a - 0.5 * G * t_star**2 - 1e-7
-    scene = replace(scene, initial=Initial(q1=0.0, q2=q2, v2=v2))
+    scene = replace(scene, initial=InitialSpec(q1=0.0, q2=q2, v2=v2))
     c = simulate(scene, collisions=1).columns
 
     def gap(t):
@@ -228,8 +229,8 @@ def test_wedge_vertex_double_contact(amplitude):
     # drive phase chosen so the vertex is back at x = 0 when the ball arrives
     contact_height = 0.0063 + scene.ball.radius * math.sqrt(1 + 1.85**2)
     t_fall = math.sqrt(2 * (0.03 - contact_height) / G)
-    drive = Drive(amplitude=amplitude, frequency=6.6, phase=-scene.drive.omega * t_fall)
-    scene = replace(scene, initial=Initial(q1=1e-9, q2=0.03), drive=drive)
+    drive = DriveSpec(amplitude=amplitude, frequency=6.6, phase=-scene.drive.omega * t_fall)
+    scene = replace(scene, initial=InitialSpec(q1=1e-9, q2=0.03), drive=drive)
     c = simulate(scene, collisions=6).columns
     r = scene.ball.radius
     assert list(c["wall"][:3]) == ["1", "0", "1"]
@@ -272,7 +273,7 @@ def test_slow_separation_is_not_redetected(speed):
     normal = np.array([-slope, 1.0]) / math.hypot(slope, 1.0)
     centre = np.array([s, 26.0 * s * s + 0.0063]) + r * normal
     v = speed * normal
-    scene = replace(scene, initial=Initial(q1=centre[0], q2=centre[1], v1=v[0], v2=v[1]))
+    scene = replace(scene, initial=InitialSpec(q1=centre[0], q2=centre[1], v1=v[0], v2=v[1]))
     c = simulate(scene, collisions=1).columns
     hop = 2.0 * speed / (G * normal[1])
     assert c["tof"][0] == pytest.approx(hop, rel=1e-3)

@@ -9,8 +9,9 @@ import pytest
 
 from billiard.errors import GeometryError
 from billiard.record import COLUMNS, read_collisions
-from billiard.scene import Initial, load_scene, replace, with_values
+from billiard.scene import load_scene, replace, with_values
 from billiard.simulate import simulate
+from billiard.spec import InitialSpec
 
 CONTRACT = ("n", "t", "q1", "q2", "v1", "v2", "omega", "u4", "un", "tof", "regime", "z", "energy")
 
@@ -104,7 +105,7 @@ def test_progress_is_reported():
 
 def test_escape_stops_the_run_and_keeps_rows():
     scene = dropped(**{"boundary.ceiling": None, "boundary.escape_height": 0.2, "air.drag": "none"})
-    scene = replace(scene, initial=Initial(q1=0.0, q2=0.05, v2=2.5))
+    scene = replace(scene, initial=InitialSpec(q1=0.0, q2=0.05, v2=2.5))
     result = simulate(scene, collisions=100)
     assert len(result) == 0
     assert result.stop_reason.startswith("ball escaped above escape_height = 0.2 m at t = ")
@@ -141,7 +142,7 @@ def test_geometry_errors():
         r"of curvature 0\.0192 m at x = 0: single-point contact fails",
     ):
         simulate(load_scene("parabola-5.4hz", overrides=["ball.radius=0.02"]), collisions=1)
-    scene = replace(load_scene("parabola-5.4hz"), initial=Initial(q1=0.01, q2=0.005))
+    scene = replace(load_scene("parabola-5.4hz"), initial=InitialSpec(q1=0.01, q2=0.005))
     with pytest.raises(
         GeometryError,
         match=r"q1 = 0\.01 m, q2 = 0\.005 m puts the ball .* m "
@@ -150,7 +151,7 @@ def test_geometry_errors():
         simulate(scene, collisions=1)
     base = load_scene("parabola-5.4hz")
     lid = base.boundary.ceiling - 0.5 * base.ball.radius  # centre closer to the lid than r
-    scene = replace(base, initial=Initial(q1=0.0, q2=lid))
+    scene = replace(base, initial=InitialSpec(q1=0.0, q2=lid))
     with pytest.raises(GeometryError, match="into the lid"):
         simulate(scene, collisions=1)
 

@@ -24,3 +24,31 @@ def test_readme_python_example_runs(index, capsys):
     exec(compile(python_blocks()[index], f"README.md block {index}", "exec"), namespace)
     out = capsys.readouterr().out
     assert "impacts" in out
+
+
+def test_readme_scene_example_shows_a_flying_ball(tmp_path, monkeypatch):
+    """The "Scene files" example is a scene worth running: the ball is thrown, not left
+    lying at the bottom of the bowl (resting relaunches are a small share)."""
+    from billiard.scene import load_scene
+    from billiard.simulate import simulate
+
+    text = re.search(r"## Scene files\n\n```toml\n(.*?)```", README.read_text(), re.S).group(1)
+    path = tmp_path / "my-scene.toml"
+    path.write_text(text)
+    notes: list[str] = []
+    scene = load_scene(path, notify=notes.append)
+    assert notes == [] and scene.name == "my-scene"
+    result = simulate(scene, collisions=2000)
+    assert result.stop_reason is None
+    assert result.counts["resting"] < 0.5 * len(result)
+    assert result.columns["q2"].max() > 0.03  # m: flights of centimetres, not nanometres
+    assert "lies on the wall" not in result.summary()
+
+
+def test_readme_csv_table_lists_every_column():
+    from billiard.record import COLUMNS
+
+    table = README.read_text().split("CSV columns:", 1)[1].split("## ", 1)[0]
+    named = set(re.findall(r"\| `([^`]+)`(?:, `([^`]+)`)?(?:, `([^`]+)`)? \|", table))
+    listed = {name for row in named for name in row if name}
+    assert set(COLUMNS) <= listed, set(COLUMNS) - listed

@@ -56,7 +56,17 @@ CASES: dict[str, tuple[list[str], str]] = {
         ["--set", "contact.restitution=1.5"],
         "'contact.restitution' = 1.5 is out of range [0, 1]",
     ),
-    "zero mass": (["--set", "ball.mass=0"], "'ball.mass' = 0.0 is out of range (0, inf)"),
+    "zero mass": (["--set", "ball.mass=0"], "'ball.mass' = 0.0 kg is out of range (0, 100] kg"),
+    "frequency far too high": (
+        ["--set", "drive.frequency=1e9"],
+        "'drive.frequency' = 1000000000.0 Hz is out of range [0, 1000] Hz",
+    ),
+    "start far too fast": (
+        ["--set", "initial.v1=1e6"],
+        "'initial.v1' = 1000000.0 m/s is out of range [-100, 100] m/s",
+    ),
+    "frame interval nan": (["--frame-interval", "nan"], "--frame-interval 'nan' must be"),
+    "name outside runs": (["--set", "name=../../x"], "scene key 'name' = '../../x' contains"),
     "amplitude without frequency": (
         ["--set", "drive.frequency=0"],
         "'drive.frequency' = 0.0 must be > 0 when drive.amplitude",

@@ -21,7 +21,7 @@ from billiard.checkpoint import CheckpointError, read_checkpoint
 from billiard.cli import main
 from billiard.interrupt import signal_after
 from billiard.record import read_collisions
-from billiard.scene import Initial, load_scene, replace, with_values
+from billiard.scene import load_scene, replace, with_values
 from billiard.simulate import (
     CHECKPOINT_NAME,
     CSV_NAME,
@@ -31,6 +31,7 @@ from billiard.simulate import (
     resume,
     simulate,
 )
+from billiard.spec import InitialSpec
 
 # billiard.simulate the module (the package exports a function of the same name)
 engine = importlib.import_module("billiard.engine")
@@ -415,7 +416,7 @@ def test_resume_of_a_stopped_run_says_so(tmp_path, capsys):
         load_scene("parabola-5.4hz"),
         {"boundary.ceiling": None, "boundary.escape_height": 0.2, "air.drag": "none"},
     )
-    scene = replace(scene, initial=Initial(q1=0.0, q2=0.05, v2=2.5))
+    scene = replace(scene, initial=InitialSpec(q1=0.0, q2=0.05, v2=2.5))
     out = tmp_path / "run"
     first = simulate(scene, collisions=50, out_dir=out)
     assert first.stop_reason.startswith("ball escaped")
