@@ -13,7 +13,8 @@ from pathlib import Path
 import pytest
 
 import billiard.reproduce as reproduce_module
-from billiard.cli import ProgressBar, main
+from billiard.cli import main
+from billiard.cli.run import ProgressBar
 from billiard.plot.run import FIGURE_NAMES
 from billiard.simulate import CSV_NAME
 

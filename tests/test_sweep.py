@@ -224,7 +224,7 @@ BAD_INPUT = {
     ),
     "invalid scene": (
         ["--vary", "drive.amplitude=0.01:-0.01:3"],
-        "point 2 (drive.amplitude = -0.01): scene key 'drive.amplitude' = -0.01 is out of range",
+        "point 2 (drive.amplitude = -0.01): scene key 'drive.amplitude' = -0.01 m is out of range",
     ),
     "start inside the wall": (
         ["--vary", "initial.q2=0.03,0.004", "--set", "initial.q1=0"],

@@ -1,0 +1,94 @@
+"""Command line: ``billiard derive | scenes | run | calibrate | plot | lyapunov | bench |
+reproduce | sweep``, one module per command or group (this package).
+
+Errors a user can cause (a bad scene, a bad curve expression, a stop condition) print one
+line and exit with status 2; no traceback.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from collections.abc import Sequence
+
+from billiard.cli import derive, run, study, sweep
+from billiard.cli.common import UserError
+
+__all__ = ["UserError", "build_parser", "main"]
+
+
+def _user_errors() -> tuple[type[BaseException], ...]:
+    """Exception classes that mean bad input or a documented stop, not a bug.
+
+    Only modules already imported are consulted: one never imported cannot have raised,
+    and importing them all would load sympy and scipy on every command (half a second).
+    """
+    errors: list[type[BaseException]] = [UserError]
+    for module, names in (
+        ("billiard.derivation.expr", ["CurveExpressionError"]),
+        ("billiard.curves", ["CurveNotFoundError"]),
+        ("billiard.scene", ["SceneError"]),
+        ("billiard.errors", ["GeometryError", "SimulationError"]),
+        ("billiard.derivation.curve", ["CurveDerivationError"]),
+        ("billiard.calibrate", ["CalibrationError"]),
+        ("billiard.analysis", ["LyapunovError"]),
+        ("billiard.reproduce", ["ReproduceError"]),
+        ("billiard.record", ["RunDataError"]),
+        ("billiard.checkpoint", ["CheckpointError"]),
+    ):
+        mod = sys.modules.get(module)
+        if mod is not None:
+            errors += [getattr(mod, n) for n in names if hasattr(mod, n)]
+    return tuple(errors)
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(
+        prog="billiard",
+        description="Driven gravitational billiard with a spinning, rubbing ball (SI units).",
+    )
+    sub = parser.add_subparsers(dest="command", required=True)
+    derive.add_parser(sub)
+    study.add_scenes_parser(sub)
+    run.add_parser(sub)
+    study.add_parsers(sub)  # calibrate, plot, lyapunov, bench, reproduce
+    sweep._add_sweep_parser(sub)
+    return parser
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    try:
+        return args.func(args)
+    except Exception as exc:
+        if not isinstance(exc, _user_errors()):
+            raise
+        message = " ".join(str(exc).split())
+        print(f"billiard: error: {message}", file=sys.stderr)
+        return 2
+    except KeyboardInterrupt:
+        print(f"billiard: interrupted; {_interrupted(args)}", file=sys.stderr)
+        return 130
+
+
+def _interrupted(args: argparse.Namespace) -> str:
+    """What is true of the files after Ctrl-C in a command (``billiard run`` reports its
+    own interruptions while it writes rows; this is any other moment)."""
+    command = args.command
+    if command == "run":
+        return "the run had not started; nothing was written"
+    if command in ("calibrate", "lyapunov", "scenes"):
+        return "nothing was written"
+    if command == "plot":
+        where = args.out or args.dir
+        return f"the figures in {where} may be missing or partly drawn; draw them again"
+    if command == "derive":
+        return "`billiard derive --check` names any generated file left out of date"
+    if command == "reproduce":
+        return "the report was not finished; runs and figures so far may be partly written"
+    return "files being written may be incomplete"
+
+
+if __name__ == "__main__":  # pragma: no cover
+    sys.exit(main())

@@ -1,0 +1,138 @@
+"""billiard derive: regenerate, check, or derive a user's curve."""
+
+from __future__ import annotations
+
+import argparse
+import time
+from pathlib import Path
+
+from billiard.cli.common import UserError
+
+
+def cmd_derive(args: argparse.Namespace) -> int:
+    from billiard.derivation import build
+    from billiard.derivation.expr import CurveExpressionError
+
+    if args.curve is not None or args.name is not None:
+        if not (args.curve and args.name):
+            raise UserError("derive: --name and --curve go together")
+        params = dict(_key_value(p, "--param") for p in args.param)
+        from billiard.curves import user_curve_dir
+
+        directory = Path(args.dir) if args.dir else user_curve_dir()
+        if args.dir:
+            if directory.exists() and not directory.is_dir():
+                raise UserError(f"derive --dir {directory}: not a directory")
+            if not directory.exists() and not directory.parent.is_dir():
+                raise UserError(
+                    f"derive --dir {directory}: its parent directory {directory.parent} "
+                    "does not exist"
+                )
+        started = time.perf_counter()
+        try:
+            path = build.derive_user_curve(
+                args.name, args.curve, params, directory, force=args.force
+            )
+        except CurveExpressionError as exc:
+            raise UserError(str(exc)) from None
+        except OSError as exc:
+            where = "" if args.dir else " (the user curve directory: $BILLIARD_HOME/curves)"
+            raise UserError(
+                f"derive: cannot write the curve to {directory}{where}: {exc.strerror or exc}"
+            ) from None
+        print(
+            f"curve {args.name!r}: f(x) = {args.curve} -> {path} "
+            f"({time.perf_counter() - started:.1f} s); a scene can now use "
+            f'curve = "{args.name}"'
+        )
+        return 0
+    root = build.repo_root()
+    where = (
+        f"{build.GENERATED} (source checkout {root})"
+        if root is not None
+        else f"{build.GENERATED}: the installed package, not a source checkout"
+    )
+    if args.check:
+        print(f"derive --check: checking {where}")
+        problems = build.check()
+        for line in problems:
+            print(line)
+        if problems:
+            print(f"derive --check: {len(problems)} file(s) differ; run `billiard derive`")
+            return 1
+        print("derive --check: generated/ is current")
+        return 0
+    print(f"derive: regenerating {where}")
+    if root is None:
+        print(
+            "derive: changes made here are lost when the package is reinstalled; "
+            "docs/derivation.md is written only in a source checkout"
+        )
+    started = time.perf_counter()
+    written = build.regenerate()
+    for path in written:
+        print(f"wrote {path}")
+    print(f"derive: {len(written)} file(s) changed ({time.perf_counter() - started:.1f} s)")
+    return 0
+
+
+class _DeriveParser(argparse.ArgumentParser):
+    """``billiard derive``'s parser: an argument starting with a single '-' that is not
+    one of its options is a value, so ``--curve -x**2 + ...`` needs no ``=``."""
+
+    def _parse_optional(self, arg_string):
+        if (
+            arg_string.startswith("-")
+            and not arg_string.startswith("--")
+            and len(arg_string) > 1
+            and arg_string not in self._option_string_actions
+        ):
+            return None
+        return super()._parse_optional(arg_string)
+
+
+def _key_value(text: str, flag: str) -> tuple[str, float]:
+    key, sep, value = text.partition("=")
+    if not sep or not key:
+        raise UserError(f"{flag} {text!r}: expected NAME=VALUE")
+    try:
+        return key.strip(), float(value)
+    except ValueError:
+        raise UserError(f"{flag} {text!r}: value is not a number") from None
+
+
+def add_parser(sub: argparse._SubParsersAction) -> None:
+    p = sub.add_parser(
+        "derive",
+        help="regenerate the generated code from the derivation",
+        description="Regenerate generated/ and docs/derivation.md, check them, "
+        "or derive a user's curve.",
+    )
+    p.add_argument(
+        "--check",
+        action="store_true",
+        help="verify that generated/ equals a fresh regeneration (exit 1 if not)",
+    )
+    p.__class__ = _DeriveParser  # accept --curve -x**2 ... (same layout: a subclass)
+    p.add_argument(
+        "--name", help="name of a user curve to derive (with --curve): letters, digits, _ and -"
+    )
+    p.add_argument(
+        "--curve",
+        help="curve expression in x, metres, e.g. '30*x**4 + 0.0063'; it must hold a ball "
+        "(real, finite, convex and rising on both sides of its bottom)",
+    )
+    p.add_argument("--force", action="store_true", help="replace a user curve of the same name")
+    p.add_argument(
+        "--param",
+        action="append",
+        default=[],
+        metavar="NAME=VALUE",
+        help="value of a named parameter of --curve (repeatable)",
+    )
+    p.add_argument(
+        "--dir",
+        help="where to write a user curve (default: the user curve directory, "
+        "$BILLIARD_HOME/curves, see `billiard.curves.user_curve_dir`)",
+    )
+    p.set_defaults(func=cmd_derive)

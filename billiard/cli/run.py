@@ -1,0 +1,345 @@
+"""billiard run: simulate a scene into a run folder, with progress and plots."""
+
+from __future__ import annotations
+
+import argparse
+import math
+import sys
+import time
+from pathlib import Path
+
+from billiard.cli.common import UserError, _note
+
+
+class ProgressBar:
+    """Progress of a run on stderr.
+
+    On a terminal: a one-line bar, redrawn ten times a second. Otherwise (a log file, a
+    batch job): one line every ``interval`` seconds with the impacts done, the simulated
+    time (s, when ``clock`` is given: a callable returning it), the rate and the
+    estimated time left.
+    """
+
+    def __init__(self, stream=None, width: int = 30, interval: float = 5.0, clock=None):
+        self.stream = sys.stderr if stream is None else stream
+        self.width = width
+        self.interval = interval
+        self.clock = clock
+        self.enabled = _isatty(self.stream)
+        self.started = time.perf_counter()
+        self.last = 0.0 if self.enabled else self.started
+        self.first_done: int | None = None
+        self.first_time = self.started
+
+    def __call__(self, done: int, total: int) -> None:
+        now = time.perf_counter()
+        if self.first_done is None:  # a resumed run starts counting where it was
+            self.first_done, self.first_time = done, now
+        if self.enabled:
+            if done < total and now - self.last < 0.1:
+                return
+            self.last = now
+            frac = done / total if total else 1.0
+            filled = int(self.width * frac)
+            rate = (done - self.first_done) / max(now - self.first_time, 1e-9)
+            self.stream.write(
+                f"\r[{'#' * filled}{'.' * (self.width - filled)}] "
+                f"{done}/{total} impacts, {rate:,.0f}/s "
+            )
+            if done >= total:
+                self.stream.write("\n")
+            self.stream.flush()
+            return
+        if done >= total or now - self.last < self.interval:
+            return
+        self.last = now
+        self.stream.write(self.line(done, total, now) + "\n")
+        self.stream.flush()
+
+    def line(self, done: int, total: int, now: float) -> str:
+        """The log line: impacts, simulated time, rate and estimated time left."""
+        elapsed = max(now - self.first_time, 1e-9)
+        rate = (done - (self.first_done or 0)) / elapsed
+        parts = [f"billiard: {done:,}/{total:,} impacts"]
+        if self.clock is not None:
+            simulated = self.clock()
+            if simulated is not None:
+                parts.append(f"t = {simulated:.6g} s simulated")
+        parts.append(f"{rate:,.0f} impacts/s")
+        if rate > 0:
+            parts.append(f"about {_duration((total - done) / rate)} left")
+        return ", ".join(parts)
+
+    def close(self) -> None:
+        if self.enabled:
+            self.stream.write("\n")
+            self.stream.flush()
+
+
+def _isatty(stream) -> bool:
+    try:
+        return bool(stream.isatty())
+    except (AttributeError, ValueError):
+        return False
+
+
+def _duration(seconds: float) -> str:
+    """A wall-clock duration for humans: 42 s, 3 min 5 s, 2 h 10 min."""
+    seconds = max(0.0, seconds)
+    if seconds < 60:
+        return f"{seconds:.0f} s"
+    if seconds < 3600:
+        return f"{seconds // 60:.0f} min {seconds % 60:.0f} s"
+    return f"{seconds // 3600:.0f} h {seconds % 3600 // 60:.0f} min"
+
+
+def _frame_interval(text: str | None) -> float | None:
+    """``--frame-interval`` in seconds: a number (0.0333) or a fraction (1/30), > 0."""
+    if text is None:
+        return None
+    from fractions import Fraction
+
+    try:
+        value = float(Fraction(text.strip())) if "/" in text else float(text)
+    except (ValueError, ZeroDivisionError):
+        value = math.nan
+    if not (math.isfinite(value) and value > 0):
+        raise UserError(
+            f"--frame-interval {text!r} must be a positive number of seconds (e.g. 0.0333 or 1/30)"
+        )
+    return value
+
+
+def _holds_run(folder: Path) -> bool:
+    """Whether a folder holds a run's files (CSV, scene or checkpoint)."""
+    from billiard.persist import CHECKPOINT_NAME, CSV_NAME, SCENE_NAME
+
+    return folder.is_dir() and any(
+        (folder / name).exists() for name in (CSV_NAME, SCENE_NAME, CHECKPOINT_NAME)
+    )
+
+
+def _remove_plots(folder: Path) -> list[str]:
+    """Delete the figures ``plot_run`` wrote into a run folder (they no longer match its
+    data); returns the names removed."""
+    from billiard.plot.run import FIGURE_NAMES
+
+    removed = []
+    for name in FIGURE_NAMES:
+        path = folder / name
+        if path.is_file():
+            path.unlink()
+            removed.append(name)
+    return removed
+
+
+def _checkpoint_clock(folder: Path):
+    """A clock for the progress line of a streamed run: the simulated time (s) of the
+    run's last checkpoint (written every second, so at most a second behind), or None
+    while there is none."""
+    import json
+
+    from billiard.persist import CHECKPOINT_NAME
+
+    def clock() -> float | None:
+        try:
+            data = json.loads((folder / CHECKPOINT_NAME).read_text(encoding="utf-8"))
+            return float(data["engine"]["ball"]["t"])
+        except (OSError, ValueError, KeyError, TypeError):
+            return None
+
+    return clock
+
+
+def cmd_run(args: argparse.Namespace) -> int:
+    import shlex
+    import signal
+
+    from billiard.checkpoint import CheckpointError
+    from billiard.persist import CSV_NAME, SCENE_NAME, resume
+    from billiard.simulate import RunInterrupted, simulate
+
+    # every argument is checked before any work
+    frame_interval = _frame_interval(args.frame_interval)
+    bar = ProgressBar()
+    stale: list[str] = []  # plots removed because the data changed under them
+    changed = False  # whether the run folder's data was changed
+    if args.resume is not None:
+        if args.scene or args.set or args.method or args.out or args.duration or args.overwrite:
+            raise UserError(
+                "run --resume DIR continues a run as it was set up: give no "
+                "SCENE, --out, --set, --method, --duration or --overwrite with it"
+            )
+        out = Path(args.resume)
+        if args.collisions is not None and args.collisions < 1:
+            raise UserError(f"run: --collisions must be >= 1, got {args.collisions}")
+    else:
+        if not args.scene:
+            raise UserError("run: give a SCENE (a built-in name or a .toml file), or --resume DIR")
+        from billiard.scene import load_scene, with_values
+
+        scene = load_scene(args.scene, overrides=args.set, notify=_note)
+        if args.duration is not None:
+            with_values(scene, {"run.duration": args.duration})  # checks it
+        out = Path(args.out) if args.out else Path("runs") / scene.name
+        if _holds_run(out) and not args.overwrite:
+            again = shlex.quote(str(out))
+            raise UserError(
+                f"run: {out} already holds a run; give --overwrite to replace it, or "
+                f"continue it with `billiard run --resume {again}`"
+            )
+        if args.collisions is not None:
+            with_values(scene, {"run.collisions": args.collisions})  # checks it
+    bar.clock = _checkpoint_clock(out)
+    try:
+        try:
+            if args.resume is not None:
+                try:
+                    result = resume(
+                        out,
+                        collisions=args.collisions,
+                        progress=bar,
+                        notify=lambda line: print(f"billiard: {line}", file=sys.stderr),
+                    )
+                except CheckpointError as exc:
+                    raise UserError(f"cannot resume {out}: {exc}") from None
+                if result.already_finished:
+                    if result.stop_reason:
+                        print(
+                            f"billiard: {out}: the run already stopped after impact "
+                            f"{len(result)}: {result.stop_reason}",
+                            file=sys.stderr,
+                        )
+                        return 3
+                    print(
+                        f"billiard: {out}: the run is already complete ({len(result)} impacts); "
+                        f"nothing to resume (--collisions N extends it)"
+                    )
+                    return 0
+                changed = True
+            else:
+                changed = True
+                try:
+                    result = simulate(
+                        scene,
+                        collisions=args.collisions,
+                        method=args.method,
+                        out_dir=out,
+                        progress=bar,
+                        duration=args.duration,
+                    )
+                except CheckpointError as exc:  # another process is writing a run in DIR
+                    changed = False
+                    raise UserError(f"cannot run in {out}: {exc}") from None
+        finally:  # end the progress bar's line before anything else is printed
+            if bar.enabled:
+                bar.stream.write("\n")
+            if changed and out.is_dir():
+                stale = _remove_plots(out)
+    except RunInterrupted as exc:
+        where = exc.out_dir or Path(".")
+        again = f"billiard run --resume {shlex.quote(str(where))}"
+        after = (
+            ""
+            if exc.checkpoint_rows == exc.rows
+            else f" (it restarts after impact {exc.checkpoint_rows}, the last checkpoint)"
+        )
+        name = signal.Signals(exc.signum).name
+        removed = f"; removed its outdated plots ({', '.join(stale)})" if stale else ""
+        print(
+            f"billiard: interrupted ({name}): {exc.rows} impacts kept in "
+            f"{where / CSV_NAME}; continue with `{again}`{after}{removed}",
+            file=sys.stderr,
+        )
+        return 128 + exc.signum
+    except OSError as exc:
+        where = f": {exc.filename}" if exc.filename else ""
+        raise UserError(f"cannot write the run: {exc.strerror or exc}{where}") from None
+    print(result.summary())
+    print(f"wrote {out / CSV_NAME} and {out / SCENE_NAME}")
+    if not args.no_plot and len(result) > 1:
+        from billiard.plot import plot_run
+
+        try:
+            paths = plot_run(out, frame_interval=frame_interval)
+        except KeyboardInterrupt:
+            print(
+                f"billiard: interrupted while drawing the plots; the run is complete in "
+                f"{out}; draw them with `billiard plot {shlex.quote(str(out))}`",
+                file=sys.stderr,
+            )
+            return 130
+        print(f"plots: {', '.join(p.name for p in paths)} in {out}")
+    elif stale:
+        print(
+            f"removed the plots of the earlier data ({', '.join(stale)}) from {out}; "
+            f"draw new ones with `billiard plot {shlex.quote(str(out))}`"
+        )
+    if result.stop_reason:
+        print(f"billiard: stopped: {result.stop_reason}", file=sys.stderr)
+        return 3
+    return 0
+
+
+def add_parser(sub: argparse._SubParsersAction) -> None:
+    p = sub.add_parser(
+        "run",
+        help="simulate a scene and write collisions.csv",
+        description="Simulate a built-in scene or a scene file (TOML, SI units). "
+        "DIR/scene.toml is written first, DIR/collisions.csv grows "
+        "row by row and DIR/checkpoint.json follows it every "
+        "second; after Ctrl-C or a kill, `billiard run --resume DIR` "
+        "finishes the same run.",
+    )
+    p.add_argument(
+        "scene", nargs="?", help="built-in scene name (see `billiard scenes`) or a .toml file"
+    )
+    p.add_argument(
+        "--resume",
+        metavar="DIR",
+        help="continue the interrupted run in DIR from its checkpoint (the result "
+        "equals an uninterrupted run byte for byte)",
+    )
+    p.add_argument(
+        "--collisions",
+        type=int,
+        help="number of impacts (default: the scene's); with --resume, a larger "
+        "total extends a finished run",
+    )
+    p.add_argument(
+        "--method",
+        choices=["event", "rk4"],
+        help="flight and impact-detection method (default: the scene's, 'event')",
+    )
+    p.add_argument(
+        "--duration",
+        type=float,
+        metavar="S",
+        help="stop after S seconds of simulated time (with --collisions: whichever comes "
+        "first; default: the scene's run.duration, no limit)",
+    )
+    p.add_argument("--out", help="output directory (default: runs/SCENE)")
+    p.add_argument(
+        "--set",
+        action="append",
+        default=[],
+        metavar="KEY=VALUE",
+        help="override a scene key, e.g. --set drive.frequency=6.0 (repeatable)",
+    )
+    p.add_argument(
+        "--overwrite",
+        action="store_true",
+        help="replace the run already in the output directory (default: refuse)",
+    )
+    p.add_argument(
+        "--no-plot",
+        action="store_true",
+        help="do not draw the plots afterwards (plots of earlier data in DIR are removed)",
+    )
+    p.add_argument(
+        "--frame-interval",
+        metavar="S",
+        help="also plot what a camera with this frame interval (s, e.g. 0.0333 or 1/30) "
+        "would record",
+    )
+    p.set_defaults(func=cmd_run)

@@ -1,0 +1,231 @@
+"""The commands over scenes and runs: scenes, calibrate, plot, lyapunov, bench, reproduce."""
+
+from __future__ import annotations
+
+import argparse
+import time
+from pathlib import Path
+
+from billiard.cli.common import UserError, _note
+
+
+def cmd_scenes(args: argparse.Namespace) -> int:
+    from billiard.scene import builtin_scenes
+
+    scenes = builtin_scenes()
+    width = max(map(len, scenes))
+    for name, description in scenes.items():
+        print(f"{name:<{width}}  {description}")
+    return 0
+
+
+def cmd_calibrate(args: argparse.Namespace) -> int:
+    import json
+
+    from billiard.calibrate import calibrate
+    from billiard.scene import load_scene
+
+    if args.impacts < 1:
+        raise UserError(f"calibrate: --impacts must be >= 1, got {args.impacts}")
+    scene = load_scene(args.scene, overrides=args.set, notify=_note)
+    started = time.perf_counter()
+    result = calibrate(
+        scene,
+        args.parameter,
+        args.target_height,
+        low=args.low,
+        high=args.high,
+        impacts=args.impacts,
+    )
+    if args.json:
+        print(json.dumps(result.as_dict()))
+        return 0
+    o = result.orbit
+    print(
+        f"{args.parameter} = {result.value:.6g}  "
+        f"(period-one orbit at q2 = {o.height:.6f} m, target {args.target_height} m)"
+    )
+    print(
+        f"orbit: time of flight {o.time_of_flight:.6f} s, locked after {o.impacts_to_lock} "
+        f"impacts from the scene's initial state, energy {o.energy:.4e} J"
+    )
+    print(
+        f"normalized point (q2/q2max, u4/u4max) = ({o.q2_normalized:.4f}, "
+        f"+-{abs(o.u4_normalized):.4f})   paper: (0.376, +-0.0372)"
+    )
+    print(
+        "q2max = E/(m g), u4max = sqrt(2 E/m), E the mechanical energy after the impact "
+        "(potential zero at q2 = 0, spin included)"
+    )
+    print(f"{result.evaluations} runs, {time.perf_counter() - started:.1f} s")
+    return 0
+
+
+# --- plot ------------------------------------------------------------------------------
+
+
+def cmd_plot(args: argparse.Namespace) -> int:
+    from billiard.plot import parse_frame_interval, parse_window, plot_run
+
+    interval = None if args.frame_interval is None else parse_frame_interval(args.frame_interval)
+    window = None if args.window is None else parse_window(args.window)
+    paths = plot_run(
+        Path(args.dir),
+        Path(args.out) if args.out else None,
+        frame_interval=interval,
+        window=window,
+        gif=not args.no_gif,
+    )
+    for path in paths:
+        print(f"wrote {path}")
+    return 0
+
+
+def cmd_lyapunov(args: argparse.Namespace) -> int:
+    from billiard.analysis import check_arguments, format_lyapunov, lyapunov_exponent
+    from billiard.scene import load_scene
+
+    scene = load_scene(args.scene, overrides=args.set, notify=_note)
+    check_arguments(scene, impacts=args.impacts, transient=args.transient, d0=args.d0)
+    result = lyapunov_exponent(
+        scene, impacts=args.impacts, transient=args.transient, d0=args.d0, method=args.method
+    )
+    print(format_lyapunov(result))
+    return 3 if result.undefined is not None else 0
+
+
+def cmd_bench(args: argparse.Namespace) -> int:
+    from billiard.bench import run_bench
+
+    return run_bench(args)
+
+
+def cmd_reproduce(args: argparse.Namespace) -> int:
+    from billiard.reproduce import run_reproduce
+
+    return run_reproduce(args)
+
+
+def add_scenes_parser(sub: argparse._SubParsersAction) -> None:
+    p = sub.add_parser("scenes", help="list the built-in scenes")
+    p.set_defaults(func=cmd_scenes)
+
+
+def add_parsers(sub: argparse._SubParsersAction) -> None:
+    p = sub.add_parser(
+        "calibrate",
+        help="fit a parameter to a period-one orbit's height",
+        description="Find the value of a scene parameter for which the ball "
+        "locks into a period-one orbit with impacts at the target "
+        "height (the paper's calibration).",
+    )
+    p.add_argument("scene", help="built-in scene name or a .toml file")
+    p.add_argument(
+        "--parameter",
+        required=True,
+        help="dotted scene key, e.g. drive.amplitude or contact.restitution",
+    )
+    p.add_argument(
+        "--target-height",
+        type=float,
+        required=True,
+        metavar="H",
+        help="height q2 of the ball centre at the orbit's impacts (m)",
+    )
+    p.add_argument("--low", type=float, help="lower end of the scan (default: value/4)")
+    p.add_argument("--high", type=float, help="upper end of the scan (default: 4 x value)")
+    p.add_argument("--impacts", type=int, default=1500, help="impacts per trial run (default 1500)")
+    p.add_argument(
+        "--set",
+        action="append",
+        default=[],
+        metavar="KEY=VALUE",
+        help="override a scene key first (repeatable)",
+    )
+    p.add_argument("--json", action="store_true", help="print one JSON object")
+    p.set_defaults(func=cmd_calibrate)
+
+    p = sub.add_parser(
+        "plot",
+        help="draw the paper's plots of a run",
+        description="Return map, time-of-flight map, phase plot, trajectory "
+        "and animation from DIR/collisions.csv and DIR/scene.toml.",
+    )
+    p.add_argument("dir", help="run directory")
+    p.add_argument("--out", metavar="DIR", help="where to write the figures (default: DIR)")
+    p.add_argument(
+        "--frame-interval",
+        metavar="S",
+        help="also show what a camera with this frame interval (s, e.g. 0.0333 or 1/30) "
+        "would record",
+    )
+    p.add_argument(
+        "--window",
+        metavar="N0:N1",
+        help="impacts N0 <= n < N1 drawn in the trajectory and GIF (either may be "
+        "left out; default: the last four drive periods)",
+    )
+    p.add_argument("--no-gif", action="store_true", help="skip the animated GIF")
+    p.set_defaults(func=cmd_plot)
+
+    p = sub.add_parser(
+        "lyapunov",
+        help="largest Lyapunov exponent of a scene's trajectory",
+        description="Largest Lyapunov exponent (per impact and per second) "
+        "from two nearby trajectories with renormalization.",
+    )
+    p.add_argument("scene", help="built-in scene name or a .toml file")
+    p.add_argument("--impacts", type=int, default=5000, help="impacts to average over (>= 1)")
+    p.add_argument("--transient", type=int, default=0, help="impacts skipped first (>= 0)")
+    p.add_argument(
+        "--d0",
+        type=float,
+        default=1e-9,
+        help="initial separation of the two trajectories (m; at most 1e-3 of the ball "
+        "radius). Exit status 3 when the exponent is undefined (a ball that never flies)",
+    )
+    p.add_argument("--method", choices=["event", "rk4"], help="default: the scene's")
+    p.add_argument(
+        "--set",
+        action="append",
+        default=[],
+        metavar="KEY=VALUE",
+        help="override a scene key first (repeatable)",
+    )
+    p.set_defaults(func=cmd_lyapunov)
+
+    from billiard.bench import add_bench_arguments  # argparse only: cheap
+
+    p = sub.add_parser(
+        "bench",
+        help="speed against accuracy; writes docs/performance.md",
+        description="Work-precision, failure boundaries, model ladder and "
+        "throughput; writes docs/performance.md and its charts.",
+    )
+    add_bench_arguments(p)
+    p.set_defaults(func=cmd_bench)
+
+    p = sub.add_parser(
+        "reproduce",
+        help="regenerate docs/paper-reproduction.md",
+        description="Calibrate, run the four paper scenes, draw the paper's "
+        "figures and write docs/paper-reproduction.md.",
+    )
+    p.add_argument(
+        "--docs",
+        metavar="DIR",
+        help="where the report and its figures go (default: docs for the full reproduction "
+        "with the default settings, else the --runs folder)",
+    )
+    p.add_argument("--runs", default="runs/paper", help="where the runs go (default runs/paper)")
+    p.add_argument(
+        "--collisions", type=int, default=25000, help="impacts per scene (default 25000)"
+    )
+    p.add_argument(
+        "--lyapunov",
+        type=int,
+        default=2000,
+        metavar="N",
+        help="impacts for each Lyapunov exponent (0 to skip; default 2000)",
+    )
+    p.set_defaults(func=cmd_reproduce)

@@ -1,0 +1,168 @@
+"""billiard sweep: parameter sweeps on local processes or a Dask cluster."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+
+from billiard.cli.common import UserError
+
+
+def cmd_sweep(args: argparse.Namespace) -> int:
+    from billiard.sweep.definition import (
+        Sweep,
+        SweepError,
+        check_keys,
+        is_sweep_file,
+        parse_vary,
+        read_sweep_file,
+    )
+    from billiard.sweep.execute import SweepInterrupted, run_sweep
+
+    settings = {
+        name: getattr(args, name)
+        for name in ("impacts", "transient", "keep", "duration")
+        if getattr(args, name) is not None
+    }
+    if args.lyapunov:
+        settings["lyapunov"] = True
+    if args.skip_invalid:
+        settings["skip_invalid"] = True
+    try:
+        if args.resume is not None:
+            given = args.scene or args.file or args.vary or args.set or args.out or settings
+            if given:
+                raise UserError(
+                    "sweep --resume DIR continues a sweep as it was set up: give no SCENE, "
+                    "--file, --vary, --set, --out or measurement options with it"
+                )
+            directory = Path(args.resume)
+            sweep = None
+        else:
+            if args.scene and args.file:
+                raise UserError("sweep: give SCENE or --file SWEEP.toml, not both")
+            source = args.file or args.scene
+            if not source:
+                raise UserError(
+                    "sweep: give a SCENE and --vary KEY=START:STOP:N, a sweep file, or --resume DIR"
+                )
+            axes = [parse_vary(text) for text in args.vary]
+            if args.file or is_sweep_file(source):
+                scene, file_axes, file_settings, _ = read_sweep_file(source, args.set)
+                axes = [*file_axes, *axes]
+                settings = {**file_settings, **settings}
+            else:
+                from billiard.scene import load_scene
+
+                scene = load_scene(source, overrides=args.set)
+            if not axes:
+                raise UserError("sweep: nothing to vary; give --vary KEY=START:STOP:N")
+            check_keys(scene, axes)
+            sweep = Sweep(scene, tuple(axes), **settings)
+            directory = Path(args.out) if args.out else Path("runs") / f"sweep-{scene.name}"
+        outcome = run_sweep(
+            sweep,
+            directory,
+            workers=args.workers,
+            dask=args.dask,
+            resume=args.resume is not None,
+            plots=not args.no_plot,
+        )
+    except SweepError as exc:
+        raise UserError(str(exc)) from None
+    except SweepInterrupted as exc:
+        again = f"billiard sweep --resume {exc.directory}"
+        print(
+            f"billiard: interrupted: {exc.done} of {exc.total} points kept in "
+            f"{exc.directory}; continue with `{again}`",
+            file=sys.stderr,
+        )
+        return 130
+    except OSError as exc:
+        where = f": {exc.filename}" if exc.filename else ""
+        raise UserError(f"cannot write the sweep: {exc.strerror or exc}{where}") from None
+    from collections import Counter
+
+    classes = Counter(r["attractor"] for r in outcome.records)
+    kinds = ", ".join(f"{n} {name}" for name, n in sorted(classes.items()))
+    print(
+        f"sweep: {len(outcome.records)} points ({len(outcome.computed)} computed now on "
+        f"{outcome.where}): {kinds}"
+    )
+    print(
+        f"wrote {outcome.result} (open with xarray.open_dataset or scipy.io.netcdf_file)"
+        + (f"; plots: {', '.join(p.name for p in outcome.plots)}" if outcome.plots else "")
+    )
+    failed = [r for r in outcome.records if r["status"] == "failed"]
+    for record in failed[:5]:
+        print(f"billiard: point {record['index']} failed: {record['reason']}", file=sys.stderr)
+    if len(failed) > 5:
+        print(f"billiard: ... {len(failed) - 5} more failed (see status, reason)", file=sys.stderr)
+    return 0
+
+
+def _add_sweep_parser(sub: argparse._SubParsersAction) -> None:
+    p = sub.add_parser(
+        "sweep",
+        help="vary scene keys over a grid; attractor, heights, times of flight per point",
+        description="Run a scene over a grid of values of one or more scene keys (any "
+        "dotted key; initial.* gives a basin map), in parallel, and write DIR/sweep.nc "
+        "(netCDF) and plots. Every finished point is kept in DIR/points.jsonl; after "
+        "Ctrl-C or a kill, `billiard sweep --resume DIR` computes only the rest. "
+        "See docs/sweeps.md.",
+    )
+    p.add_argument(
+        "scene",
+        nargs="?",
+        help="built-in scene name, a scene .toml file, or a sweep .toml file (one with "
+        "a [vary] table)",
+    )
+    p.add_argument(
+        "--vary",
+        action="append",
+        default=[],
+        metavar="KEY=START:STOP:N",
+        help="a swept key: N values from START to STOP, or KEY=v1,v2,... (repeatable: a grid)",
+    )
+    p.add_argument("--file", metavar="SWEEP.toml", help="a sweep file (see docs/sweeps.md)")
+    p.add_argument(
+        "--set",
+        action="append",
+        default=[],
+        metavar="KEY=VALUE",
+        help="override a key of the base scene (repeatable)",
+    )
+    p.add_argument(
+        "--impacts", type=int, help="impacts measured per point, after the transient (2000)"
+    )
+    p.add_argument("--transient", type=int, help="impacts simulated first, not measured (500)")
+    p.add_argument(
+        "--duration", type=float, metavar="S", help="simulated time per point at most (s)"
+    )
+    p.add_argument(
+        "--keep", type=int, metavar="K", help="last K impact heights and times stored (100)"
+    )
+    p.add_argument(
+        "--lyapunov",
+        action="store_true",
+        help="also the largest Lyapunov exponent per point (about three times the cost)",
+    )
+    p.add_argument("--workers", type=int, metavar="N", help="local worker processes (all cores)")
+    p.add_argument(
+        "--dask",
+        metavar="ADDRESS",
+        help="run the points on this dask.distributed scheduler, e.g. tcp://host:8786",
+    )
+    p.add_argument(
+        "--resume", metavar="DIR", help="compute the points an interrupted sweep in DIR lacks"
+    )
+    p.add_argument("--out", metavar="DIR", help="output folder (default runs/sweep-SCENE)")
+    p.add_argument(
+        "--skip-invalid",
+        action="store_true",
+        help="record points whose scene is invalid (e.g. a start inside the wall) as "
+        "invalid instead of refusing the sweep (kept for --resume)",
+    )
+    p.add_argument("--no-plot", action="store_true", help="do not draw the plots")
+    p.set_defaults(func=cmd_sweep)
