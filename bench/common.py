@@ -20,10 +20,10 @@ from billiard.generated import ball as _ball
 
 from billiard.errors import SimulationError
 from billiard.record import MemoryRecorder
-from billiard.scene import Scene, load_scene, with_values
+from billiard.scene import PAPER_SCENES, Scene, load_scene, with_values
 from billiard.simulate import BallState, Simulation, simulate
 
-SCENES = ("parabola-5.4hz", "wedge-6.6hz", "hyperbola-5.8hz", "hyperbola-4.5hz")
+SCENES = PAPER_SCENES
 #: A run shorter than this (CPU s) is repeated and the median of the repeats kept.
 SHORT_RUN = 0.5
 #: Impact time of the event found by two methods differs by more than this (s): the two

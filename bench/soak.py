@@ -65,7 +65,7 @@ from billiard.errors import GeometryError
 from billiard.impact import ImpactResult
 from billiard.interrupt import signal_after
 from billiard.record import read_collisions
-from billiard.scene import Scene, fowles_coefficients, load_scene, with_values
+from billiard.scene import PAPER_SCENES, Scene, fowles_coefficients, load_scene, with_values
 from billiard.simulate import (
     RunInterrupted,
     Simulation,
@@ -86,7 +86,6 @@ __all__ = [
     "stop_kind",
 ]
 
-PAPER_SCENES = ("parabola-5.4hz", "wedge-6.6hz", "hyperbola-5.8hz", "hyperbola-4.5hz")
 #: Curves of the random scenes: the paper's three and two expressions (a flat-bottomed
 #: quartic bowl and a sharply rounded V, whose radius of curvature at the bottom, 5 mm,
 #: is close to the ball's).

@@ -23,6 +23,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .errors import GeometryError
+from .phase import phase_point
 from .scene import Scene, SceneError, with_values
 from .simulate import simulate
 
@@ -69,13 +70,14 @@ def find_period_one(
     lock = int(np.nonzero(off)[0][-1]) + 1 if off.any() else 0
     energy = float(columns["energy"][-1])
     u4 = float(columns["u4"][-1])
+    q2n, u4n = phase_point(float(ref_q2), u4, energy, mass, gravity)
     return Orbit(
         height=float(ref_q2),
         time_of_flight=float(ref_tof),
         u4=u4,
         energy=energy,
-        q2_normalized=float(mass * gravity * ref_q2 / energy),
-        u4_normalized=float(u4 / math.sqrt(2 * energy / mass)),
+        q2_normalized=float(q2n),
+        u4_normalized=float(u4n),
         impacts_to_lock=lock,
     )
 

@@ -18,12 +18,12 @@ import numpy as np
 
 from .calibrate import Calibration, calibrate, find_period_one
 from .camera import camera_filter
+from .phase import phase_scales
 from .plot import paper_figure, paper_phase_figure, plot_run
 from .record import read_collisions
-from .scene import load_scene, scene_to_toml
+from .scene import PAPER_SCENES, load_scene, scene_to_toml
 from .simulate import simulate
 
-PAPER_SCENES = ("parabola-5.4hz", "wedge-6.6hz", "hyperbola-5.8hz", "hyperbola-4.5hz")
 FIG2_SCENES = ("wedge-6.6hz", "hyperbola-5.8hz", "hyperbola-4.5hz")
 # The paper does not give the experiment's camera rate; a standard video frame interval.
 CAMERA_FRAME = 1 / 30
@@ -149,7 +149,7 @@ def _markdown(
     by = {s.scene: s for s in stats}
     o = cal.orbit
     m, g = parabola.ball.mass, parabola.run.gravity
-    q2max, u4max = o.energy / (m * g), math.sqrt(2 * o.energy / m)
+    q2max, u4max = phase_scales(o.energy, m, g)
     w, h58, h45 = by["wedge-6.6hz"], by["hyperbola-5.8hz"], by["hyperbola-4.5hz"]
     p = by["parabola-5.4hz"]
 

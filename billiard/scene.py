@@ -53,6 +53,7 @@ from billiard.spec import (
 from billiard.toml_text import toml_key, toml_value
 
 __all__ = [
+    "PAPER_SCENES",
     "BUILTIN_CURVES",
     "DRAG_MODELS",
     "DRIVE_DIRECTIONS",
@@ -272,6 +273,15 @@ def _parse_override_value(text: str) -> Any:
 
 def _scene_resource(name: str) -> Any:
     return resources.files("billiard.scenes").joinpath(f"{name}.toml")
+
+
+#: The paper's four experiments, in the paper's order (all built in).
+PAPER_SCENES: tuple[str, ...] = (
+    "parabola-5.4hz",
+    "wedge-6.6hz",
+    "hyperbola-5.8hz",
+    "hyperbola-4.5hz",
+)
 
 
 def builtin_scene_names() -> list[str]:

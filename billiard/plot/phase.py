@@ -8,6 +8,7 @@ from matplotlib.axes import Axes
 from matplotlib.lines import Line2D
 from matplotlib.ticker import MultipleLocator
 
+from ..phase import phase_point
 from ..scene import Scene
 from .common import (
     MODEL_COLOR,
@@ -72,9 +73,8 @@ def phase_coordinates(columns: Columns, scene: Scene) -> tuple[np.ndarray, np.nd
     g = scene.run.gravity
     good = np.isfinite(energy) & (energy > 0)
     safe = np.where(good, energy, np.nan)
-    q2max = safe / (m * g)
-    u4max = np.sqrt(2.0 * safe / m)
-    return u4 / u4max, q2 / q2max
+    q2n, u4n = phase_point(q2, u4, safe, m, g)
+    return u4n, q2n
 
 
 def phase_plot(
