@@ -10,10 +10,13 @@ from __future__ import annotations
 
 import math
 from collections.abc import Mapping
+from fractions import Fraction
 
 import numpy as np
 
-__all__ = ["camera_filter"]
+from billiard.record import RunDataError
+
+__all__ = ["camera_filter", "parse_frame_interval"]
 
 
 def camera_filter(
@@ -85,3 +88,22 @@ def camera_filter(
         tof[1:] = np.diff(t[index])
         out["tof"] = tof
     return out
+
+
+def parse_frame_interval(text: str) -> float:
+    """A camera frame interval in seconds from text: a number (``0.0333``) or a fraction
+    (``1/30``), > 0. The one parser of ``--frame-interval`` (``billiard run`` and
+    ``billiard plot``).
+
+    Raises:
+        RunDataError: not a number, or not a positive finite one.
+    """
+    try:
+        value = float(Fraction(text.strip())) if "/" in text else float(text)
+    except (ValueError, ZeroDivisionError):
+        value = math.nan
+    if not (math.isfinite(value) and value > 0):
+        raise RunDataError(
+            f"frame interval {text!r} must be a positive number of seconds (e.g. 0.0333 or 1/30)"
+        )
+    return value

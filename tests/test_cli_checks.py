@@ -46,7 +46,7 @@ def test_run_frame_interval_is_checked_before_the_run(in_tmp, capsys, value):
     args = ["run", "parabola-5.4hz", "--collisions", "5", "--out", str(other)]
     capsys.readouterr()
     assert main([*args, "--frame-interval", value]) == 2
-    assert f"--frame-interval {value!r} must be a positive number of seconds" in one_error_line(
+    assert f"frame interval {value!r} must be a positive number of seconds" in one_error_line(
         capsys
     )
     assert not other.exists()

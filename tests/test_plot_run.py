@@ -149,9 +149,9 @@ def test_command_line(bounce_run, tmp_path, capsys):
 @pytest.mark.parametrize(
     ("extra", "problem"),
     [
-        (["--frame-interval", "-1"], "frame interval '-1' must be a number of seconds > 0"),
-        (["--frame-interval", "1/0"], "frame interval '1/0' is not a number of seconds"),
-        (["--frame-interval", "0"], "must be a number of seconds > 0"),
+        (["--frame-interval", "-1"], "frame interval '-1' must be a positive number of seconds"),
+        (["--frame-interval", "1/0"], "frame interval '1/0' must be a positive number of seconds"),
+        (["--frame-interval", "0"], "must be a positive number of seconds"),
         (["--window", "5"], "window '5': expected N0:N1"),
         (["--window", "a:b"], "must be whole impact numbers"),
         (["--window", "500:600"], "window 500:600 holds no impacts"),

@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import argparse
-import math
 import sys
 import time
 from pathlib import Path
@@ -94,20 +93,10 @@ def _duration(seconds: float) -> str:
 
 
 def _frame_interval(text: str | None) -> float | None:
-    """``--frame-interval`` in seconds: a number (0.0333) or a fraction (1/30), > 0."""
-    if text is None:
-        return None
-    from fractions import Fraction
+    """``--frame-interval`` in seconds (a number or a fraction such as 1/30), or None."""
+    from billiard.camera import parse_frame_interval
 
-    try:
-        value = float(Fraction(text.strip())) if "/" in text else float(text)
-    except (ValueError, ZeroDivisionError):
-        value = math.nan
-    if not (math.isfinite(value) and value > 0):
-        raise UserError(
-            f"--frame-interval {text!r} must be a positive number of seconds (e.g. 0.0333 or 1/30)"
-        )
-    return value
+    return None if text is None else parse_frame_interval(text)
 
 
 def _holds_run(folder: Path) -> bool:

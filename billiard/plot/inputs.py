@@ -3,8 +3,8 @@
 from __future__ import annotations
 
 import math
-from fractions import Fraction
 
+from ..camera import parse_frame_interval
 from .common import RunDataError, Window
 
 __all__ = ["checked_interval", "parse_frame_interval", "parse_window"]
@@ -26,23 +26,6 @@ def checked_interval(frame_interval: float | None) -> float | None:
         raise RunDataError(
             f"camera frame interval must be a positive number of seconds, got {frame_interval!r}"
         )
-    return value
-
-
-def parse_frame_interval(text: str) -> float:
-    """Parse a frame interval in seconds: a number (``0.0333``) or a fraction (``1/30``).
-
-    Raises:
-        RunDataError: not a number, or not > 0.
-    """
-    try:
-        value = float(Fraction(text.strip())) if "/" in text else float(text)
-    except (ValueError, ZeroDivisionError):
-        raise RunDataError(
-            f"frame interval {text!r} is not a number of seconds (e.g. 0.0333 or 1/30)"
-        ) from None
-    if not (math.isfinite(value) and value > 0):
-        raise RunDataError(f"frame interval {text!r} must be a number of seconds > 0")
     return value
 
 
