@@ -98,6 +98,11 @@ TEXT_COLUMNS: frozenset[str] = frozenset({"regime", "wall"})
 _TEXT = TEXT_COLUMNS
 _INTEGER = frozenset({"n"})
 FLUSH_INTERVAL = 1.0  # s of wall-clock time between flushes of a streamed file
+#: Line terminator of the rows written: a plain newline, so that line tools (awk, cut,
+#: sort) see ``0.5`` and not ``0.5\r``. Files written with ``\r\n`` (by older versions)
+#: still read, and a resumed one is continued with its own terminator.
+LINE_END = "\n"
+_LINE_ENDS = ("\n", "\r\n")
 
 
 class RunDataError(ValueError):
@@ -233,6 +238,8 @@ class CsvRecorder:
             always exactly what a checkpoint describes.
         durable: sync each flush to the storage device (``os.fsync``), so that rows
             said to be kept survive a crash of the machine too, not only of the process.
+        line_end: the rows' line terminator (:data:`LINE_END`; ``"\r\n"`` only to
+            continue a file written so).
 
     Raises:
         RunBusyError: another process holds the file (a run still going on).
@@ -245,20 +252,24 @@ class CsvRecorder:
         *,
         autoflush: bool = True,
         durable: bool = True,
+        line_end: str = LINE_END,
         _open: tuple[int, CsvMark] | None = None,
     ):
+        if line_end not in _LINE_ENDS:
+            raise ValueError(f"line_end must be one of {_LINE_ENDS!r}, got {line_end!r}")
         self.path = Path(path)
         self.names = tuple(columns)
         self.autoflush = autoflush
         self.durable = durable
+        self.line_end = line_end
         self._pending = io.StringIO()
-        self._writer = csv.writer(self._pending)
+        self._writer = csv.writer(self._pending, lineterminator=line_end)
         self._pending_rows = 0
         self._last_flush = time.monotonic()
         if _open is None:
             self._fd: int | None = _open_locked(self.path)
             os.ftruncate(self._fd, 0)
-            header = _header_line(self.names)
+            header = _header_line(self.names, line_end)
             data = header.encode("utf-8")
             _write_all(self._fd, data)
             if durable:
@@ -279,7 +290,8 @@ class CsvRecorder:
     ) -> tuple[CsvRecorder, Truncation]:
         """Continue a streamed file at ``mark``: check that the file holds the header
         and, at the mark, the expected last line; cut off everything after the mark (rows
-        written after the checkpoint and any unterminated last line); append from there.
+        written after the checkpoint and any unterminated last line); append from there,
+        with the line terminator the file was written with (its header's).
 
         Raises:
             CheckpointError: the file is missing, shorter than the mark, or differs
@@ -291,8 +303,9 @@ class CsvRecorder:
             raise CheckpointError(
                 f"{path} is missing" if not path.exists() else f"{path} is not a file"
             )
-        header = _header_line(columns).encode()
         line = mark.last_line.encode()
+        line_end = "\r\n" if mark.last_line.endswith("\r\n") else "\n"
+        header = _header_line(columns, line_end).encode()
         fd = _open_locked(path)
         try:
             size = os.fstat(fd).st_size
@@ -319,7 +332,9 @@ class CsvRecorder:
             os.close(fd)
             raise
         cut = Truncation(tail.count(b"\n"), len(tail) - (tail.rfind(b"\n") + 1))
-        recorder = cls(path, columns, autoflush=autoflush, durable=durable, _open=(fd, mark))
+        recorder = cls(
+            path, columns, autoflush=autoflush, durable=durable, line_end=line_end, _open=(fd, mark)
+        )
         return recorder, cut
 
     def append(self, row: Sequence[Any]) -> None:
@@ -344,7 +359,7 @@ class CsvRecorder:
         _write_all(self._fd, data)
         if self.durable:
             os.fsync(self._fd)
-        # the last line of what was just written (every row ends with "\r\n")
+        # the last line of what was just written (every row ends with the line terminator)
         start = text.rfind("\n", 0, len(text) - 1) + 1
         self._mark = CsvMark(
             self._mark.rows + self._pending_rows, self._mark.size + len(data), text[start:]
@@ -388,9 +403,9 @@ class CsvRecorder:
             shutil.copyfile(self.path, path)
 
 
-def _header_line(columns: Sequence[str]) -> str:
+def _header_line(columns: Sequence[str], line_end: str = LINE_END) -> str:
     buffer = io.StringIO()
-    csv.writer(buffer).writerow(columns)
+    csv.writer(buffer, lineterminator=line_end).writerow(columns)
     return buffer.getvalue()
 
 
@@ -488,12 +503,12 @@ def read_collisions(path: str | os.PathLike[str]) -> dict[str, np.ndarray]:
 
 def write_collisions(path: str | os.PathLike[str], columns: Mapping[str, Sequence[Any]]) -> Path:
     """Write columns (name -> one value per impact) as a CSV file in the
-    ``collisions.csv`` format: header line, one row per impact, floats with
-    :func:`repr` so that they read back bit for bit."""
+    ``collisions.csv`` format: header line, one row per impact, each ended by
+    :data:`LINE_END`, floats with :func:`repr` so that they read back bit for bit."""
     path = Path(path)
     names = list(columns)
     with open(path, "w", newline="", encoding="utf-8") as handle:
-        writer = csv.writer(handle)
+        writer = csv.writer(handle, lineterminator=LINE_END)
         writer.writerow(names)
         for row in zip(*(columns[name] for name in names), strict=True):
             writer.writerow([_format(v) for v in row])

@@ -164,7 +164,7 @@ def test_interrupt_and_resume_is_byte_identical(case, tmp_path, monkeypatch):
         )
         # what an interruption leaves: every completed impact, whole lines, a checkpoint
         text = (out / CSV_NAME).read_bytes()
-        assert text.endswith(b"\r\n")
+        assert text.endswith(b"\n") and b"\r" not in text
         assert read_collisions(out / CSV_NAME)["n"].tolist() == list(range(1, k + 1))
         assert text == (ref / CSV_NAME).read_bytes()[: len(text)]
         checkpoint = read_checkpoint(out / CHECKPOINT_NAME)
@@ -558,7 +558,7 @@ def test_recorder_writes_whole_rows_at_least_once_a_second(tmp_path, monkeypatch
     path = tmp_path / "rows.csv"
     recorder = record.CsvRecorder(path)  # the header is on disk at once
     header = path.read_bytes()
-    assert header == b",".join(name.encode() for name in record.COLUMNS) + b"\r\n"
+    assert header == b",".join(name.encode() for name in record.COLUMNS) + b"\n"
     row = (
         1,
         0.5,
@@ -585,7 +585,7 @@ def test_recorder_writes_whole_rows_at_least_once_a_second(tmp_path, monkeypatch
     monkeypatch.setattr(record, "FLUSH_INTERVAL", 0.0)
     recorder.append(row)  # due: both rows go out in one write
     data = path.read_bytes()
-    assert data.count(b"\r\n") == 3 and data.endswith(b"\r\n")
+    assert data.count(b"\n") == 3 and data.endswith(b"\n") and b"\r" not in data
     mark = recorder.flush()
     assert (mark.rows, mark.size) == (2, len(data)) and data.endswith(mark.last_line.encode())
     recorder.close()
