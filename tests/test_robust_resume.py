@@ -370,7 +370,7 @@ def test_sigterm_stops_cleanly(tmp_path):
 # the end of the file
 
 
-def test_truncated_last_line_is_dropped(tmp_path, monkeypatch):
+def test_truncated_last_line_is_dropped_and_rows_after_the_checkpoint_kept(tmp_path, monkeypatch):
     name, changes, method, impacts, _ = CASES["event-no-drag"]
     scene = case_scene(name, changes)
     ref = reference(tmp_path, scene, method, impacts)
@@ -385,8 +385,9 @@ def test_truncated_last_line_is_dropped(tmp_path, monkeypatch):
     notes: list[str] = []
     resume(out, notify=notes.append)
     assert notes == [
-        f"resuming {out} after impact 700 of {impacts}; dropped 3 row(s) written after the "
-        "checkpoint and an unterminated last line (40 bytes)"
+        f"resuming {out} after impact 700 of {impacts}; 3 row(s) written after the "
+        "checkpoint are kept (each checked against the recomputed impact); dropped an "
+        "unterminated last line (40 bytes)"
     ]
     assert same_run(ref, out)
 
