@@ -173,6 +173,8 @@ def resume(
     total = scene.run.collisions if collisions is None else int(collisions)
     rows = mark.rows
     csv_path = out / CSV_NAME
+    if csv_path.is_file() and csv_path.stat().st_size < mark.size:
+        return _recompute(out, scene, total, rows, progress, notify, on_record)
     by_time = scene.run.duration is not None and collisions is None
     if status == "stopped" or (status == "complete" and (total <= rows or by_time)):
         if collisions is not None and total < rows:
@@ -236,6 +238,56 @@ def resume(
     with _mismatch_hint(out):
         return _run_streamed(
             sim, total, out, stream, state, progress, on_record, resumed_from=rows, truncation=cut
+        )
+
+
+def _recompute(
+    out: Path,
+    scene: Any,
+    total: int,
+    checkpoint_rows: int,
+    progress: Progress | None,
+    notify: Callable[[str], None] | None,
+    on_record: OnRecord | None,
+) -> Result:
+    """Resume a run whose CSV file is shorter than its checkpoint says (cut short by
+    hand, or restored from an older copy): the run is deterministic, so it is recomputed
+    from the scene's initial state, each recomputed row is checked against the row on
+    disk (the file is left as it is and the old checkpoint kept until every whole row
+    has matched), and the run continues after them."""
+    csv_path = out / CSV_NAME
+    try:
+        header = CsvRecorder.header_mark(csv_path)
+    except CheckpointError as exc:
+        raise CheckpointError(f"{exc}; {_restart_hint(out)}") from None
+    sim = Simulation(scene)  # a fresh engine: no memory of the checkpoint's state
+    sim.resolved_scene(total)  # validates the new total
+    stream, cut = CsvRecorder.reopen(csv_path, header, autoflush=False)
+    if notify is not None:
+        partial = (
+            f" and an unterminated last line ({cut.partial_bytes} bytes), to be dropped"
+            if cut.partial_bytes
+            else ""
+        )
+        notify(
+            f"{csv_path} holds {cut.rows} of the {checkpoint_rows} impacts its checkpoint "
+            f"describes{partial}: recomputing the run from its start, checking each of "
+            f"the {cut.rows} rows on disk against the recomputed impact, then continuing "
+            f"to impact {total}"
+        )
+    if total != scene.run.collisions:
+        write_text_atomic(out / SCENE_NAME, scene_to_toml(sim.resolved_scene(total)))
+    with _mismatch_hint(out):
+        return _run_streamed(
+            sim,
+            total,
+            out,
+            stream,
+            sim.start_state(),
+            progress,
+            on_record,
+            resumed_from=0,
+            truncation=cut,
         )
 
 

@@ -342,6 +342,27 @@ class CsvRecorder:
         else:
             self._fd, self._mark = _open
 
+    @staticmethod
+    def header_mark(path: str | os.PathLike[str], columns: Sequence[str] = COLUMNS) -> CsvMark:
+        """The mark of a run file's header (no rows), in the file's line ending.
+
+        Raises:
+            CheckpointError: the file is missing or does not start with the header.
+        """
+        path = Path(path)
+        try:
+            with open(path, "rb") as handle:
+                start = handle.readline()
+        except FileNotFoundError:
+            raise CheckpointError(f"{path} is missing") from None
+        except OSError as exc:
+            raise CheckpointError(f"{path} cannot be read: {exc.strerror or exc}") from None
+        for line_end in _LINE_ENDS:
+            header = _header_line(columns, line_end)
+            if start == header.encode():
+                return CsvMark(0, len(start), header)
+        raise CheckpointError(f"{path} does not start with the header of a run file")
+
     @classmethod
     def reopen(
         cls,
@@ -420,7 +441,7 @@ class CsvRecorder:
     def rows_on_disk(self) -> int:
         """Whole rows in the file: the flushed (or checked) ones, plus rows still to be
         checked."""
-        return self._mark.rows + (self._check_rows if self._check is not None else 0)
+        return self._mark.rows + self._check_rows
 
     def append(self, row: Sequence[Any]) -> None:
         self._writer.writerow([_format(v) for v in row])
@@ -458,6 +479,7 @@ class CsvRecorder:
         if self._check is None:
             return
         self._close_check()
+        self._check_rows = 0
         if self._fd is not None and os.fstat(self._fd).st_size > self._mark.size:
             os.ftruncate(self._fd, self._mark.size)
             if self.durable:
@@ -469,7 +491,6 @@ class CsvRecorder:
         if self._check is not None:
             self._check.close()
             self._check = None
-            self._check_rows = 0
 
     def _discard_pending(self) -> None:
         self._pending.seek(0)

@@ -458,11 +458,6 @@ def _edit_scene(path: Path) -> None:
     path.write_text(path.read_text().replace("restitution = 0.393", "restitution = 0.4"))
 
 
-def _shorten_csv(path: Path) -> None:
-    data = path.read_bytes()
-    path.write_bytes(data[: len(data) // 2])
-
-
 def _replace_csv(path: Path) -> None:
     data = bytearray(path.read_bytes())
     data[-10] = ord("7") if data[-10] != ord("7") else ord("8")
@@ -492,7 +487,6 @@ BREAKAGES = {
         "is not the scene the checkpoint was written for",
     ),
     "missing scene": (lambda d: (d / SCENE_NAME).unlink(), "scene.toml is missing"),
-    "shortened csv": (lambda d: _shorten_csv(d / CSV_NAME), "fewer than the"),
     "replaced csv": (lambda d: _replace_csv(d / CSV_NAME), "does not match the checkpoint"),
     "missing csv": (lambda d: (d / CSV_NAME).unlink(), "collisions.csv is missing"),
 }
