@@ -45,6 +45,9 @@ DOCUMENTED_STOPS = [
         r"|the gap's extremum did not converge"
         r"|offset-curve inversion did not converge at x = \S+ m"
         r"|the flight's step-size control failed \(.+\)) (after|at) impact \d+ \(t = \S+ s\)",
+        r"run.step = \S+ s is too coarse for this scene \(use run.step <= \S+ s\): 3 impacts "
+        r"in a row were found within \S+ s of the previous one, where the ball had just left "
+        r"the wall \(it comes back within one step\) after impact \d+ \(t = \S+ s\)",
     )
 ]
 DOCUMENTED_GEOMETRY = re.compile(
