@@ -35,7 +35,7 @@ DOCUMENTED_STOPS = [
     re.compile(p)
     for p in (
         r"ball escaped above escape_height = \S+ m at t = \S+ s after impact \d+",
-        r"inelastic collapse: 10000 impacts within 1e-06 s of simulated time, "
+        r"inelastic collapse: 200 impacts within 1e-06 s of simulated time, "
         r"at impact \d+ \(t = \S+ s\)",
         r"inelastic collapse: 1000 consecutive impacts with zero time of flight, "
         r"at impact \d+ \(t = \S+ s\)",
