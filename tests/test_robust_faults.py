@@ -179,8 +179,7 @@ def test_unresolvable_collapse_keeps_rows_on_disk(tmp_path):
     scene = load_scene("parabola-5.4hz", overrides=["contact.elastic_below=0"])
     result = simulate(scene, collisions=5000, out_dir=tmp_path)
     assert result.stop_reason == (
-        "inelastic collapse: 200 impacts within 1e-06 s of simulated time, at impact "
-        "201 (t = 0 s)"
+        "inelastic collapse: 200 impacts within 1e-06 s of simulated time, at impact 201 (t = 0 s)"
     )
     assert_kept(result, tmp_path, 201)
 
