@@ -22,12 +22,24 @@ __all__ = [
     "ImpactResult",
     "KaneLevinsonImpact",
     "LowVelocityRule",
+    "REGIME_RTOL",
     "impact_law",
 ]
 
 STICK = "stick"
 SLIP = "slip"
 ELASTIC = "elastic"
+
+#: Relative tolerance of the friction-cone test |Rt| <= mu_s Rn, in units of the
+#: momenta that enter the impulses: 16 ulps. The no-slip impulse Rt is a sum of a few
+#: products of the ball's and the boundary's velocity components with the mass, so it
+#: carries a rounding error of a few ulps of m (|u1| + |u2| + r |u3| + |vb1| + |vb2|).
+#: A purely normal impact (no tangential relative velocity, no spin) has Rt = 0 exactly
+#: but computes |Rt| ~ 1e-17 m |u|, which with mu_s = 0 used to exceed mu_s Rn = 0 and
+#: label the impact ``slip``. The cone is widened by this much so that rounding alone
+#: never decides the regime; an impulse genuinely outside the cone (by more than 1e-14 of
+#: the momenta) still slips.
+REGIME_RTOL = 16 * 2.0**-52
 
 
 @dataclass(frozen=True, slots=True)
@@ -117,7 +129,8 @@ class KaneLevinsonImpact:
 
     Newton restitution on the contact point's normal velocity relative to the boundary.
     The no-slip solution is tried first and kept if its impulse lies in the static
-    friction cone, |Rt| <= mu_s Rn; otherwise the ball slips with Rt = -mu_k Rn sign(wt).
+    friction cone, |Rt| <= mu_s Rn (up to rounding: :data:`REGIME_RTOL`); otherwise the
+    ball slips with Rt = -mu_k Rn sign(wt).
     Slow impacts follow the :class:`LowVelocityRule` (regime ``"elastic"``).
 
     Args:
@@ -187,7 +200,8 @@ class KaneLevinsonImpact:
             return ImpactResult(u1, u2, u3, 0.0, 0.0, ELASTIC if low else SLIP, wt, wn, False)
         n1, n2, n3, rt, rn = _ball.impact_stick(v1, v2, u3, z, vb1, vb2, m, r, k, e)
         regime = STICK
-        if abs(rt) > self.mu_s * rn:
+        rounding = REGIME_RTOL * m * (abs(v1) + abs(v2) + r * abs(u3) + abs(vb1) + abs(vb2))
+        if abs(rt) > self.mu_s * rn + rounding:
             sgn = math.copysign(1.0, wt)
             n1, n2, n3, rt, rn = _ball.impact_slip(
                 v1, v2, u3, z, vb1, vb2, m, r, k, e, self.mu_k, sgn

@@ -21,18 +21,23 @@ the rows so far are flushed, a final checkpoint is written and
 signal stops at once; the files then still hold a valid prefix of the run and the last
 checkpoint, from which :func:`resume` redoes the few impacts after it. A SIGKILL leaves
 the last checkpoint (at most a second old) and possibly rows after it, even an
-unterminated last line; :func:`resume` cuts those off.
+unterminated last line; :func:`resume` keeps the whole rows after the checkpoint (it
+compares each recomputed impact with the row on disk instead of writing it again) and
+cuts an unterminated last line off. A failed write (a full disk) raises
+:class:`RunWriteError` and leaves the same: whole rows, possibly after the checkpoint.
 """
 
 from __future__ import annotations
 
 import contextlib
+import errno
 import hashlib
 import math
 import os
+import shlex
 import signal
 import time
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Iterator, Mapping
 from pathlib import Path
 from typing import Any
 
@@ -44,13 +49,20 @@ from billiard.checkpoint import (
 )
 from billiard.engine import COLLAPSE_COUNT, Progress, Simulation
 from billiard.interrupt import RunInterrupted, StopRequest, signals_deferred
-from billiard.record import CsvMark, CsvRecorder, Truncation
+from billiard.record import CsvMark, CsvRecorder, RowMismatchError, RunBusyError, Truncation
 from billiard.result import Result, RunFile
 from billiard.scene import scene_from_toml, scene_to_toml
 from billiard.state import EngineState
 from billiard.status import Status
 
-__all__ = ["CHECKPOINT_NAME", "CSV_NAME", "SCENE_NAME", "resume", "run_streamed"]
+__all__ = [
+    "CHECKPOINT_NAME",
+    "CSV_NAME",
+    "SCENE_NAME",
+    "RunWriteError",
+    "resume",
+    "run_streamed",
+]
 
 #: File names inside a run directory.
 CSV_NAME = "collisions.csv"
@@ -102,9 +114,10 @@ def resume(
 ) -> Result:
     """Continue a streamed run from its checkpoint.
 
-    The CSV file is first cut back to the checkpoint's row (dropping rows written after
-    it and an unterminated last line); the finished file then equals that of an
-    uninterrupted run byte for byte.
+    Whole rows after the checkpoint's row are kept: each recomputed impact is compared
+    with the row on disk rather than written again (a row that differs raises
+    :class:`CheckpointError`, the file unchanged); an unterminated last line is cut off.
+    The finished file then equals that of an uninterrupted run byte for byte.
 
     Args:
         out_dir: the run directory (written by ``simulate(..., out_dir=...)``).
@@ -124,6 +137,7 @@ def resume(
             scene does not match it, or another process is still writing it.
         SceneError: DIR/scene.toml is not a valid scene.
         RunInterrupted: as for :func:`~billiard.simulate.simulate`.
+        RunWriteError: a write failed (a full disk); every whole row is kept.
     """
     out = Path(out_dir)
     if not out.is_dir():
@@ -158,6 +172,9 @@ def resume(
         )
     total = scene.run.collisions if collisions is None else int(collisions)
     rows = mark.rows
+    csv_path = out / CSV_NAME
+    if csv_path.is_file() and csv_path.stat().st_size < mark.size:
+        return _recompute(out, scene, total, rows, progress, notify, on_record)
     by_time = scene.run.duration is not None and collisions is None
     if status == "stopped" or (status == "complete" and (total <= rows or by_time)):
         if collisions is not None and total < rows:
@@ -170,7 +187,7 @@ def resume(
             sim.counts, final_time = dict(last.counts), last.ball.t
         return Result(
             scene,
-            RunFile(out / CSV_NAME, rows),
+            RunFile(csv_path, rows),
             stop_status,
             stop_reason,
             0.0,
@@ -199,19 +216,95 @@ def resume(
     except CheckpointError as exc:
         raise CheckpointError(f"{checkpoint_path}: {exc}") from None
     sim.resolved_scene(total)  # validates the new total
-    stream, cut = CsvRecorder.reopen(out / CSV_NAME, mark, autoflush=False)
+    try:
+        stream, cut = CsvRecorder.reopen(csv_path, mark, autoflush=False)
+    except CheckpointError as exc:
+        if isinstance(exc, RunBusyError):
+            raise
+        raise CheckpointError(f"{exc}; {_restart_hint(out)}") from None
     if notify is not None:
-        dropped = []
+        notes = []
         if cut.rows:
-            dropped.append(f"{cut.rows} row(s) written after the checkpoint")
+            notes.append(
+                f"{cut.rows} row(s) written after the checkpoint are kept "
+                f"(each checked against the recomputed impact)"
+            )
         if cut.partial_bytes:
-            dropped.append(f"an unterminated last line ({cut.partial_bytes} bytes)")
-        note = f"; dropped {' and '.join(dropped)}" if dropped else ""
+            notes.append(f"dropped an unterminated last line ({cut.partial_bytes} bytes)")
+        note = f"; {'; '.join(notes)}" if notes else ""
         notify(f"resuming {out} after impact {rows} of {total}{note}")
     if total != scene.run.collisions:
         write_text_atomic(out / SCENE_NAME, scene_to_toml(sim.resolved_scene(total)))
-    return _run_streamed(
-        sim, total, out, stream, state, progress, on_record, resumed_from=rows, truncation=cut
+    with _mismatch_hint(out):
+        return _run_streamed(
+            sim, total, out, stream, state, progress, on_record, resumed_from=rows, truncation=cut
+        )
+
+
+def _recompute(
+    out: Path,
+    scene: Any,
+    total: int,
+    checkpoint_rows: int,
+    progress: Progress | None,
+    notify: Callable[[str], None] | None,
+    on_record: OnRecord | None,
+) -> Result:
+    """Resume a run whose CSV file is shorter than its checkpoint says (cut short by
+    hand, or restored from an older copy): the run is deterministic, so it is recomputed
+    from the scene's initial state, each recomputed row is checked against the row on
+    disk (the file is left as it is and the old checkpoint kept until every whole row
+    has matched), and the run continues after them."""
+    csv_path = out / CSV_NAME
+    try:
+        header = CsvRecorder.header_mark(csv_path)
+    except CheckpointError as exc:
+        raise CheckpointError(f"{exc}; {_restart_hint(out)}") from None
+    sim = Simulation(scene)  # a fresh engine: no memory of the checkpoint's state
+    sim.resolved_scene(total)  # validates the new total
+    stream, cut = CsvRecorder.reopen(csv_path, header, autoflush=False)
+    if notify is not None:
+        partial = (
+            f" and an unterminated last line ({cut.partial_bytes} bytes), to be dropped"
+            if cut.partial_bytes
+            else ""
+        )
+        notify(
+            f"{csv_path} holds {cut.rows} of the {checkpoint_rows} impacts its checkpoint "
+            f"describes{partial}: recomputing the run from its start, checking each of "
+            f"the {cut.rows} rows on disk against the recomputed impact, then continuing "
+            f"to impact {total}"
+        )
+    if total != scene.run.collisions:
+        write_text_atomic(out / SCENE_NAME, scene_to_toml(sim.resolved_scene(total)))
+    with _mismatch_hint(out):
+        return _run_streamed(
+            sim,
+            total,
+            out,
+            stream,
+            sim.start_state(),
+            progress,
+            on_record,
+            resumed_from=0,
+            truncation=cut,
+        )
+
+
+@contextlib.contextmanager
+def _mismatch_hint(out: Path) -> Iterator[None]:
+    """Add the way forward to a row that does not match its recomputation."""
+    try:
+        yield
+    except RowMismatchError as exc:
+        raise CheckpointError(f"{exc}; {_restart_hint(out)}") from None
+
+
+def _restart_hint(out: Path) -> str:
+    """The command that starts the run in ``out`` again from its beginning."""
+    return (
+        f"to start it again from the beginning: `billiard run "
+        f"{shlex.quote(str(out / SCENE_NAME))} --out {shlex.quote(str(out))}`"
     )
 
 
@@ -236,9 +329,13 @@ def _run_streamed(
     keeping ``out/checkpoint.json`` in step with what the CSV file holds."""
     checkpoint_path = out / CHECKPOINT_NAME
     fingerprint = _fingerprint(sim)
-    saved = [stream.mark.rows]
+    saved = [start.impacts]
 
     def save(state: EngineState, status: str, reason: str | None = None) -> None:
+        if stream.checking:
+            # rows already on disk are still being compared with the recomputed ones:
+            # the existing checkpoint stays until they all match
+            return
         mark = stream.flush()
         if state.impacts != mark.rows:  # pragma: no cover - an engine bug
             raise AssertionError(f"engine state after {state.impacts}, CSV {mark.rows}")
@@ -280,14 +377,20 @@ def _run_streamed(
             except RunInterrupted as exc:
                 save(sim.state, "interrupted")
                 stream.close()
-                exc.rows, exc.checkpoint_rows, exc.out_dir = len(stream), saved[0], out
+                exc.rows, exc.checkpoint_rows, exc.out_dir = stream.rows_on_disk, saved[0], out
                 raise
             except KeyboardInterrupt as exc:
                 # a second signal broke off an impact: the rows so far are whole and the
                 # last checkpoint still describes a prefix of them
                 stream.close()
-                raise RunInterrupted(signal.SIGINT, len(stream), saved[0], out) from exc
+                raise RunInterrupted(signal.SIGINT, stream.rows_on_disk, saved[0], out) from exc
+            # the run is over: rows on disk it did not reach (none, unless the file
+            # held more than the run makes) are not part of it
+            stream.end_check()
             save(sim.state, "complete" if reason is None else "stopped", reason)
+    except OSError as exc:
+        stream.close()
+        raise RunWriteError.after(exc, out, stream.rows_on_disk, saved[0]) from exc
     finally:
         stream.close()
     if request.signum:
@@ -306,6 +409,54 @@ def _run_streamed(
         resumed_from=resumed_from,
         truncation=truncation,
     )
+
+
+class RunWriteError(OSError):
+    """A streamed run could not write its files (the disk is full, a quota, an I/O
+    error). The CSV file ends with the ``rows`` whole rows that reached it, and
+    :func:`resume` keeps them all (rows after the last checkpoint are recomputed and
+    checked, not rewritten). ``strerror`` is the one-line message: what failed, how many
+    impacts are kept, and how to continue.
+
+    Attributes:
+        rows: whole rows in the CSV file.
+        checkpoint_rows: rows the checkpoint describes (a resume recomputes the rest).
+        out_dir: the run directory.
+    """
+
+    def __init__(self, errno_: int, message: str, rows: int, checkpoint_rows: int, out: Path):
+        super().__init__(errno_, message)
+        self.rows = rows
+        self.checkpoint_rows = checkpoint_rows
+        self.out_dir = out
+
+    @classmethod
+    def after(cls, exc: OSError, out: Path, rows: int, checkpoint_rows: int) -> RunWriteError:
+        code = exc.errno or errno.EIO
+        if code in _DISK_FULL:
+            what = f"the disk is full ({os.strerror(code)})"
+        else:
+            where = f" {exc.filename}" if exc.filename else ""
+            what = f"a write failed{where} ({exc.strerror or exc})"
+        if (out / CHECKPOINT_NAME).is_file():
+            again = (
+                f"free some space, then continue with "
+                f"`billiard run --resume {shlex.quote(str(out))}`"
+                if code in _DISK_FULL
+                else f"continue with `billiard run --resume {shlex.quote(str(out))}`"
+            )
+        else:  # not even the first checkpoint was written: nothing to continue from
+            again = "nothing to continue from: run it again"
+        return cls(
+            code,
+            f"{what}: {rows} impacts kept in {out / CSV_NAME}; {again}",
+            rows,
+            checkpoint_rows,
+            out,
+        )
+
+
+_DISK_FULL = frozenset({errno.ENOSPC, getattr(errno, "EDQUOT", errno.ENOSPC)})
 
 
 def _all_finite(data: Any) -> bool:

@@ -19,7 +19,14 @@ from typing import Any
 
 from billiard.engine import COLLAPSE_COUNT, COLLAPSE_SPAN, ZERO_FLIGHT_LIMIT, Progress, Simulation
 from billiard.interrupt import RunInterrupted
-from billiard.persist import CHECKPOINT_NAME, CSV_NAME, SCENE_NAME, resume, run_streamed
+from billiard.persist import (
+    CHECKPOINT_NAME,
+    CSV_NAME,
+    SCENE_NAME,
+    RunWriteError,
+    resume,
+    run_streamed,
+)
 from billiard.record import MemoryRecorder
 from billiard.result import Result
 from billiard.scene import with_values
@@ -37,6 +44,7 @@ __all__ = [
     "EngineState",
     "Result",
     "RunInterrupted",
+    "RunWriteError",
     "Simulation",
     "Status",
     "resume",
@@ -80,6 +88,8 @@ def simulate(
         RunBusyError: another process is writing a run in ``out_dir``.
         RunInterrupted: a streamed run got SIGINT or SIGTERM; its files are complete up
             to the last impact and :func:`resume` continues it.
+        RunWriteError: a streamed run could not write its files (a full disk; an
+            ``OSError``): its message says how many impacts are kept and how to continue.
     """
     if duration is not None:
         scene = with_values(scene, {"run.duration": duration})  # validates it

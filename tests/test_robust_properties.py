@@ -35,7 +35,7 @@ DOCUMENTED_STOPS = [
     re.compile(p)
     for p in (
         r"ball escaped above escape_height = \S+ m at t = \S+ s after impact \d+",
-        r"inelastic collapse: 10000 impacts within 1e-06 s of simulated time, "
+        r"inelastic collapse: 200 impacts within 1e-06 s of simulated time, "
         r"at impact \d+ \(t = \S+ s\)",
         r"inelastic collapse: 1000 consecutive impacts with zero time of flight, "
         r"at impact \d+ \(t = \S+ s\)",
@@ -45,6 +45,9 @@ DOCUMENTED_STOPS = [
         r"|the gap's extremum did not converge"
         r"|offset-curve inversion did not converge at x = \S+ m"
         r"|the flight's step-size control failed \(.+\)) (after|at) impact \d+ \(t = \S+ s\)",
+        r"run.step = \S+ s is too coarse for this scene \(use run.step <= \S+ s\): 3 impacts "
+        r"in a row were found within \S+ s of the previous one, where the ball had just left "
+        r"the wall \(it comes back within one step\) after impact \d+ \(t = \S+ s\)",
     )
 ]
 DOCUMENTED_GEOMETRY = re.compile(
