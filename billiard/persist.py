@@ -304,7 +304,7 @@ def _restart_hint(out: Path) -> str:
     """The command that starts the run in ``out`` again from its beginning."""
     return (
         f"to start it again from the beginning: `billiard run "
-        f"{shlex.quote(str(out / SCENE_NAME))} --out {shlex.quote(str(out))}`"
+        f"{shlex.quote(str(out / SCENE_NAME))} --out {shlex.quote(str(out))} --overwrite`"
     )
 
 

@@ -65,7 +65,7 @@ CASES: dict[str, tuple[list[str], str]] = {
         ["--set", "initial.v1=1e6"],
         "'initial.v1' = 1000000.0 m/s is out of range [-100, 100] m/s",
     ),
-    "frame interval nan": (["--frame-interval", "nan"], "--frame-interval 'nan' must be"),
+    "frame interval nan": (["--frame-interval", "nan"], "frame interval 'nan' must be"),
     "name outside runs": (["--set", "name=../../x"], "scene key 'name' = '../../x' contains"),
     "amplitude without frequency": (
         ["--set", "drive.frequency=0"],

@@ -86,7 +86,7 @@ def test_a_csv_that_is_not_a_prefix_is_refused_with_the_command_to_restart(
     files = {p.name: p.read_bytes() for p in out.iterdir()}
     assert main(["run", "--resume", str(out), "--no-plot"]) == 2
     err = capsys.readouterr().err.splitlines()[-1]
-    command = f"billiard run {out / SCENE_NAME} --out {out}"
+    command = f"billiard run {out / SCENE_NAME} --out {out} --overwrite"
     assert err == (
         f"billiard: error: cannot resume {out}: {out / CSV_NAME}: impact 20 on disk differs "
         f"from the same impact recomputed (was the file edited or replaced?); to start it "
@@ -104,7 +104,7 @@ def test_a_csv_without_its_header_is_refused(tmp_path, capsys):
     assert main(["run", "--resume", str(out), "--no-plot"]) == 2
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and "does not start with the header of a run file" in err
-    assert f"`billiard run {out / SCENE_NAME} --out {out}`" in err
+    assert f"`billiard run {out / SCENE_NAME} --out {out} --overwrite`" in err
 
 
 def test_an_interrupted_recomputation_keeps_the_old_checkpoint(reference, tmp_path):
