@@ -49,11 +49,11 @@ from billiard.checkpoint import (
 )
 from billiard.engine import COLLAPSE_COUNT, Progress, Simulation
 from billiard.interrupt import RunInterrupted, StopRequest, signals_deferred
-from billiard.record import CsvMark, CsvRecorder, RowMismatchError, RunBusyError, Truncation
 from billiard.result import Result, RunFile
 from billiard.scene import scene_from_toml, scene_to_toml
 from billiard.state import EngineState
 from billiard.status import Status
+from billiard.stream import CsvMark, CsvRecorder, RowMismatchError, RunBusyError, Truncation
 
 __all__ = [
     "CHECKPOINT_NAME",

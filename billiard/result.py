@@ -10,8 +10,9 @@ from typing import Any
 
 import numpy as np
 
-from billiard.record import CsvRecorder, MemoryRecorder, Truncation, read_collisions
+from billiard.record import MemoryRecorder, read_collisions
 from billiard.status import Status
+from billiard.stream import CsvRecorder, Truncation
 
 __all__ = ["Result", "RunFile"]
 

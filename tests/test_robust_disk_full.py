@@ -177,5 +177,5 @@ def test_an_edited_row_after_the_checkpoint_is_refused_and_nothing_changes(
     assert note.startswith(f"billiard: resuming {out} after impact {error.checkpoint_rows} ")
     assert err.startswith(f"billiard: error: cannot resume {out}: ")
     assert f"impact {error.rows} on disk differs" in err, err
-    assert f"`billiard run {out / 'scene.toml'} --out {out}`" in err
+    assert f"`billiard run {out / 'scene.toml'} --out {out} --overwrite`" in err
     assert {p.name: p.read_bytes() for p in out.iterdir()} == files

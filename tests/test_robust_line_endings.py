@@ -7,9 +7,10 @@ import numpy as np
 
 from billiard.checkpoint import read_checkpoint, write_checkpoint
 from billiard.interrupt import signal_after
-from billiard.record import CsvRecorder, read_collisions, write_collisions
+from billiard.record import read_collisions, write_collisions
 from billiard.scene import load_scene
 from billiard.simulate import CHECKPOINT_NAME, CSV_NAME, RunInterrupted, resume, simulate
+from billiard.stream import CsvRecorder
 
 
 def _lines_end_with_newline_only(data: bytes) -> bool:

@@ -37,6 +37,7 @@ from billiard.spec import InitialSpec
 engine = importlib.import_module("billiard.engine")
 persist = importlib.import_module("billiard.persist")
 record = importlib.import_module("billiard.record")
+stream = importlib.import_module("billiard.stream")
 
 REPO = Path(__file__).resolve().parent.parent
 
@@ -535,11 +536,11 @@ def test_one_run_directory_one_writer(tmp_path, monkeypatch):
     touches it."""
     out = finished_run(tmp_path, monkeypatch)
     files = {p.name: p.read_bytes() for p in out.iterdir()}
-    holder = record.CsvRecorder.reopen(
-        out / CSV_NAME, record.CsvMark.from_dict(read_checkpoint(out / CHECKPOINT_NAME)["csv"])
+    holder = stream.CsvRecorder.reopen(
+        out / CSV_NAME, stream.CsvMark.from_dict(read_checkpoint(out / CHECKPOINT_NAME)["csv"])
     )[0]
     try:
-        with pytest.raises(record.RunBusyError, match="being written by another process"):
+        with pytest.raises(stream.RunBusyError, match="being written by another process"):
             simulate(load_scene("wedge-6.6hz"), collisions=10, out_dir=out)
         with pytest.raises(CheckpointError, match="being written by another process"):
             resume(out)
@@ -552,7 +553,7 @@ def test_one_run_directory_one_writer(tmp_path, monkeypatch):
 
 def test_recorder_writes_whole_rows_at_least_once_a_second(tmp_path, monkeypatch):
     path = tmp_path / "rows.csv"
-    recorder = record.CsvRecorder(path)  # the header is on disk at once
+    recorder = stream.CsvRecorder(path)  # the header is on disk at once
     header = path.read_bytes()
     assert header == b",".join(name.encode() for name in record.COLUMNS) + b"\n"
     row = (

@@ -1,0 +1,470 @@
+"""A run file streamed to disk as it grows: rows appended in whole lines, flushed and synced
+at least once a second, with the marks a checkpoint stores to find its place again.
+
+A streamed file only ever grows by whole rows: rows are collected in memory and written
+with one system call per flush, then synced to disk. A process killed in the middle of
+that call can leave an unterminated last line; readers skip it, and resuming the run
+(:func:`billiard.persist.resume`) cuts the file back to the checkpoint's row or checks
+the rows after it against a recomputation.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import csv
+import io
+import os
+import shutil
+import time
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any, BinaryIO
+
+import numpy as np
+
+from billiard.checkpoint import CheckpointError
+from billiard.record import (
+    _LINE_ENDS,
+    COLUMNS,
+    FLUSH_INTERVAL,
+    LINE_END,
+    _format,
+    _header_line,
+    read_collisions,
+)
+
+try:  # advisory file locks (POSIX); elsewhere two processes are not kept apart
+    import fcntl
+except ImportError:  # pragma: no cover
+    fcntl = None  # type: ignore[assignment]
+
+__all__ = ["CsvMark", "CsvRecorder", "RowMismatchError", "RunBusyError", "Truncation"]
+
+
+@dataclass(frozen=True)
+class CsvMark:
+    """A row boundary of a streamed CSV file: ``rows`` data rows occupy the first
+    ``size`` bytes, the last of which form ``last_line`` (the header when rows = 0,
+    line terminator included). A checkpoint stores one to find its place in the file."""
+
+    rows: int
+    size: int
+    last_line: str
+
+    def as_dict(self) -> dict[str, Any]:
+        return {"rows": self.rows, "bytes": self.size, "last_line": self.last_line}
+
+    @classmethod
+    def from_dict(cls, data: Mapping[str, Any]) -> CsvMark:
+        rows, size, line = data.get("rows"), data.get("bytes"), data.get("last_line")
+        if not (
+            _is_count(rows) and _is_count(size) and isinstance(line, str) and line.endswith("\n")
+        ):
+            raise CheckpointError("its 'csv' entry is malformed")
+        return cls(rows, size, line)
+
+
+def _is_count(value: Any) -> bool:
+    return isinstance(value, int) and not isinstance(value, bool) and value >= 0
+
+
+@dataclass(frozen=True)
+class Truncation:
+    """What reopening a CSV file at a mark found after it: complete rows written after
+    the mark (a kill or a failed write between a flush and its checkpoint leaves them;
+    they are checked against the recomputed rows and kept), and the bytes of an
+    unterminated last line, which are dropped (0 when the file ended cleanly)."""
+
+    rows: int
+    partial_bytes: int
+
+
+class _ShortWrite(Exception):
+    """A write that failed after ``written`` bytes reached the file."""
+
+    def __init__(self, written: int, error: OSError):
+        super().__init__(written, error)
+        self.written = written
+        self.error = error
+
+
+def _write_all(fd: int, data: bytes) -> None:
+    view = memoryview(data)
+    done = 0
+    while view:
+        try:
+            written = os.write(fd, view)
+        except OSError as exc:
+            raise _ShortWrite(done, exc) from exc
+        done += written
+        view = view[written:]
+
+
+def _read_at(fd: int, size: int, offset: int) -> bytes:
+    chunks = []
+    while size > 0:
+        chunk = os.pread(fd, size, offset)
+        if not chunk:
+            break
+        chunks.append(chunk)
+        size -= len(chunk)
+        offset += len(chunk)
+    return b"".join(chunks)
+
+
+class RunBusyError(CheckpointError):
+    """Another process is writing the same run file."""
+
+
+class RowMismatchError(CheckpointError):
+    """A row already in a run file differs from the same impact recomputed on resume:
+    the file is not (a prefix of) this run. Nothing was written to the file."""
+
+    def __init__(self, path: Path, impact: int):
+        super().__init__(
+            f"{path}: impact {impact} on disk differs from the same impact recomputed "
+            f"(was the file edited or replaced?)"
+        )
+        self.path = path
+        self.impact = impact
+
+
+_SCAN_CHUNK = 1 << 20
+
+
+def _scan_rows(fd: int, start: int, end: int) -> tuple[int, int]:
+    """(number of whole lines, end of the last whole line) of the bytes [start, end)."""
+    rows, whole, offset = 0, start, start
+    while offset < end:
+        chunk = _read_at(fd, min(_SCAN_CHUNK, end - offset), offset)
+        if not chunk:
+            break
+        rows += chunk.count(b"\n")
+        last = chunk.rfind(b"\n")
+        if last >= 0:
+            whole = offset + last + 1
+        offset += len(chunk)
+    return rows, whole
+
+
+def _open_locked(path: Path) -> int:
+    """Open ``path`` for writing (created if missing, not truncated) and take an exclusive
+    advisory lock on it, so that two processes never write one run; the lock goes with
+    the descriptor, also when the process is killed."""
+    fd = os.open(path, os.O_RDWR | os.O_CREAT, 0o666)
+    if fcntl is not None:
+        try:
+            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except OSError:
+            os.close(fd)
+            raise RunBusyError(f"{path} is being written by another process") from None
+    return fd
+
+
+class CsvRecorder:
+    """Rows streamed to a CSV file as they are produced; nothing but the rows since the
+    last flush is kept in memory, so long runs stay flat. Read back with :meth:`columns`.
+
+    A failed write (a full disk) leaves the file ending with the whole rows that reached
+    it: a row cut short is removed again, :attr:`mark` counts the whole rows, and the
+    recorder writes nothing more (:meth:`close` only closes the file).
+
+    Args:
+        path: the file; emptied (or created) and given its header at once.
+        columns: column names.
+        autoflush: flush on its own at least once a second. A run that checkpoints
+            turns this off and calls :meth:`flush` itself, so that what is on disk is
+            always exactly what a checkpoint describes.
+        durable: sync each flush to the storage device (``os.fsync``), so that rows
+            said to be kept survive a crash of the machine too, not only of the process.
+        line_end: the rows' line terminator (:data:`LINE_END`; ``"\\r\\n"`` only to
+            continue a file written so).
+
+    Raises:
+        RunBusyError: another process holds the file (a run still going on).
+    """
+
+    def __init__(
+        self,
+        path: str | os.PathLike[str],
+        columns: Sequence[str] = COLUMNS,
+        *,
+        autoflush: bool = True,
+        durable: bool = True,
+        line_end: str = LINE_END,
+        _open: tuple[int, CsvMark] | None = None,
+    ):
+        if line_end not in _LINE_ENDS:
+            raise ValueError(f"line_end must be one of {_LINE_ENDS!r}, got {line_end!r}")
+        self.path = Path(path)
+        self.names = tuple(columns)
+        self.autoflush = autoflush
+        self.durable = durable
+        self.line_end = line_end
+        self._pending = io.StringIO()
+        self._writer = csv.writer(self._pending, lineterminator=line_end)
+        self._pending_rows = 0
+        self._last_flush = time.monotonic()
+        #: the write error that ended writing (None while writes succeed)
+        self.failed: OSError | CheckpointError | None = None
+        # rows already on disk after the mark, checked against the appended ones
+        self._check: BinaryIO | None = None
+        self._check_end = 0
+        self._check_rows = 0
+        if _open is None:
+            self._fd: int | None = _open_locked(self.path)
+            os.ftruncate(self._fd, 0)
+            header = _header_line(self.names, line_end)
+            data = header.encode("utf-8")
+            try:
+                _write_all(self._fd, data)
+            except _ShortWrite as short:
+                os.close(self._fd)
+                raise short.error from None
+            if durable:
+                os.fsync(self._fd)
+            self._mark = CsvMark(0, len(data), header)
+        else:
+            self._fd, self._mark = _open
+
+    @staticmethod
+    def header_mark(path: str | os.PathLike[str], columns: Sequence[str] = COLUMNS) -> CsvMark:
+        """The mark of a run file's header (no rows), in the file's line ending.
+
+        Raises:
+            CheckpointError: the file is missing or does not start with the header.
+        """
+        path = Path(path)
+        try:
+            with open(path, "rb") as handle:
+                start = handle.readline()
+        except FileNotFoundError:
+            raise CheckpointError(f"{path} is missing") from None
+        except OSError as exc:
+            raise CheckpointError(f"{path} cannot be read: {exc.strerror or exc}") from None
+        for line_end in _LINE_ENDS:
+            header = _header_line(columns, line_end)
+            if start == header.encode():
+                return CsvMark(0, len(start), header)
+        raise CheckpointError(f"{path} does not start with the header of a run file")
+
+    @classmethod
+    def reopen(
+        cls,
+        path: str | os.PathLike[str],
+        mark: CsvMark,
+        columns: Sequence[str] = COLUMNS,
+        *,
+        autoflush: bool = True,
+        durable: bool = True,
+    ) -> tuple[CsvRecorder, Truncation]:
+        """Continue a streamed file at ``mark``: check that the file holds the header
+        and, at the mark, the expected last line, and append from there, with the line
+        terminator the file was written with (its header's).
+
+        Whole rows already in the file after the mark (written after the checkpoint
+        that gave the mark) are not rewritten: each row appended is compared with the
+        next of them (:class:`RowMismatchError` if it differs, before anything is
+        written), and only rows beyond them are written. Until then the file is left
+        as it is; at the first row written (or :meth:`end_check`), an unterminated last
+        line is cut off.
+
+        Raises:
+            CheckpointError: the file is missing, shorter than the mark, or differs
+                from what the mark describes (the file is then left as it was).
+            RunBusyError: another process is still writing it.
+        """
+        path = Path(path)
+        if not path.is_file():
+            raise CheckpointError(
+                f"{path} is missing" if not path.exists() else f"{path} is not a file"
+            )
+        line = mark.last_line.encode()
+        line_end = "\r\n" if mark.last_line.endswith("\r\n") else "\n"
+        header = _header_line(columns, line_end).encode()
+        fd = _open_locked(path)
+        check: BinaryIO | None = None
+        try:
+            size = os.fstat(fd).st_size
+            if size < mark.size:
+                raise CheckpointError(
+                    f"{path} holds {size} bytes, fewer than the {mark.size} bytes of the "
+                    f"{mark.rows} impacts the checkpoint describes (was it replaced?)"
+                )
+            start = _read_at(fd, len(header), 0)
+            at_mark = b""
+            if mark.size >= max(len(line), len(header)):
+                at_mark = _read_at(fd, len(line), mark.size - len(line))
+            if start != header or at_mark != line:
+                raise CheckpointError(
+                    f"{path} does not match the checkpoint (impact {mark.rows} is not "
+                    f"where the checkpoint says; was the file edited or replaced?)"
+                )
+            rows, whole = _scan_rows(fd, mark.size, size)
+            if rows:
+                check = open(path, "rb")  # noqa: SIM115 - closed by the recorder
+                check.seek(mark.size)
+            elif size > mark.size:
+                os.ftruncate(fd, mark.size)
+                os.fsync(fd)
+            os.lseek(fd, mark.size, os.SEEK_SET)
+        except BaseException:
+            os.close(fd)
+            raise
+        recorder = cls(
+            path, columns, autoflush=autoflush, durable=durable, line_end=line_end, _open=(fd, mark)
+        )
+        recorder._check, recorder._check_end, recorder._check_rows = check, whole, rows
+        return recorder, Truncation(rows, size - whole)
+
+    @property
+    def checking(self) -> bool:
+        """Are appended rows still being compared with rows already in the file?"""
+        return self._check is not None
+
+    @property
+    def rows_on_disk(self) -> int:
+        """Whole rows in the file: the flushed (or checked) ones, plus rows still to be
+        checked."""
+        return self._mark.rows + self._check_rows
+
+    def append(self, row: Sequence[Any]) -> None:
+        self._writer.writerow([_format(v) for v in row])
+        self._pending_rows += 1
+        if self._check is not None:
+            self._check_row()
+            if self._check is not None:
+                return
+        if self.autoflush:
+            # wall-clock time decides only when bytes reach the disk, never what they are
+            now = time.monotonic()
+            if now - self._last_flush >= FLUSH_INTERVAL:
+                self.flush()
+
+    def _check_row(self) -> None:
+        """Compare the one pending row with the next row in the file."""
+        assert self._check is not None and self._pending_rows == 1
+        if self._mark.size >= self._check_end:
+            self.end_check()
+            return
+        text = self._pending.getvalue()
+        line = text.encode("utf-8")
+        if self._check.readline() != line:
+            self._discard_pending()
+            self._close_check()
+            self.failed = RowMismatchError(self.path, self._mark.rows + 1)
+            raise self.failed
+        self._mark = CsvMark(self._mark.rows + 1, self._mark.size + len(line), text)
+        self._check_rows -= 1
+        self._discard_pending()
+
+    def end_check(self) -> None:
+        """Stop checking: cut the file after the rows checked so far (dropping rows not
+        reached and an unterminated last line), and write from there."""
+        if self._check is None:
+            return
+        self._close_check()
+        self._check_rows = 0
+        if self._fd is not None and os.fstat(self._fd).st_size > self._mark.size:
+            os.ftruncate(self._fd, self._mark.size)
+            if self.durable:
+                os.fsync(self._fd)
+        if self._fd is not None:
+            os.lseek(self._fd, self._mark.size, os.SEEK_SET)
+
+    def _close_check(self) -> None:
+        if self._check is not None:
+            self._check.close()
+            self._check = None
+
+    def _discard_pending(self) -> None:
+        self._pending.seek(0)
+        self._pending.truncate()
+        self._pending_rows = 0
+
+    def flush(self) -> CsvMark:
+        """Write the rows collected since the last flush in one system call, sync them
+        (when durable), and return the new end of the file.
+
+        Raises:
+            OSError: the write or the sync failed (e.g. the disk is full); the file then
+                ends with the whole rows that reached it (:attr:`mark`), and nothing
+                more is written.
+        """
+        self._last_flush = time.monotonic()
+        if self.failed is not None:
+            raise self.failed
+        text = self._pending.getvalue()
+        if not text:
+            return self._mark
+        if self._fd is None:
+            raise ValueError(f"{self.path} is closed")
+        data = text.encode("utf-8")
+        try:
+            _write_all(self._fd, data)
+            if self.durable:
+                os.fsync(self._fd)
+        except _ShortWrite as short:
+            self._fail(data, short.written, short.error)
+        except OSError as exc:  # the sync failed: the bytes are in the file
+            self._fail(data, len(data), exc)
+        self._advance(text, len(data), self._pending_rows)
+        self._discard_pending()
+        return self._mark
+
+    def _advance(self, text: str, size: int, rows: int) -> None:
+        # the last line of what was written (every row ends with the line terminator)
+        start = text.rfind("\n", 0, len(text) - 1) + 1
+        self._mark = CsvMark(self._mark.rows + rows, self._mark.size + size, text[start:])
+
+    def _fail(self, data: bytes, written: int, error: OSError) -> None:
+        """A flush failed after ``written`` bytes of ``data``: keep the whole rows among
+        them, cut a row cut short (which frees space rather than needing it), write
+        nothing more, and raise ``error``."""
+        whole = data.rfind(b"\n", 0, written) + 1
+        if whole:
+            text = data[:whole].decode("utf-8")
+            self._advance(text, whole, text.count("\n"))
+        if whole < written:
+            with contextlib.suppress(OSError):
+                os.ftruncate(self._fd, self._mark.size)  # type: ignore[arg-type]
+        self._discard_pending()
+        self.failed = error
+        raise error
+
+    @property
+    def mark(self) -> CsvMark:
+        """The end of what has been flushed to the file."""
+        return self._mark
+
+    def __len__(self) -> int:
+        return self._mark.rows + self._pending_rows
+
+    @property
+    def closed(self) -> bool:
+        return self._fd is None
+
+    def close(self) -> None:
+        """Flush the remaining rows and close the file (idempotent). After a failed
+        write, or while rows are still being checked, it only closes the file."""
+        if self._fd is None:
+            return
+        try:
+            if self.failed is None and self._check is None:
+                self.flush()
+        finally:
+            self._close_check()
+            os.close(self._fd)
+            self._fd = None
+
+    def columns(self) -> dict[str, np.ndarray]:
+        if self._fd is not None and self.failed is None:
+            self.flush()
+        return read_collisions(self.path)
+
+    def write_csv(self, path: str | os.PathLike[str]) -> None:
+        if self._fd is not None and self.failed is None:
+            self.flush()
+        if Path(path).resolve() != self.path.resolve():
+            shutil.copyfile(self.path, path)
