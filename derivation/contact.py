@@ -292,12 +292,17 @@ def derive_contact() -> ContactDerivation:
     )
 
     def finish(solution):
-        """Each unknown as one fraction, its numerator grouped by the drag factor and the
-        friction coefficient (cheap rational algebra; no trigonometric simplification)."""
+        """Each unknown as one fraction, its numerator grouped by the drag factor, the
+        friction coefficient and the powers of u_s (cheap rational algebra; no
+        trigonometric simplification)."""
         out = []
         for expr in solution:
             num, den = sm.fraction(sm.cancel(sm.together(_plain(expr))))
-            num = sm.collect(sm.expand(num), [c_drag, mu_k], func=sm.factor_terms)
+            num = sm.collect(
+                sm.expand(num),
+                [c_drag, mu_k],
+                func=lambda part: sm.collect(part, S_DOT, func=sm.factor),
+            )
             out.append(sm.factor_terms(num) / sm.factor(den))
         return sm.Matrix(out)
 

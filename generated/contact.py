@@ -2,7 +2,7 @@
 # Source: derivation/contact.py (Kane's method)
 # sympy 1.14.0
 # Functions: roll_rhs, roll_spin, slide_rhs, slip_velocity, centre_state, s_dot_of_velocity, contact_energy
-# content sha256: c156d7171f25929692ea6835b952cde38ffb2c5243d554c099ab037685862cf0
+# content sha256: 3a94f0852e7dfd72211a437892f20c31806e985d1740f9e74c972a6b9ad6c393
 """Sustained contact of the ball with one wall of the moving boundary: rolling and sliding
 (Kane's method, contact forces from auxiliary speeds).
 
@@ -21,30 +21,27 @@ def roll_rhs(s_dot, fp, f2, f3, ab1, ab2, vb1, vb2, m, r, k, g, c_lin, c_quad):
 
     Arguments: s_dot = ds/dt (m/s); fp = f'(s); f2 = f''(s) (1/m); f3 = f'''(s) (1/m^2); ab1, ab2 the boundary's acceleration in N (m/s^2); vb1, vb2 the boundary's velocity in N (m/s); m the mass (kg); r the radius (m); k the inertia factor (I = k m r^2); g gravity (m/s^2); c_lin (N s/m) and c_quad (N s^2/m^2) Fowles drag on the centre's lab velocity.
     """
-    _c0 = 1/(k + 1)
-    _c1 = fp**2 + 1
-    _c2 = math.sqrt(_c1)
-    _c3 = f2*r/_c1
-    _c4 = s_dot**2
-    _c5 = 1/_c2
-    _c6 = _c4*_c5*f2
-    _c7 = _c6*fp
-    _c8 = f2**2
-    _c9 = _c4*r/_c1**2
-    _c10 = _c9*(_c1*f3 - 2*_c8*fp)
-    _c11 = _c5*ab1
-    _c12 = _c5*ab2
-    _c13 = _c5*g
-    _c14 = _c11 + _c12*fp + _c13*fp
-    _c15 = _c5*vb1
-    _c16 = _c3*s_dot
-    _c17 = _c5*(-_c16 + _c2*s_dot)
-    _c18 = c_lin + c_quad*math.sqrt((_c17 + vb1)**2 + (_c17*fp + vb2)**2)
-    _c19 = _c18*(_c15 - _c16 + _c2*s_dot + _c5*fp*vb2)
+    _c0 = k + 1
+    _c1 = 1/_c0
+    _c2 = fp**2 + 1
+    _c3 = math.sqrt(_c2)
+    _c4 = f2/_c2
+    _c5 = _c4*r
+    _c6 = -_c3 + _c5
+    _c7 = 1/_c3
+    _c8 = _c7*ab1
+    _c9 = _c7*ab2
+    _c10 = _c7*g
+    _c11 = m*(_c10*fp + _c8 + _c9*fp)
+    _c12 = m*s_dot**2
+    _c13 = _c7*vb1
+    _c14 = _c13 + _c7*fp*vb2
+    _c15 = _c7*(_c3*s_dot - _c5*s_dot)
+    _c16 = c_lin + c_quad*math.sqrt((_c15 + vb1)**2 + (_c15*fp + vb2)**2)
     return (
-        _c0*(_c19 + m*(-_c10*k - _c10 + _c14 + _c7*k + _c7))/(m*(-_c2 + _c3)),
-        _c18*(-_c15*fp + _c5*vb2) + m*(-_c11*fp + _c12 + _c13 + _c6 - _c8*_c9),
-        _c0*k*(_c14*m + _c19),
+        _c1*(-_c0*_c12*(-_c7*f2*fp + r*(_c2*f3 - 2*f2**2*fp)/_c2**2) + _c11 + _c16*(_c14 - _c6*s_dot))/(_c6*m),
+        -_c12*_c4*_c6 + _c16*(-_c13*fp + _c7*vb2) + m*(_c10 - _c8*fp + _c9),
+        _c1*k*(_c11 + _c16*(_c14 - _c6*s_dot)),
     )
 
 
@@ -65,31 +62,31 @@ def slide_rhs(s_dot, fp, f2, f3, ab1, ab2, vb1, vb2, m, r, k, g, c_lin, c_quad, 
     _c0 = 1/m
     _c1 = fp**2 + 1
     _c2 = math.sqrt(_c1)
-    _c3 = f2*r/_c1
-    _c4 = 1/_c2
-    _c5 = _c4*ab2
-    _c6 = _c4*g
-    _c7 = _c4*ab1
-    _c8 = s_dot**2
-    _c9 = _c4*_c8*f2
-    _c10 = f2**2
-    _c11 = _c8*r/_c1**2
-    _c12 = -_c10*_c11 + _c5 + _c6 - _c7*fp + _c9
-    _c13 = _c12*m
-    _c14 = mu_k*sgn
-    _c15 = _c4*vb1
-    _c16 = _c4*vb2
-    _c17 = _c3*s_dot
-    _c18 = _c15*fp
-    _c19 = _c4*(-_c17 + _c2*s_dot)
+    _c3 = f2/_c1
+    _c4 = _c3*r
+    _c5 = -_c2 + _c4
+    _c6 = 1/_c2
+    _c7 = _c6*ab1
+    _c8 = _c6*ab2
+    _c9 = _c6*g
+    _c10 = s_dot**2
+    _c11 = _c10*m
+    _c12 = _c7*fp
+    _c13 = _c3*_c5
+    _c14 = _c10*_c13 + _c12 - _c6*ab2 - _c6*g
+    _c15 = mu_k*sgn
+    _c16 = _c6*vb1
+    _c17 = _c6*vb2
+    _c18 = _c16*fp
+    _c19 = _c6*(_c2*s_dot - _c4*s_dot)
     _c20 = c_lin + c_quad*math.sqrt((_c19 + vb1)**2 + (_c19*fp + vb2)**2)
-    _c21 = -_c16 + _c18
-    _c22 = _c13 - _c20*_c21
+    _c21 = _c20*(-_c18 + _c6*vb2)
+    _c22 = -_c11*_c13 + _c21 + m*(-_c12 + _c8 + _c9)
     return (
-        _c0*(_c13*_c14 + _c20*(_c14*_c16 - _c14*_c18 + _c15 + _c16*fp - _c17 + _c2*s_dot) + m*(-_c11*(_c1*f3 - 2*_c10*fp) + _c5*fp + _c6*fp + _c7 + _c9*fp))/(-_c2 + _c3),
-        _c0*_c14*(-_c12*m + _c20*_c21)/(k*r),
+        _c0*(-_c11*(-_c6*f2*fp + r*(_c1*f3 - 2*f2**2*fp)/_c1**2) - _c14*_c15*m + _c20*(_c15*_c17 - _c15*_c18 + _c16 + _c17*fp - _c5*s_dot) + m*(_c7 + _c8*fp + _c9*fp))/_c5,
+        _c0*_c15*(_c14*m - _c21)/(k*r),
         _c22,
-        -_c14*_c22,
+        -_c15*_c22,
     )
 
 
