@@ -191,9 +191,9 @@ def load_curve(curve: str, parameters: dict[str, float] | None = None) -> CurveM
     values.update({k: float(v) for k, v in (parameters or {}).items()})
     p = tuple(float(values[name]) for name in module.PARAMETER_NAMES)
     walls = []
-    for index, (interval, f, df, d2f, near, dnear, poly) in enumerate(module.WALLS):
+    for index, (interval, f, df, d2f, near, dnear, poly, d3f) in enumerate(module.WALLS):
         lo, hi = interval(p)
-        walls.append(Wall(index, float(lo), float(hi), p, f, df, d2f, near, dnear, poly))
+        walls.append(Wall(index, float(lo), float(hi), p, f, df, d2f, near, dnear, poly, d3f))
     return CurveModel(
         name=module.NAME,
         expression=module.EXPRESSION,

@@ -16,7 +16,7 @@ from dataclasses import dataclass
 __all__ = ["CURVE_FORMAT", "Wall"]
 
 #: The layout of generated curve modules this runtime reads (their ``FORMAT``).
-CURVE_FORMAT = 2
+CURVE_FORMAT = 3
 
 Params = tuple[float, ...]
 
@@ -34,6 +34,8 @@ class Wall:
         near, dnear: the nearest-point condition g(s, px, py, p) (m) and dg/ds.
         poly: coefficients (highest power first) of the polynomial whose real roots are
             the candidate nearest points, poly(px, py, p); None when there is none.
+        d3f: third derivative f'''(x, p) (1/m^2), for the equations of sustained contact
+            (billiard.generated.contact).
     """
 
     index: int
@@ -46,6 +48,7 @@ class Wall:
     near: Callable[[float, float, float, Params], float]
     dnear: Callable[[float, float, float, Params], float]
     poly: Callable[[float, float, Params], tuple[float, ...]] | None
+    d3f: Callable[[float, Params], float]
 
     def height(self, x: float) -> float:
         """f(x) (m): not for hot loops, which call ``self.f(x, self.p)`` directly."""

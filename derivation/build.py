@@ -18,6 +18,7 @@ import sympy as sm
 
 from . import codegen, curve, report, shape
 from .ball import BallDerivation, derive_ball, plain
+from .contact import ContactDerivation, derive_contact
 from .expr import PAPER_CURVES, curve_name_problem, parse_curve
 
 GENERATED = Path(__file__).resolve().parent.parent / "generated"
@@ -116,6 +117,123 @@ def ball_module(d: BallDerivation) -> str:
     return codegen.module_text(header, body)
 
 
+#: Units of the contact functions' arguments, for their docstrings.
+_CONTACT_UNITS = {
+    "s": "s the contact point's abscissa in the boundary's frame (m)",
+    "s_dot": "s_dot = ds/dt (m/s)",
+    "u3": "u3 the spin about n3 (rad/s, counter-clockwise positive)",
+    "f0": "f0 = f(s) (m)",
+    "fp": "fp = f'(s)",
+    "f2": "f2 = f''(s) (1/m)",
+    "f3": "f3 = f'''(s) (1/m^2)",
+    "d1": "d1, d2 the boundary's displacement in N (m)",
+    "vb1": "vb1, vb2 the boundary's velocity in N (m/s)",
+    "ab1": "ab1, ab2 the boundary's acceleration in N (m/s^2)",
+    "u1": "u1, u2 a lab velocity of the centre (m/s)",
+    "m": "m the mass (kg)",
+    "r": "r the radius (m)",
+    "k": "k the inertia factor (I = k m r^2)",
+    "g": "g gravity (m/s^2)",
+    "c_lin": "c_lin (N s/m) and c_quad (N s^2/m^2) Fowles drag on the centre's lab velocity",
+    "mu_k": "mu_k kinetic friction",
+    "sgn": "sgn = +1 or -1 the sign of the slip (slip_velocity)",
+}
+
+
+def _contact_doc(summary: str, args: list[str]) -> str:
+    units = "; ".join(_CONTACT_UNITS[a] for a in args if a in _CONTACT_UNITS)
+    return f"{summary}\n\n    Arguments: {units}.\n    "
+
+
+def contact_module(cd: ContactDerivation) -> str:
+    S = _sym
+    names = "s s_dot u3 f0 fp f2 f3 d1 d2 vb1 vb2 ab1 ab2 u1 u2 m r k g c_lin c_quad mu_k sgn"
+    sym = {n: S(n) for n in names.split()}
+
+    def by_name(expr):
+        return expr.xreplace({a: S(a.name) for a in expr.free_symbols})
+
+    geometry = {S(a.name): by_name(v) for a, v in cd.geometry.items()}
+    drag_factor = by_name(cd.drag_factor)
+
+    def p(expr):
+        """Plain symbols by name; the drag factor; the geometry in f', f'', f'''."""
+        expr = by_name(sm.sympify(expr)).xreplace({S("c_drag"): drag_factor})
+        return expr.xreplace(geometry)
+
+    def fn(name, args, outputs, summary):
+        args = args.split()
+        return codegen.function_source(
+            name, [sym[a] for a in args], outputs, _contact_doc(summary, args)
+        )
+
+    roll, slide = cd.roll, cd.slide
+    rhs_args = "s_dot fp f2 f3 ab1 ab2 vb1 vb2 m r k g c_lin c_quad"
+    parts = [
+        '"""Sustained contact of the ball with one wall of the moving boundary: rolling and '
+        "sliding\n(Kane's method, contact forces from auxiliary speeds).\n\n"
+        "The wall enters only through f'(s), f''(s), f'''(s) at the contact abscissa s, so\n"
+        "these functions serve every curve. Contact force on the ball at the contact point:\n"
+        "F c1 + N c2. Symbols and conventions: see docs/design.md and docs/derivation.md.\n"
+        'SI units.\n"""\n\nimport math\n\n',
+        fn(
+            "roll_rhs",
+            rhs_args,
+            [p(roll[0]), p(roll[3]), p(roll[2])],
+            "Rolling without slip: (s_ddot, N, F), s_ddot = d2s/dt2 (m/s^2) and the contact "
+            "force's components N along c2 and F along c1 (N). The spin follows the no-slip "
+            "condition: u3 = roll_spin(s_dot, fp, f2, r).",
+        ),
+        fn(
+            "roll_spin",
+            "s_dot fp f2 r",
+            p(cd.roll_spin),
+            "Spin u3 (rad/s) of the ball rolling without slip at ds/dt = s_dot.",
+        ),
+        fn(
+            "slide_rhs",
+            rhs_args + " mu_k sgn",
+            [p(e) for e in slide],
+            "Sliding: (s_ddot, spin_dot, N, F), s_ddot = d2s/dt2 (m/s^2), spin_dot = du3/dt "
+            "(rad/s^2), N along c2 and F = -mu_k N sgn along c1 (N). The spin itself does "
+            "not enter.",
+        ),
+        fn(
+            "slip_velocity",
+            "s_dot u3 fp f2 r",
+            p(cd.slip),
+            "Slip w_t (m/s): the velocity of the ball's material contact point relative to "
+            "the wall, along c1.",
+        ),
+        fn(
+            "centre_state",
+            "s s_dot f0 fp f2 d1 d2 vb1 vb2 r",
+            [p(e) for e in cd.centre],
+            "Lab state (q1, q2, u1, u2) of the centre on the offset curve (m, m/s).",
+        ),
+        fn(
+            "s_dot_of_velocity",
+            "u1 u2 fp f2 vb1 vb2 r",
+            p(cd.s_dot),
+            "ds/dt (m/s) of a centre on the offset curve with the lab velocity (u1, u2); "
+            "the velocity's normal component relative to the wall is ignored.",
+        ),
+        fn(
+            "contact_energy",
+            "s_dot u3 f0 fp f2 m r k g",
+            p(cd.energy),
+            "Energy in the boundary's frame (J): the kinetic energy relative to the "
+            "boundary plus m g times the centre's height in the boundary's frame.",
+        ),
+    ]
+    body = "\n\n".join(parts)
+    header = codegen.generated_notice("derivation/contact.py (Kane's method)") + [
+        "Functions: roll_rhs, roll_spin, slide_rhs, slip_velocity, centre_state, "
+        "s_dot_of_velocity, contact_energy",
+    ]
+    return codegen.module_text(header, body)
+
+
 def curve_from_text(name: str, text: str, parameters: dict[str, str]) -> curve.CurveDerivation:
     parsed = parse_curve(text)
     missing = sorted(set(parsed.parameters) - set(parameters))
@@ -146,7 +264,7 @@ def curve_from_text(name: str, text: str, parameters: dict[str, str]) -> curve.C
 
 
 #: Version of the generated curve modules' layout; the runtime refuses other layouts.
-CURVE_FORMAT = 2
+CURVE_FORMAT = 3
 #: Name of the parameter-array argument of every generated wall function (parameter
 #: names start with a letter, so it cannot clash with one).
 PARAMETER_ARRAY = "_p"
@@ -166,8 +284,8 @@ def curve_module(cd: curve.CurveDerivation) -> str:
         "",
         "Every function takes the curve's parameters as its last argument, an array in the",
         "order of PARAMETER_NAMES. WALLS lists, per smooth wall, the functions",
-        "(interval, f, df, d2f, near, dnear, poly); poly is None where the nearest-point",
-        'condition is not a polynomial."""',
+        "(interval, f, df, d2f, near, dnear, poly, d3f); poly is None where the",
+        'nearest-point condition is not a polynomial."""',
         "",
         "import math",
         "",
@@ -214,6 +332,16 @@ def curve_module(cd: curve.CurveDerivation) -> str:
         lines.append(
             "\n"
             + codegen.function_source(
+                f"d3f_{i}",
+                [x],
+                p(w.d3f.subs(fx)),
+                "Third derivative f'''(x) (1/m^2).",
+                array=array,
+            )
+        )
+        lines.append(
+            "\n"
+            + codegen.function_source(
                 f"near_{i}",
                 [s, px, py],
                 p(w.near),
@@ -240,7 +368,9 @@ def curve_module(cd: curve.CurveDerivation) -> str:
                 )
             )
         poly = f"poly_{i}" if w.poly is not None else "None"
-        walls.append(f"    (interval_{i}, f_{i}, df_{i}, d2f_{i}, near_{i}, dnear_{i}, {poly}),")
+        walls.append(
+            f"    (interval_{i}, f_{i}, df_{i}, d2f_{i}, near_{i}, dnear_{i}, {poly}, d3f_{i}),"
+        )
     lines += ["", "WALLS = (\n" + "\n".join(walls) + "\n)", ""]
     bps = ", ".join(f"float({codegen.pyexpr(p(b))})" for b in cd.breakpoints)
     used = {a.name for b in cd.breakpoints for a in p(b).free_symbols}
@@ -271,15 +401,19 @@ def repo_root() -> Path | None:
 
 @functools.lru_cache(maxsize=1)
 def _expected_texts() -> tuple[tuple[str, str], ...]:
-    """(relative path, text) of every file the derivation writes. Cached: ~5 s of sympy."""
+    """(relative path, text) of every file the derivation writes. Cached: ~8 s of sympy."""
     d = derive_ball()
-    files = [("generated/ball.py", ball_module(d))]
+    contact = derive_contact()
+    files = [
+        ("generated/ball.py", ball_module(d)),
+        ("generated/contact.py", contact_module(contact)),
+    ]
     curves = []
     for name, (text, params) in PAPER_CURVES.items():
         cd = curve_from_text(name, text, params)
         curves.append(cd)
         files.append((f"generated/curves/{name}.py", curve_module(cd)))
-    files.append(("docs/derivation.md", report.derivation_markdown(d, curves)))
+    files.append(("docs/derivation.md", report.derivation_markdown(d, contact, curves)))
     return tuple(files)
 
 

@@ -1,7 +1,8 @@
 """Geometry of a boundary curve y = f(x), for any expression f in sympy.
 
 For each smooth piece ("wall") of the curve this derives the slope f', the second
-derivative f'' (curvature kappa = f''/(1+f'^2)^(3/2)), the tangent angle z = atan f', the
+derivative f'' (curvature kappa = f''/(1+f'^2)^(3/2)), the third derivative f''' (the
+equations of sustained contact need it), the tangent angle z = atan f', the
 nearest-point condition between a ball centre (px, py) and the curve,
 
     g(s) = (s - px) + (f(s) - py) f'(s) = 0,
@@ -42,6 +43,7 @@ class Wall:
     f: sm.Basic
     df: sm.Basic
     d2f: sm.Basic
+    d3f: sm.Basic  # f''', for the contact equations
     near: sm.Basic  # nearest-point condition g(s)
     dnear: sm.Basic
     poly: list[sm.Basic] | None  # coefficients, highest power of s first
@@ -171,9 +173,10 @@ def derive_curve(
         fs = f.subs(x, s)
         df = sm.diff(fs, s)
         d2f = sm.diff(df, s)
+        d3f = sm.diff(d2f, s)
         near = (s - px) + (fs - py) * df
         dnear = sm.diff(near, s)
-        walls.append(Wall(lo, hi, fs, df, d2f, near, dnear, nearest_polynomial(near)))
+        walls.append(Wall(lo, hi, fs, df, d2f, d3f, near, dnear, nearest_polynomial(near)))
     return CurveDerivation(
         name, text, expression, parameters, parameter_symbols, breakpoints, walls
     )

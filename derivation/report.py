@@ -5,6 +5,7 @@ from __future__ import annotations
 import sympy as sm
 
 from .ball import BallDerivation, plain
+from .contact import ContactDerivation, printable
 from .curve import CurveDerivation
 
 
@@ -13,25 +14,35 @@ def _latex(expr) -> str:
     return sm.latex(expr, mat_delim="(")
 
 
-def derivation_markdown(d: BallDerivation, curves: list[CurveDerivation]) -> str:
+def derivation_markdown(
+    d: BallDerivation, cd: ContactDerivation, curves: list[CurveDerivation]
+) -> str:
     out = [
         "# Derivation of the model",
         "",
         "This page is written by `billiard derive` from the derivation code "
-        "(`derivation/ball.py`, `derivation/curve.py`); do not edit it by hand. The sections "
-        "follow the code from top to bottom. Symbols: `m` mass, `r` radius, `k` inertia factor "
-        "(I = k m r^2), `g` gravity, `c_lin`, `c_quad` Fowles drag coefficients, `c_magnus` "
-        "Magnus coefficient, `z` tangent angle of the boundary at the contact, `vb1`, `vb2` "
-        "the boundary's velocity, `e` restitution, `mu_k` kinetic friction, `sgn` the sign of "
-        "the slip velocity before the impact, `u1p, u2p, u3p` the speeds after the impact. "
-        "SI units.",
+        "(`derivation/ball.py`, `derivation/contact.py`, `derivation/curve.py`); do not edit "
+        "it by hand. The sections follow the code from top to bottom. Symbols: `m` mass, "
+        "`r` radius, `k` inertia factor (I = k m r^2), `g` gravity, `c_lin`, `c_quad` Fowles "
+        "drag coefficients, `c_magnus` Magnus coefficient, `z` tangent angle of the boundary "
+        "at the contact, `vb1`, `vb2` the boundary's velocity, `e` restitution, `mu_k` "
+        "kinetic friction, `sgn` the sign of the slip velocity before the impact, "
+        "`u1p, u2p, u3p` the speeds after the impact. "
+        "In sustained contact: `s` the contact point's abscissa in the boundary's frame, "
+        "`u_s = ds/dt`, `f', f'', f'''` the wall's derivatives at s, `N` and `F` the contact "
+        "force's components along c2 and c1, `ab1, ab2` the boundary's acceleration, "
+        "`mu_k` kinetic friction and `sgn` the sign of the slip. SI units.",
         "",
     ]
     for i, step in enumerate(d.steps, 1):
         out += [f"## {i}. {step.title}", "", step.text, ""]
         for label, expr in step.equations:
             out += ["$$", f"{label} = {_latex(expr)}", "$$", ""]
-    n = len(d.steps) + 1
+    for i, step in enumerate(cd.steps, len(d.steps) + 1):
+        out += [f"## {i}. {step.title}", "", step.text, ""]
+        for label, expr in step.equations:
+            out += ["$$", f"{label} = {_latex(printable(expr))}", "$$", ""]
+    n = len(d.steps) + len(cd.steps) + 1
     out += [
         f"## {n}. Boundary curves and the nearest point",
         "",
@@ -54,7 +65,8 @@ def derivation_markdown(d: BallDerivation, curves: list[CurveDerivation]) -> str
                 out += [f"Wall {j}, on ${sm.latex(w.lo)} < x < {sm.latex(w.hi)}$:", ""]
             out += [
                 "$$",
-                f"f'(s) = {sm.latex(w.df)},\\qquad f''(s) = {sm.latex(w.d2f)}",
+                f"f'(s) = {sm.latex(w.df)},\\qquad f''(s) = {sm.latex(w.d2f)},"
+                f"\\qquad f'''(s) = {sm.latex(w.d3f)}",
                 "$$",
                 "",
                 "$$",

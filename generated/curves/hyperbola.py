@@ -4,17 +4,17 @@
 # Curve 'hyperbola': f(x) = sqrt(alpha*(1 + beta*x**2)) - delta
 # Parameters: alpha = 0.00403, beta = 800, delta = 0.0445
 # Walls: 1; nearest-point polynomial degree: 4
-# content sha256: 1ad206aff7a36e9b2942daf6fd73543279101e42ecadce8753efb2627565331b
+# content sha256: 4472b8fbc7d5ddf3411a85f7647e5006034c4843f91883ac609c688ab41f1bdf
 """Boundary curve 'hyperbola': f(x) = sqrt(alpha*(1 + beta*x**2)) - delta (x and f in metres).
 
 Every function takes the curve's parameters as its last argument, an array in the
 order of PARAMETER_NAMES. WALLS lists, per smooth wall, the functions
-(interval, f, df, d2f, near, dnear, poly); poly is None where the nearest-point
-condition is not a polynomial."""
+(interval, f, df, d2f, near, dnear, poly, d3f); poly is None where the
+nearest-point condition is not a polynomial."""
 
 import math
 
-FORMAT = 2
+FORMAT = 3
 NAME = 'hyperbola'
 EXPRESSION = 'sqrt(alpha*(1 + beta*x**2)) - delta'
 PARAMETER_NAMES = ('alpha', 'beta', 'delta')
@@ -50,6 +50,15 @@ def d2f_0(x, _p):
     _c1 = _c0*beta + 1
     _c2 = math.sqrt(_c1*alpha)
     return -_c0*_c2*beta**2/_c1**2 + _c2*beta/_c1
+
+
+def d3f_0(x, _p):
+    """Third derivative f'''(x) (1/m^2)."""
+    alpha = _p[0]
+    beta = _p[1]
+    _c0 = beta*x**2 + 1
+    _c1 = 3*math.sqrt(_c0*alpha)
+    return -_c1*beta**2*x/_c0**2 + _c1*beta**3*x**3/_c0**3
 
 
 def near_0(s, px, py, _p):
@@ -97,7 +106,7 @@ def poly_0(px, py, _p):
 
 
 WALLS = (
-    (interval_0, f_0, df_0, d2f_0, near_0, dnear_0, poly_0),
+    (interval_0, f_0, df_0, d2f_0, near_0, dnear_0, poly_0, d3f_0),
 )
 
 

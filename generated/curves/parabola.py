@@ -4,17 +4,17 @@
 # Curve 'parabola': f(x) = a*x**2 + c
 # Parameters: a = 26, c = 0.0063
 # Walls: 1; nearest-point polynomial degree: 3
-# content sha256: af733c84c19169bd09f57e806284f93da20a630fbe3296dafb76631a00d8385b
+# content sha256: 7c7dcd39b40f02982c0264b61eafbe511407f4e941e4f0816b89d63aaae566d0
 """Boundary curve 'parabola': f(x) = a*x**2 + c (x and f in metres).
 
 Every function takes the curve's parameters as its last argument, an array in the
 order of PARAMETER_NAMES. WALLS lists, per smooth wall, the functions
-(interval, f, df, d2f, near, dnear, poly); poly is None where the nearest-point
-condition is not a polynomial."""
+(interval, f, df, d2f, near, dnear, poly, d3f); poly is None where the
+nearest-point condition is not a polynomial."""
 
 import math
 
-FORMAT = 2
+FORMAT = 3
 NAME = 'parabola'
 EXPRESSION = 'a*x**2 + c'
 PARAMETER_NAMES = ('a', 'c')
@@ -43,6 +43,11 @@ def d2f_0(x, _p):
     """Second derivative f''(x) (1/m)."""
     a = _p[0]
     return 2*a
+
+
+def d3f_0(x, _p):
+    """Third derivative f'''(x) (1/m^2)."""
+    return 0.0
 
 
 def near_0(s, px, py, _p):
@@ -74,7 +79,7 @@ def poly_0(px, py, _p):
 
 
 WALLS = (
-    (interval_0, f_0, df_0, d2f_0, near_0, dnear_0, poly_0),
+    (interval_0, f_0, df_0, d2f_0, near_0, dnear_0, poly_0, d3f_0),
 )
 
 

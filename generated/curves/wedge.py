@@ -4,17 +4,17 @@
 # Curve 'wedge': f(x) = b*abs(x) + c
 # Parameters: b = 1.85, c = 0.0063
 # Walls: 2; nearest-point polynomial degree: 1, 1
-# content sha256: 192ca22e0ae007fb172eff84f3a7cebfcd30ea29143babf1ce6b6ed0d4d868e8
+# content sha256: 23216700bd5ca8c36c6ef482e9577db2aa8a336f8f9f18908eaea3c89df9c9c8
 """Boundary curve 'wedge': f(x) = b*abs(x) + c (x and f in metres).
 
 Every function takes the curve's parameters as its last argument, an array in the
 order of PARAMETER_NAMES. WALLS lists, per smooth wall, the functions
-(interval, f, df, d2f, near, dnear, poly); poly is None where the nearest-point
-condition is not a polynomial."""
+(interval, f, df, d2f, near, dnear, poly, d3f); poly is None where the
+nearest-point condition is not a polynomial."""
 
 import math
 
-FORMAT = 2
+FORMAT = 3
 NAME = 'wedge'
 EXPRESSION = 'b*abs(x) + c'
 PARAMETER_NAMES = ('b', 'c')
@@ -41,6 +41,11 @@ def df_0(x, _p):
 
 def d2f_0(x, _p):
     """Second derivative f''(x) (1/m)."""
+    return 0.0
+
+
+def d3f_0(x, _p):
+    """Third derivative f'''(x) (1/m^2)."""
     return 0.0
 
 
@@ -90,6 +95,11 @@ def d2f_1(x, _p):
     return 0.0
 
 
+def d3f_1(x, _p):
+    """Third derivative f'''(x) (1/m^2)."""
+    return 0.0
+
+
 def near_1(s, px, py, _p):
     """Nearest-point condition g(s) = (s - px) + (f(s) - py) f'(s) (m)."""
     b = _p[0]
@@ -114,8 +124,8 @@ def poly_1(px, py, _p):
 
 
 WALLS = (
-    (interval_0, f_0, df_0, d2f_0, near_0, dnear_0, poly_0),
-    (interval_1, f_1, df_1, d2f_1, near_1, dnear_1, poly_1),
+    (interval_0, f_0, df_0, d2f_0, near_0, dnear_0, poly_0, d3f_0),
+    (interval_1, f_1, df_1, d2f_1, near_1, dnear_1, poly_1, d3f_1),
 )
 
 
