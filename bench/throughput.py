@@ -77,7 +77,16 @@ def startup(repeats: int) -> dict:
         "python -c pass": [py, "-c", "pass"],
         "import billiard.simulate": [py, "-c", "import billiard.simulate, billiard.scene"],
         "billiard run parabola-5.4hz --collisions 1 --no-plot": billiard_command()
-        + ["run", "parabola-5.4hz", "--collisions", "1", "--no-plot", "--out", "run"],
+        + [
+            "run",
+            "parabola-5.4hz",
+            "--collisions",
+            "1",
+            "--no-plot",
+            "--out",
+            "run",
+            "--overwrite",
+        ],
     }
     out: dict = {}
     with tempfile.TemporaryDirectory() as tmp:
@@ -104,6 +113,7 @@ def import_times(cwd: str, top: int = 8) -> list[dict]:
         "--no-plot",
         "--out",
         "run",
+        "--overwrite",
     ]
     done = subprocess.run(command, cwd=cwd, capture_output=True, text=True, check=True)
     rows = []

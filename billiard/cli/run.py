@@ -111,7 +111,7 @@ def _holds_run(folder: Path) -> bool:
 def _remove_plots(folder: Path) -> list[str]:
     """Delete the figures ``plot_run`` wrote into a run folder (they no longer match its
     data); returns the names removed."""
-    from billiard.plot.run import FIGURE_NAMES
+    from billiard.runfolder import FIGURE_NAMES
 
     removed = []
     for name in FIGURE_NAMES:

@@ -10,6 +10,7 @@ import numpy as np
 from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 
+from ..runfolder import FIGURE_NAMES
 from ..scene import Scene, SceneError, scene_from_toml
 from .animation import animate
 from .common import (
@@ -30,15 +31,6 @@ from .titles import scene_title
 from .trajectory import trajectory, window_rows
 
 __all__ = ["FIGURE_NAMES", "load_run", "plot_run", "read_scene"]
-
-#: Files written by :func:`plot_run`, in order.
-FIGURE_NAMES: tuple[str, ...] = (
-    "return_map.png",
-    "time_map.png",
-    "phase.png",
-    "trajectory.png",
-    "animation.gif",
-)
 
 
 def read_scene(path: str | os.PathLike[str]) -> Scene:
