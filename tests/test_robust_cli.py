@@ -137,3 +137,21 @@ def test_bad_input_is_one_line_exit_2(case, outcomes):
     # nothing was started: no run directory (or the file in its way is untouched)
     assert not (work / "run").exists()
     assert (work / "occupied").read_text() == "not a directory\n"
+
+
+def test_a_run_without_plots_does_not_load_the_plotting_stack(tmp_path):
+    """Start-up stays short: ``billiard run --no-plot`` imports neither matplotlib nor
+    sympy (a run folder's figure names come from ``billiard.runfolder``)."""
+    code = (
+        "import sys\n"
+        "from billiard.cli import main\n"
+        "main(['run', 'wedge-6.6hz', '--collisions', '3', '--no-plot', '--out', 'r'])\n"
+        "main(['run', 'wedge-6.6hz', '--collisions', '3', '--no-plot', '--out', 'r',"
+        " '--overwrite'])\n"
+        "print(sorted(m for m in ('matplotlib', 'sympy') if m in sys.modules))\n"
+    )
+    done = subprocess.run(
+        [sys.executable, "-c", code], cwd=tmp_path, capture_output=True, text=True, timeout=120
+    )
+    assert done.returncode == 0, done.stderr
+    assert done.stdout.strip().splitlines()[-1] == "[]"
