@@ -204,6 +204,7 @@ class ContactModel:
         omega = self.drive.omega
         lo, hi = wall.lo, wall.hi
         mu_s = self.mu_s
+        frictionless = mu_s == 0.0
         n_y = 2 if mode == "roll" else 3
         y0 = tuple(y0[:n_y])
 
@@ -218,6 +219,8 @@ class ContactModel:
             out = [n, y[0] - lo, hi - y[0]]
             if mode == "roll":
                 out.append(mu_s * n - abs(f))
+            elif frictionless:
+                out.append(1.0)  # no friction: the slip's sign changes nothing
             else:
                 out.append(sgn * self.slip(wall, y[0], y[1], y[2]))
             if gaps:
@@ -240,8 +243,11 @@ class ContactModel:
         next_sample = 0
         n_samples = len(samples)
         steps = 0
+        # the step is at most 1/20 of the drive period, so that the conditions, which
+        # the drive moves, cannot change sign twice unseen within a step
+        h_max = math.inf if self.static else 0.1 * math.pi / abs(omega)
         while tau < limit:
-            h = min(h, limit - tau)
+            h = min(h, limit - tau, h_max)
             for _ in range(60):
                 ks = [k1]
                 for i in range(1, 6):

@@ -185,6 +185,8 @@ class Simulation:
         self._contact: tuple[float, ...] = ()
         self._samples = 0
         self._phase_time = {"roll": 0.0, "slide": 0.0}
+        if self.phases:
+            self._start_in_contact()
 
     @property
     def ball(self) -> BallState:
@@ -415,7 +417,7 @@ class Simulation:
         if surface.kind != "wall" or e >= 1.0:
             return
         rebound = e * abs(res.wn)
-        if not (rebound < self.scene.contact.elastic_below or res.regime == "elastic"):
+        if not (rebound <= self.scene.contact.elastic_below or res.regime == "elastic"):
             return
         wall = surface.wall
         sd = model.s_dot(wall, theta, s, res.u1, res.u2)
@@ -426,6 +428,29 @@ class Simulation:
         settle = t + 2.0 * rebound / (n_force / model.m * (1.0 - e))
         self._mode = mode
         self._contact = (float(index), s, sd, sgn, t, settle)
+
+    def _start_in_contact(self) -> None:
+        """A ball that starts lying on a wall (gap and relative normal speed zero to
+        rounding, 1e-12 m and 1e-12 m/s) while the wall presses it starts in contact,
+        without an impact."""
+        ball = self._ball
+        px, py, vx, vy = self.drive.to_boundary_frame(
+            ball.theta, ball.q1, ball.q2, ball.u1, ball.u2
+        )
+        model = self.contact_model
+        for j, surface in enumerate(self.boundary.offsets):
+            warm = list(self.warm[j])
+            gap, rate = surface.gap_rate(px, py, vx, vy, warm)
+            s, z, cz = surface.contact(px, warm)
+            if abs(gap) > 1e-12 or abs(rate * cz) > 1e-12 or not surface.lo <= s <= surface.hi:
+                continue
+            wall = surface.wall
+            sd = model.s_dot(wall, ball.theta, s, ball.u1, ball.u2)
+            mode, sgn = model.mode_for(wall, ball.theta, s, sd, ball.u3)
+            if model.forces(wall, mode, sgn, ball.theta, (s, sd, ball.u3))[2] > 0.0:
+                self._mode = mode
+                self._contact = (float(j), s, sd, sgn, ball.t, ball.t)
+                return
 
     def _other_gaps(self, index: int) -> list[Callable[[float, float], float]]:
         gaps = []
