@@ -405,6 +405,18 @@ class Simulation:
         """Simulated time (s) spent in finished rolling and sliding phases."""
         return dict(self._phase_time)
 
+    def mode_times(self) -> dict[str, float]:
+        """Simulated time (s) spent flying, rolling and sliding from the scene's start to
+        ``final_time`` (an unfinished contact phase counted up to it)."""
+        times = dict(self._phase_time)
+        if self._mode != "flight" and self._contact:
+            end = self.final_time if math.isfinite(self.final_time) else self._ball.t
+            times[self._mode] += end - self._contact[4]
+        total = (self.final_time if math.isfinite(self.final_time) else self._ball.t) - (
+            self.initial.t
+        )
+        return {"flight": total - times["roll"] - times["slide"], **times}
+
     def _land(self, index: int, s: float, theta: float, res: Any, t: float) -> None:
         """After an impact: enter contact when the rebound speed e |wn| is below the
         landing speed (``contact.elastic_below``) while the wall presses the ball (the

@@ -111,7 +111,7 @@ COLUMNS: tuple[str, ...] = ImpactRecord._fields
 REQUIRED_COLUMNS: tuple[str, ...] = COLUMNS[:13]
 #: Columns read as text; ``n`` is an integer, every other column a float.
 TEXT_COLUMNS: frozenset[str] = frozenset({"regime", "wall"})
-_TEXT = TEXT_COLUMNS
+_TEXT = TEXT_COLUMNS | {"mode", "end"}  # the latter two: contacts.csv, trajectory.csv
 _INTEGER = frozenset({"n"})
 FLUSH_INTERVAL = 1.0  # s of wall-clock time between flushes of a streamed file
 #: Line terminator of the rows written: a plain newline, so that line tools (awk, cut,
