@@ -23,7 +23,7 @@ the dense output to 1e-13 s.
 from __future__ import annotations
 
 import math
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Iterable, Sequence
 from dataclasses import dataclass
 from typing import Any
 
@@ -189,7 +189,7 @@ class ContactModel:
         y0: Vec,
         limit: float,
         gaps: Sequence[Callable[[float, float], float]] = (),
-        samples: Sequence[float] = (),
+        samples: Iterable[float] = (),
         on_sample: Callable[[float, Vec], None] | None = None,
     ) -> PhaseEnd:
         """Integrate one contact phase from y0 at drive angle theta0 for at most
@@ -198,8 +198,9 @@ class ContactModel:
         Args:
             gaps: for each other wall, gap(px, py) (m) of the centre (relative to the
                 boundary) from that wall's offset curve; its zero is an ``impact``.
-            samples: increasing times (s, from the phase's start) at which to report the
-                state to ``on_sample(tau, y)``, those before the phase's end.
+            samples: increasing times (s, from the phase's start; an iterable, read as
+                far as the phase goes) at which to report the state to
+                ``on_sample(tau, y)``.
         """
         omega = self.drive.omega
         lo, hi = wall.lo, wall.hi
@@ -240,8 +241,8 @@ class ContactModel:
         scale = max(abs(k1[0]), abs(k1[1]), 1e-3)
         h = min(limit, 1e-3 / scale + 1e-4) if limit > 0.0 else 0.0
         c_prev = conditions(0.0, y)
-        next_sample = 0
-        n_samples = len(samples)
+        samples = iter(samples)
+        next_sample = next(samples, math.inf)
         steps = 0
         # the step is at most 1/20 of the drive period, so that the conditions, which
         # the drive moves, cannot change sign twice unseen within a step
@@ -304,10 +305,10 @@ class ContactModel:
                 end_t, end_i = best
                 end_y = dense(end_t)
             if on_sample is not None:
-                while next_sample < n_samples and samples[next_sample] <= end_t:
-                    ts = samples[next_sample]
+                while next_sample <= end_t:
+                    ts = next_sample
                     on_sample(ts, dense(ts) if ts > t_a else y_a)
-                    next_sample += 1
+                    next_sample = next(samples, math.inf)
             if end_i >= 0:
                 other = end_i - 4 if reasons[end_i] == "impact" else -1
                 return PhaseEnd(end_t, reasons[end_i], end_y, other)

@@ -19,7 +19,7 @@ from __future__ import annotations
 import math
 import time
 from collections import deque
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 from typing import Any
 
 from billiard.boundary import Boundary, Drive
@@ -514,15 +514,15 @@ class Simulation:
         t0, theta0 = ball.t, ball.theta
         omega = self.drive.omega
         sc = self.scene
-        samples: list[float] = []
-        if self.on_sample is not None:
+
+        def sample_times() -> Iterator[float]:
             k = self._samples
             while True:
                 ts = self.initial.t + k * self.sample_dt
                 if ts > until:
-                    break
+                    return
                 if ts >= t0:
-                    samples.append(ts - t0)
+                    yield ts - t0
                 k += 1
 
         def on_sample(tau: float, y: tuple) -> None:
@@ -535,7 +535,8 @@ class Simulation:
 
         end = model.run_phase(
             wall, mode, sgn, theta0, (s, sd, ball.u3), until - t0, self._other_gaps(index),
-            samples, on_sample if samples else None,
+            sample_times() if self.on_sample is not None else (),
+            on_sample if self.on_sample is not None else None,
         )  # fmt: skip
         if end.reason is None:
             return None
