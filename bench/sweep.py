@@ -102,13 +102,15 @@ def million(points: int, impacts: int) -> dict:
     }
 
 
+# Python's own allocation peak (tracemalloc), in kB: deterministic, unlike the
+# process's peak resident size, which an allocator may serve from memory freed earlier.
 _MEMORY = """
-import resource, sys, billiard
+import sys, tracemalloc, billiard
 scene = billiard.load_scene("wedge-6.6hz", overrides=["air.drag=none"])
 billiard.simulate(scene, collisions=100)
-before = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
+tracemalloc.start()
 billiard.simulate(scene, collisions=int(sys.argv[1])).columns
-print(resource.getrusage(resource.RUSAGE_SELF).ru_maxrss - before)
+print(tracemalloc.get_traced_memory()[1] // 1024)
 """
 
 
@@ -155,8 +157,8 @@ def render(results: dict) -> str:
         "## Sweeps: parallel throughput and a plan for 10^8 impacts",
         "",
         f"Measured by `{results['command']}` ({results['date']}, {results['machine']}; "
-        f"load average {results['load']} at the start); `billiard bench` does not run it "
-        "(its section registry has no place for it), and it rewrites only this section.",
+        f"load average {results['load']} at the start); a section of `billiard bench`, "
+        "kept when the rest of the page is rewritten.",
         "",
         f"**1 against 2 worker processes.** The same sweep, {t['points']} points of "
         f"{t['impacts_per_point']} impacts (the parabola at 25.43 mm, 5.0 to 5.8 Hz: "

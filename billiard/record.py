@@ -113,7 +113,6 @@ REQUIRED_COLUMNS: tuple[str, ...] = COLUMNS[:13]
 TEXT_COLUMNS: frozenset[str] = frozenset({"regime", "wall"})
 _TEXT = TEXT_COLUMNS | {"mode", "end"}  # the latter two: contacts.csv, trajectory.csv
 _INTEGER = frozenset({"n"})
-FLUSH_INTERVAL = 1.0  # s of wall-clock time between flushes of a streamed file
 #: Line terminator of the rows written: a plain newline, so that line tools (awk, cut,
 #: sort) see ``0.5`` and not ``0.5\r``. Files written with ``\r\n`` (by older versions)
 #: still read, and a resumed one is continued with its own terminator.

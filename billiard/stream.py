@@ -27,7 +27,6 @@ from billiard.checkpoint import CheckpointError
 from billiard.record import (
     _LINE_ENDS,
     COLUMNS,
-    FLUSH_INTERVAL,
     LINE_END,
     _format,
     _header_line,
@@ -40,6 +39,9 @@ except ImportError:  # pragma: no cover
     fcntl = None  # type: ignore[assignment]
 
 __all__ = ["CsvMark", "CsvRecorder", "RowMismatchError", "RunBusyError", "Truncation"]
+
+#: Wall-clock seconds between flushes of a streamed file.
+FLUSH_INTERVAL = 1.0
 
 
 @dataclass(frozen=True)

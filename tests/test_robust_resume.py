@@ -576,10 +576,10 @@ def test_recorder_writes_whole_rows_at_least_once_a_second(tmp_path, monkeypatch
         0.01,
         1.5,
     )
-    monkeypatch.setattr(record, "FLUSH_INTERVAL", 3600.0)
+    monkeypatch.setattr(stream, "FLUSH_INTERVAL", 3600.0)
     recorder.append(row)
     assert path.read_bytes() == header  # collected, not yet due
-    monkeypatch.setattr(record, "FLUSH_INTERVAL", 0.0)
+    monkeypatch.setattr(stream, "FLUSH_INTERVAL", 0.0)
     recorder.append(row)  # due: both rows go out in one write
     data = path.read_bytes()
     assert data.count(b"\n") == 3 and data.endswith(b"\n") and b"\r" not in data
