@@ -4,7 +4,6 @@ byte-for-byte resume contract with contact phases and sampling."""
 from __future__ import annotations
 
 import json
-import signal
 
 import numpy as np
 import pytest
@@ -107,7 +106,3 @@ def test_cli_bad_sample_is_one_line(tmp_path, capsys):
     assert main(["run", "wedge-6.6hz", "--sample", "-1", "--out", str(tmp_path / "x")]) != 0
     err = capsys.readouterr().err.strip()
     assert "--sample" in err and "\n" not in err
-
-
-def test_signal_hook_is_sigint():
-    assert signal.SIGINT  # the hook's default signal, used above
