@@ -247,6 +247,8 @@ class ContactModel:
         # the step is at most 1/20 of the drive period, so that the conditions, which
         # the drive moves, cannot change sign twice unseen within a step
         h_max = math.inf if self.static else 0.1 * math.pi / abs(omega)
+        rest_span = 0.0 if self.static else 2.0 * math.pi / abs(omega)
+        rest_since = math.inf
         while tau < limit:
             h = min(h, limit - tau, h_max)
             for _ in range(60):
@@ -315,9 +317,16 @@ class ContactModel:
             tau, y, k1, c_prev = t_b, y_new, k7, c_new
             factor = 5.0 if err == 0.0 else min(5.0, max(0.2, 0.9 * err**-0.2))
             h *= factor
-            if self.static and steps > 4 and _at_rest(k1) and math.isinf(limit):
+            if not _at_rest(k1):
+                rest_since = math.inf
+            elif rest_since == math.inf:
+                rest_since = tau
+            if math.isinf(limit) and steps > 4 and tau - rest_since >= rest_span:
+                # at rest relative to the boundary, with every condition kept, for a
+                # whole drive period (or, on a static boundary, a few steps): the drive
+                # is periodic, so this repeats for ever
                 raise SimulationError(
-                    "the ball is at rest on a static boundary: nothing more happens",
+                    "the ball rests on the boundary, moving with it: nothing more happens",
                     Status.TIME_LIMIT,
                 )
         return PhaseEnd(limit, None, y)

@@ -209,3 +209,14 @@ def test_a_shaken_table_throws_the_ball_where_it_falls_faster_than_g(gamma):
     record = sim.step()
     assert isinstance(record, ContactRecord) and record.end == "lift-off"
     assert record.t_end == pytest.approx(math.asin(1 / gamma) / w, abs=1e-11)
+
+
+def test_a_ball_resting_on_a_shaken_table_ends_an_unlimited_run():
+    # at rest relative to the table through a whole drive period: it stays for ever
+    from billiard.simulate import simulate
+    from billiard.status import Status
+
+    sc, _ = table(0.9)
+    result = simulate(sc, collisions=100)
+    assert len(result) == 0 and result.status is Status.TIME_LIMIT
+    assert "rests on the boundary" in result.stop_reason
