@@ -49,8 +49,10 @@ from billiard.checkpoint import (
 )
 from billiard.engine import COLLAPSE_COUNT, Progress, Simulation
 from billiard.interrupt import RunInterrupted, StopRequest, signals_deferred
+from billiard.record import CONTACT_COLUMNS, TRAJECTORY_COLUMNS
 from billiard.result import Result, RunFile
 from billiard.scene import scene_from_toml, scene_to_toml
+from billiard.sidecsv import CONTACTS_NAME, TRAJECTORY_NAME, SideCsv
 from billiard.state import EngineState
 from billiard.status import Status
 from billiard.stream import CsvMark, CsvRecorder, RowMismatchError, RunBusyError, Truncation
@@ -151,6 +153,8 @@ def resume(
         engine = data["engine"]
         stop_reason = data.get("stop_reason")
         stop_status = Status(data.get("stop_status", Status.COMPLETE))
+        sample = data.get("sample")
+        side_sizes = {str(k): int(v) for k, v in data.get("side", {}).items()}
     except (KeyError, TypeError, ValueError):
         raise CheckpointError(f"{checkpoint_path} lacks an entry it needs") from None
     except CheckpointError as exc:
@@ -166,6 +170,7 @@ def resume(
         raise CheckpointError(f"{scene_path} cannot be read: {exc}") from None
     scene = scene_from_toml(text, source=f"'{scene_path}'")
     sim = Simulation(scene)
+    sim.sample_dt = None if sample is None else float(sample)
     if _fingerprint(sim) != fingerprint:
         raise CheckpointError(
             f"{scene_path} is not the scene the checkpoint was written for (edited since?)"
@@ -174,7 +179,7 @@ def resume(
     rows = mark.rows
     csv_path = out / CSV_NAME
     if csv_path.is_file() and csv_path.stat().st_size < mark.size:
-        return _recompute(out, scene, total, rows, progress, notify, on_record)
+        return _recompute(out, scene, total, rows, progress, notify, on_record, sim.sample_dt)
     by_time = scene.run.duration is not None and collisions is None
     if status == "stopped" or (status == "complete" and (total <= rows or by_time)):
         if collisions is not None and total < rows:
@@ -237,7 +242,16 @@ def resume(
         write_text_atomic(out / SCENE_NAME, scene_to_toml(sim.resolved_scene(total)))
     with _mismatch_hint(out):
         return _run_streamed(
-            sim, total, out, stream, state, progress, on_record, resumed_from=rows, truncation=cut
+            sim,
+            total,
+            out,
+            stream,
+            state,
+            progress,
+            on_record,
+            resumed_from=rows,
+            truncation=cut,
+            side_sizes=side_sizes,
         )
 
 
@@ -249,6 +263,7 @@ def _recompute(
     progress: Progress | None,
     notify: Callable[[str], None] | None,
     on_record: OnRecord | None,
+    sample: float | None = None,
 ) -> Result:
     """Resume a run whose CSV file is shorter than its checkpoint says (cut short by
     hand, or restored from an older copy): the run is deterministic, so it is recomputed
@@ -261,6 +276,7 @@ def _recompute(
     except CheckpointError as exc:
         raise CheckpointError(f"{exc}; {_restart_hint(out)}") from None
     sim = Simulation(scene)  # a fresh engine: no memory of the checkpoint's state
+    sim.sample_dt = sample
     sim.resolved_scene(total)  # validates the new total
     stream, cut = CsvRecorder.reopen(csv_path, header, autoflush=False)
     if notify is not None:
@@ -324,12 +340,30 @@ def _run_streamed(
     *,
     resumed_from: int | None = None,
     truncation: Truncation | None = None,
+    side_sizes: Mapping[str, int] | None = None,
 ) -> Result:
     """Run ``sim`` from ``start`` to ``total`` impacts, streaming rows to ``stream`` and
-    keeping ``out/checkpoint.json`` in step with what the CSV file holds."""
+    keeping ``out/checkpoint.json`` in step with what the CSV file holds (and the side
+    files, contacts.csv and trajectory.csv, cut back to ``side_sizes`` on a resume)."""
     checkpoint_path = out / CHECKPOINT_NAME
     fingerprint = _fingerprint(sim)
     saved = [start.impacts]
+    sides: dict[str, SideCsv] = {}
+    try:
+        if sim.phases:
+            size = None if side_sizes is None else side_sizes.get("contacts")
+            sides["contacts"] = SideCsv(out / CONTACTS_NAME, CONTACT_COLUMNS, size)
+            sim.on_contact = sides["contacts"].append
+        if sim.sample_dt is not None:
+            size = None if side_sizes is None else side_sizes.get("trajectory")
+            trajectory = SideCsv(out / TRAJECTORY_NAME, TRAJECTORY_COLUMNS, size)
+            sides["trajectory"] = trajectory
+            sim.on_sample = lambda *row: trajectory.append(row)
+    except BaseException:
+        for side in sides.values():
+            side.close()
+        stream.close()
+        raise
 
     def save(state: EngineState, status: str, reason: str | None = None) -> None:
         if stream.checking:
@@ -355,6 +389,8 @@ def _run_streamed(
                 "scene_sha256": fingerprint,
                 "csv": mark.as_dict(),
                 "engine": engine,
+                "sample": sim.sample_dt,
+                "side": {name: side.flush() for name, side in sides.items()},
             },
         )
         saved[0] = mark.rows
@@ -393,6 +429,8 @@ def _run_streamed(
         raise RunWriteError.after(exc, out, stream.rows_on_disk, saved[0]) from exc
     finally:
         stream.close()
+        for side in sides.values():
+            side.close()
     if request.signum:
         # the signal came after the last impact: the files are complete; let it act now
         signal.raise_signal(request.signum)
@@ -408,6 +446,9 @@ def _run_streamed(
         regimes=sim.impact.regimes,
         resumed_from=resumed_from,
         truncation=truncation,
+        mode_times=sim.mode_times() if sim.phases or sim.sample_dt else None,
+        contacts=out / CONTACTS_NAME if "contacts" in sides else None,
+        trajectory=out / TRAJECTORY_NAME if "trajectory" in sides else None,
     )
 
 

@@ -40,6 +40,9 @@ import numpy as np
 
 __all__ = [
     "COLUMNS",
+    "CONTACT_COLUMNS",
+    "TRAJECTORY_COLUMNS",
+    "ContactRecord",
     "REQUIRED_COLUMNS",
     "TEXT_COLUMNS",
     "ImpactRecord",
@@ -74,13 +77,41 @@ class ImpactRecord(NamedTuple):
     q3: float
 
 
+class ContactRecord(NamedTuple):
+    """One rolling or sliding phase (``contact.model = "phases"``), as
+    :meth:`billiard.engine.Simulation.step` returns it and as it is written to
+    ``contacts.csv`` (columns in the README's table)."""
+
+    t_start: float
+    t_end: float
+    wall: str
+    mode: str
+    end: str
+    t_settle: float
+    q1_start: float
+    q2_start: float
+    v1_start: float
+    v2_start: float
+    omega_start: float
+    q1_end: float
+    q2_end: float
+    v1_end: float
+    v2_end: float
+    omega_end: float
+
+
+#: The columns of ``contacts.csv``, in order.
+CONTACT_COLUMNS: tuple[str, ...] = ContactRecord._fields
+#: The columns of ``trajectory.csv`` (``billiard run --sample DT``), in order.
+TRAJECTORY_COLUMNS: tuple[str, ...] = ("t", "q1", "q2", "v1", "v2", "omega", "energy", "mode")
+
 #: The columns of ``collisions.csv``, in order: the fields of :class:`ImpactRecord`.
 COLUMNS: tuple[str, ...] = ImpactRecord._fields
 #: Columns every run file must have for plots and analyses (the first thirteen).
 REQUIRED_COLUMNS: tuple[str, ...] = COLUMNS[:13]
 #: Columns read as text; ``n`` is an integer, every other column a float.
 TEXT_COLUMNS: frozenset[str] = frozenset({"regime", "wall"})
-_TEXT = TEXT_COLUMNS
+_TEXT = TEXT_COLUMNS | {"mode", "end"}  # the latter two: contacts.csv, trajectory.csv
 _INTEGER = frozenset({"n"})
 #: Line terminator of the rows written: a plain newline, so that line tools (awk, cut,
 #: sort) see ``0.5`` and not ``0.5\r``. Files written with ``\r\n`` (by older versions)

@@ -75,6 +75,9 @@ class Result:
         resumed_from: int | None = None,
         truncation: Truncation | None = None,
         already_finished: bool = False,
+        mode_times: dict[str, float] | None = None,
+        contacts: Any = None,
+        trajectory: Any = None,
     ):
         self.scene = scene
         self.status = Status(status)
@@ -89,6 +92,21 @@ class Result:
         self.truncation = truncation
         self.already_finished = already_finished
         self._columns: dict[str, np.ndarray] | None = None
+        self.mode_times = mode_times
+        self._contacts = contacts
+        self._trajectory = trajectory
+
+    @property
+    def contacts(self) -> dict[str, np.ndarray] | None:
+        """The contact phases (``contact.model = "phases"``): column name -> array, the
+        columns of contacts.csv; None for the impacts model."""
+        return _side_columns(self._contacts)
+
+    @property
+    def trajectory(self) -> dict[str, np.ndarray] | None:
+        """The samples of a run with a sampling interval: column name -> array, the
+        columns of trajectory.csv (t, q1, q2, v1, v2, omega, energy, mode); else None."""
+        return _side_columns(self._trajectory)
 
     @property
     def message(self) -> str:
@@ -134,6 +152,12 @@ class Result:
                 "(the low-velocity rule standing in for rolling): a stronger drive "
                 "(drive.amplitude, m) or a start above the wall (initial.q2, m) makes it fly"
             )
+        if self.mode_times is not None:
+            m = self.mode_times
+            text += (
+                f"; {m['flight']:.6g} s flying, {m['roll']:.6g} s rolling, "
+                f"{m['slide']:.6g} s sliding"
+            )
         if self.resumed_from is not None:
             text += f"; resumed after impact {self.resumed_from}"
         if self.status is Status.TIME_LIMIT:
@@ -141,3 +165,13 @@ class Result:
         if self.stop_reason:
             text += f"; stopped: {self.stop_reason}"
         return text
+
+
+def _side_columns(source: Any) -> dict[str, np.ndarray] | None:
+    if source is None:
+        return None
+    if isinstance(source, (str, os.PathLike)):
+        from billiard.sidecsv import read_side_csv
+
+        return read_side_csv(source)
+    return source.columns()

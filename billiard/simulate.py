@@ -12,6 +12,7 @@ result container (:mod:`billiard.result`). Their public names are re-exported he
 
 from __future__ import annotations
 
+import math
 import os
 import time
 from collections.abc import Callable
@@ -27,9 +28,9 @@ from billiard.persist import (
     resume,
     run_streamed,
 )
-from billiard.record import MemoryRecorder
+from billiard.record import CONTACT_COLUMNS, TRAJECTORY_COLUMNS, MemoryRecorder
 from billiard.result import Result
-from billiard.scene import with_values
+from billiard.scene import SceneError, with_values
 from billiard.state import BallState, EngineState
 from billiard.status import Status
 
@@ -62,6 +63,7 @@ def simulate(
     progress: Progress | None = None,
     duration: float | None = None,
     on_record: Callable[[int], None] | None = None,
+    sample: float | None = None,
 ) -> Result:
     """Run a scene.
 
@@ -76,6 +78,8 @@ def simulate(
             limits comes first; default ``scene.run.duration`` (None: no limit).
         on_record: called with the impact number after each record (a hook for tests
             and audits).
+        sample: sampling interval (s) of simulated time: the state every ``sample``
+            seconds in ``result.trajectory`` (and ``trajectory.csv``).
 
     Returns:
         A :class:`Result`; a run that had to stop early (ball escaped, inelastic
@@ -96,9 +100,20 @@ def simulate(
     sim = Simulation(scene, method)
     total = scene.run.collisions if collisions is None else int(collisions)
     resolved = sim.resolved_scene(total)  # validates the impact count before any work
+    if sample is not None:
+        if not (isinstance(sample, (int, float)) and math.isfinite(sample) and sample > 0):
+            raise SceneError(f"the sampling interval must be a number > 0 s, got {sample!r}")
+        sim.sample_dt = float(sample)
     if out_dir is not None:
         return run_streamed(sim, out_dir, collisions=total, progress=progress, on_record=on_record)
     recorder = MemoryRecorder()
+    contacts = trajectory = None
+    if sim.phases:
+        contacts = MemoryRecorder(CONTACT_COLUMNS)
+        sim.on_contact = contacts.append
+    if sim.sample_dt is not None:
+        trajectory = MemoryRecorder(TRAJECTORY_COLUMNS)
+        sim.on_sample = lambda *row: trajectory.append(row)
     start = time.perf_counter()
     reason = sim.run(total, recorder, progress, on_record=on_record)
     wall_time = time.perf_counter() - start
@@ -112,4 +127,7 @@ def simulate(
         sim.counts,
         sim.final_time,
         regimes=sim.impact.regimes,
+        mode_times=sim.mode_times() if sim.phases or sim.sample_dt else None,
+        contacts=contacts,
+        trajectory=trajectory,
     )

@@ -271,13 +271,19 @@ class ContactSpec:
         mu_static: static friction coefficient (dimensionless).
         mu_kinetic: kinetic friction coefficient (dimensionless, <= mu_static).
         elastic_below: relative normal speed (m/s) below which impacts are elastic (e = 1),
-            which prevents inelastic collapse.
+            which prevents inelastic collapse. With ``model = "phases"`` it is also the
+            landing speed: an impact on a wall that presses the ball, whose rebound
+            speed e |wn| would be below it, starts a rolling or sliding phase instead.
+        model: ``"impacts"`` (impacts only, with the paper's low-velocity rule) or
+            ``"phases"`` (impacts plus rolling and sliding phases on a wall, see
+            :mod:`billiard.contact_phase`).
     """
 
     restitution: float = 0.393
     mu_static: float = 0.61
     mu_kinetic: float = 0.47
     elastic_below: float = 0.01
+    model: str = "impacts"
 
     def __post_init__(self) -> None:
         _set(self, "restitution", limited("contact.restitution", self.restitution))
@@ -289,7 +295,11 @@ class ContactSpec:
                 f"contact.mu_static = {self.mu_static!r}"
             )
         _set(self, "elastic_below", limited("contact.elastic_below", self.elastic_below))
+        check_choice("contact.model", self.model, CONTACT_MODELS)
 
+
+#: Contact models (``contact.model``).
+CONTACT_MODELS = ("impacts", "phases")
 
 _DEFAULT_C_LIN, _DEFAULT_C_QUAD = fowles_coefficients(_DEFAULT_RADIUS)
 

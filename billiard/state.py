@@ -4,16 +4,16 @@ event to the next (what a checkpoint stores, so that a run continues bit for bit
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, fields
+from dataclasses import dataclass, field, fields
 from typing import Any
 
 from billiard.checkpoint import CheckpointError
 
 __all__ = ["MOTION_STATES", "BallState", "EngineState"]
 
-#: Motion states of the ball. Today the engine knows free flight between impacts only;
-#: sustained contact adds rolling and sliding on a wall.
-MOTION_STATES: tuple[str, ...] = ("flight",)
+#: Motion states of the ball: free flight between impacts, and (``contact.model =
+#: "phases"``) rolling and sliding on one wall.
+MOTION_STATES: tuple[str, ...] = ("flight", "roll", "slide")
 
 
 @dataclass(slots=True)
@@ -56,6 +56,11 @@ class EngineState:
         flight: the flight model's memory (the adaptive integrator's step proposal).
         locator: the impact locator's memory (the fixed-step locator's warm starts).
         mode: the ball's motion state (one of :data:`MOTION_STATES`).
+        contact: in contact (``roll`` or ``slide``): the wall's surface index, the contact
+            abscissa s (m), ds/dt (m/s), the slip sign while sliding, the phase's start
+            time and its settle time (s); empty in flight.
+        samples: trajectory samples reported so far (``--sample``).
+        phase_time: simulated time (s) spent in finished ``roll`` and ``slide`` phases.
     """
 
     ball: BallState
@@ -69,6 +74,9 @@ class EngineState:
     flight: dict[str, float]
     locator: dict[str, list[float]]
     mode: str = "flight"
+    contact: tuple[float, ...] = ()
+    samples: int = 0
+    phase_time: dict[str, float] = field(default_factory=dict)
 
     def to_dict(self) -> dict[str, Any]:
         """Plain JSON-ready data (floats stay floats; :mod:`json` writes them with
@@ -85,6 +93,9 @@ class EngineState:
             "flight": dict(self.flight),
             "locator": {key: list(value) for key, value in self.locator.items()},
             "mode": self.mode,
+            "contact": list(self.contact),
+            "samples": self.samples,
+            "phase_time": dict(self.phase_time),
         }
 
     @classmethod
@@ -111,11 +122,16 @@ class EngineState:
                 flight={str(k): _finite(v) for k, v in data["flight"].items()},
                 locator={str(k): [_finite(x) for x in v] for k, v in data["locator"].items()},
                 mode=mode,
+                contact=tuple(_finite(x) for x in data.get("contact", ())),
+                samples=_count(data.get("samples", 0)),
+                phase_time={str(k): _finite(v) for k, v in data.get("phase_time", {}).items()},
             )
         except CheckpointError:
             raise
         except (KeyError, TypeError, ValueError, AttributeError) as exc:
             raise CheckpointError(f"its engine state is malformed ({exc!r})") from None
+        if (mode == "flight") != (len(state.contact) == 0) or len(state.contact) not in (0, 6):
+            raise CheckpointError("its engine state's contact does not match its motion state")
         if len(state.recent) > window:
             raise CheckpointError("its engine state is malformed (collapse window too long)")
         return state

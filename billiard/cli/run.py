@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import math
 import sys
 import time
 from pathlib import Path
@@ -150,14 +151,19 @@ def cmd_run(args: argparse.Namespace) -> int:
 
     # every argument is checked before any work
     frame_interval = _frame_interval(args.frame_interval)
+    if args.sample is not None and not (math.isfinite(args.sample) and args.sample > 0):
+        raise UserError(f"run: --sample must be a number > 0 (s), got {args.sample!r}")
     bar = ProgressBar()
     stale: list[str] = []  # plots removed because the data changed under them
     changed = False  # whether the run folder's data was changed
     if args.resume is not None:
-        if args.scene or args.set or args.method or args.out or args.duration or args.overwrite:
+        if (
+            args.scene or args.set or args.method or args.out or args.duration
+            or args.overwrite or args.sample is not None
+        ):  # fmt: skip
             raise UserError(
                 "run --resume DIR continues a run as it was set up: give no "
-                "SCENE, --out, --set, --method, --duration or --overwrite with it"
+                "SCENE, --out, --set, --method, --duration, --sample or --overwrite with it"
             )
         out = Path(args.resume)
         if args.collisions is not None and args.collisions < 1:
@@ -216,6 +222,7 @@ def cmd_run(args: argparse.Namespace) -> int:
                         out_dir=out,
                         progress=bar,
                         duration=args.duration,
+                        sample=args.sample,
                     )
                 except CheckpointError as exc:  # another process is writing a run in DIR
                     changed = False
@@ -245,7 +252,9 @@ def cmd_run(args: argparse.Namespace) -> int:
         where = f": {exc.filename}" if exc.filename else ""
         raise UserError(f"cannot write the run: {exc.strerror or exc}{where}") from None
     print(result.summary())
-    print(f"wrote {out / CSV_NAME} and {out / SCENE_NAME}")
+    extra = [p for p in (result._contacts, result._trajectory) if isinstance(p, Path)]
+    names = ", ".join(str(p) for p in (out / CSV_NAME, *extra))
+    print(f"wrote {names} and {out / SCENE_NAME}")
     if not args.no_plot and len(result) > 1:
         from billiard.plot import plot_run
 
@@ -306,6 +315,12 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
         metavar="S",
         help="stop after S seconds of simulated time (with --collisions: whichever comes "
         "first; default: the scene's run.duration, no limit)",
+    )
+    p.add_argument(
+        "--sample",
+        type=float,
+        metavar="DT",
+        help="also write DIR/trajectory.csv: the state every DT seconds of simulated time",
     )
     p.add_argument("--out", help="output directory (default: runs/SCENE)")
     p.add_argument(

@@ -1,0 +1,81 @@
+"""The side files of a streamed run with ``contact.model = "phases"`` or ``--sample``:
+``contacts.csv`` (one row per finished contact phase) and ``trajectory.csv`` (one row
+per sample). Each grows by whole rows; a checkpoint records their sizes, and a resumed
+run cuts them back to those sizes and writes on, so that they end up byte for byte as
+an uninterrupted run writes them.
+"""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Sequence
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from billiard.checkpoint import CheckpointError
+from billiard.record import _format
+
+__all__ = ["CONTACTS_NAME", "TRAJECTORY_NAME", "SideCsv", "read_side_csv"]
+
+CONTACTS_NAME = "contacts.csv"
+TRAJECTORY_NAME = "trajectory.csv"
+_TEXT = frozenset({"wall", "mode", "end"})
+
+
+class SideCsv:
+    """A CSV file written by whole rows, buffered until :meth:`flush`.
+
+    Args:
+        path: the file.
+        columns: its header.
+        size: None to start the file afresh; else the size (bytes) a checkpoint
+            recorded, to which the file is cut back before writing on.
+    """
+
+    def __init__(self, path: Path, columns: Sequence[str], size: int | None = None):
+        self.path = Path(path)
+        self._pending: list[str] = []
+        if size is None:
+            self._file = open(self.path, "wb")  # noqa: SIM115 - closed by close()
+            self._file.write((",".join(columns) + "\n").encode())
+        else:
+            try:
+                self._file = open(self.path, "r+b")  # noqa: SIM115
+            except FileNotFoundError:
+                raise CheckpointError(f"{self.path} is missing") from None
+            if os.fstat(self._file.fileno()).st_size < size:
+                self._file.close()
+                raise CheckpointError(f"{self.path} is shorter than its checkpoint says")
+            self._file.truncate(size)
+            self._file.seek(size)
+
+    def append(self, row: Sequence[Any]) -> None:
+        self._pending.append(",".join(_format(v) for v in row) + "\n")
+
+    def flush(self) -> int:
+        """Write the buffered rows; returns the file's size (bytes)."""
+        if self._pending:
+            self._file.write("".join(self._pending).encode())
+            self._pending.clear()
+        self._file.flush()
+        os.fsync(self._file.fileno())
+        return self._file.tell()
+
+    def close(self) -> None:
+        if not self._file.closed:
+            self.flush()
+            self._file.close()
+
+
+def read_side_csv(path: str | os.PathLike[str]) -> dict[str, np.ndarray]:
+    """Column name -> numpy array of a side file (text columns as str)."""
+    lines = Path(path).read_text(encoding="utf-8").splitlines()
+    names = lines[0].split(",")
+    rows = [line.split(",") for line in lines[1:] if line]
+    out: dict[str, np.ndarray] = {}
+    for i, name in enumerate(names):
+        values = [row[i] for row in rows]
+        out[name] = np.array(values, dtype=str if name in _TEXT else np.float64)
+    return out
