@@ -96,6 +96,13 @@ class Simulation(ContactPhases):
         )
         self.impact: ImpactLaw = law if law is not None else impact_law(scene)
         self.initial = self.initial_state()
+        #: (m, r, k, g) of the energy formula, looked up once rather than per impact
+        self._ball_constants = (
+            scene.ball.mass,
+            scene.ball.radius,
+            scene.ball.inertia_factor,
+            scene.run.gravity,
+        )
         #: simulated time (s) at which a run ends (inf when the scene sets no duration)
         self.end_time = (
             math.inf if scene.run.duration is None else self.initial.t + scene.run.duration
@@ -330,18 +337,8 @@ class Simulation(ContactPhases):
             res = self.impact.apply(before, Contact(ev.z, vb1, vb2, self._pressing(ev)))
         except SimulationError as exc:
             raise SimulationError(f"{exc} at impact {n + 1} (t = {t:.9g} s)", exc.status) from None
-        scene = self.scene
         u4, un = _ball.frame_velocity(res.u1, res.u2, ev.z)
-        energy = _ball.energy(
-            ev.q2,
-            res.u1,
-            res.u2,
-            res.u3,
-            scene.ball.mass,
-            scene.ball.radius,
-            scene.ball.inertia_factor,
-            scene.run.gravity,
-        )
+        energy = _ball.energy(ev.q2, res.u1, res.u2, res.u3, *self._ball_constants)
         record = ImpactRecord(
             n + 1,
             t,
@@ -385,7 +382,8 @@ class Simulation(ContactPhases):
         while t - recent[0] >= COLLAPSE_SPAN:
             recent.popleft()
         self.final_time = t
-        self._fault = self._collapse(n + 1, t)
+        if len(recent) > COLLAPSE_COUNT or self._zero_flights >= ZERO_FLIGHT_LIMIT:
+            self._fault = self._collapse(n + 1, t)
         if self.phases:
             self._land(ev.index, ev.s, ev.theta, res, t)
         return record
