@@ -31,6 +31,7 @@ from billiard.engine_phases import (
     COLLAPSE_SPAN,
     ZERO_FLIGHT_LIMIT,
     ContactPhases,
+    compensated_add,
 )
 from billiard.errors import GeometryError, SimulationError
 from billiard.events import Event
@@ -313,12 +314,7 @@ class Simulation(ContactPhases):
                 f"{exc} after impact {n} (t = {state.t:.9g} s)", exc.status
             ) from None
         tau = ev.tau
-        clock = self._clock
-        total = clock + tau
-        if abs(clock) >= abs(tau):
-            error = self._clock_error + ((clock - total) + tau)
-        else:
-            error = self._clock_error + ((tau - total) + clock)
+        total, error = compensated_add(self._clock, self._clock_error, tau)
         t = total + error
         if self.on_sample is not None:
             self._sample_flight_to(state, min(t, until))

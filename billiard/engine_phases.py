@@ -17,6 +17,7 @@ from billiard.state import BallState
 from billiard.status import Status
 
 __all__ = [
+    "compensated_add",
     "COLLAPSE_COUNT",
     "COLLAPSE_SPAN",
     "LIFT_OFF_SPEED",
@@ -33,6 +34,16 @@ ZERO_FLIGHT_LIMIT = 1_000
 #: Normal speed (m/s) a ball leaving a wall at lift-off is given, far below any speed
 #: resolved (it moves the ball by 1e-12 m per second of flight).
 LIFT_OFF_SPEED = 1e-6
+
+
+def compensated_add(clock: float, error: float, tau: float) -> tuple[float, float]:
+    """Add a duration tau (s) to the engine's clock by Neumaier's compensated summation:
+    (new sum, new running error); the time is their sum. The clock is a sum of tens of
+    thousands of durations: kept this way it stays the correctly rounded sum."""
+    total = clock + tau
+    if abs(clock) >= abs(tau):
+        return total, error + ((clock - total) + tau)
+    return total, error + ((tau - total) + clock)
 
 
 class ContactPhases:
@@ -184,12 +195,7 @@ class ContactPhases:
         if end.reason is None:
             return None
         tau = end.tau
-        clock = self._clock
-        total = clock + tau
-        if abs(clock) >= abs(tau):
-            error = self._clock_error + ((clock - total) + tau)
-        else:
-            error = self._clock_error + ((tau - total) + clock)
+        total, error = compensated_add(self._clock, self._clock_error, tau)
         t = total + error
         theta = (theta0 + omega * tau) % (2.0 * math.pi)
         q1, q2, u1, u2, u3 = model.lab_state(wall, theta, end.y, mode)
