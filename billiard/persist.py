@@ -238,21 +238,9 @@ def resume(
             notes.append(f"dropped an unterminated last line ({cut.partial_bytes} bytes)")
         note = f"; {'; '.join(notes)}" if notes else ""
         notify(f"resuming {out} after impact {rows} of {total}{note}")
-    if total != scene.run.collisions:
-        write_text_atomic(out / SCENE_NAME, scene_to_toml(sim.resolved_scene(total)))
-    with _mismatch_hint(out):
-        return _run_streamed(
-            sim,
-            total,
-            out,
-            stream,
-            state,
-            progress,
-            on_record,
-            resumed_from=rows,
-            truncation=cut,
-            side_sizes=side_sizes,
-        )
+    return _continue(
+        sim, scene, total, out, stream, state, progress, on_record, rows, cut, side_sizes
+    )
 
 
 def _recompute(
@@ -291,20 +279,30 @@ def _recompute(
             f"the {cut.rows} rows on disk against the recomputed impact, then continuing "
             f"to impact {total}"
         )
+    return _continue(sim, scene, total, out, stream, sim.start_state(), progress, on_record, 0, cut)
+
+
+def _continue(
+    sim: Simulation,
+    scene: Any,
+    total: int,
+    out: Path,
+    stream: CsvRecorder,
+    start: EngineState,
+    progress: Progress | None,
+    on_record: OnRecord | None,
+    resumed_from: int,
+    cut: Truncation,
+    side_sizes: Any = None,
+) -> Result:
+    """Go on with a resumed run from ``start`` (after recording a new total in scene.toml)."""
     if total != scene.run.collisions:
         write_text_atomic(out / SCENE_NAME, scene_to_toml(sim.resolved_scene(total)))
     with _mismatch_hint(out):
         return _run_streamed(
-            sim,
-            total,
-            out,
-            stream,
-            sim.start_state(),
-            progress,
-            on_record,
-            resumed_from=0,
-            truncation=cut,
-        )
+            sim, total, out, stream, start, progress, on_record,
+            resumed_from=resumed_from, truncation=cut, side_sizes=side_sizes,
+        )  # fmt: skip
 
 
 @contextlib.contextmanager
