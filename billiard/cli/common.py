@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import argparse
 import sys
 
 
@@ -11,3 +12,8 @@ class UserError(Exception):
 
 def _note(line: str) -> None:
     print(f"billiard: note: {line}", file=sys.stderr)
+
+
+def add_set_argument(parser: argparse.ArgumentParser, help: str) -> None:
+    """The repeatable ``--set KEY=VALUE`` scene override every scene command takes."""
+    parser.add_argument("--set", action="append", default=[], metavar="KEY=VALUE", help=help)

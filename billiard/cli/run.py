@@ -8,7 +8,7 @@ import sys
 import time
 from pathlib import Path
 
-from billiard.cli.common import UserError, _note
+from billiard.cli.common import UserError, _note, add_set_argument
 
 
 class ProgressBar:
@@ -323,13 +323,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
         help="also write DIR/trajectory.csv: the state every DT seconds of simulated time",
     )
     p.add_argument("--out", help="output directory (default: runs/SCENE)")
-    p.add_argument(
-        "--set",
-        action="append",
-        default=[],
-        metavar="KEY=VALUE",
-        help="override a scene key, e.g. --set drive.frequency=6.0 (repeatable)",
-    )
+    add_set_argument(p, "override a scene key, e.g. --set drive.frequency=6.0 (repeatable)")
     p.add_argument(
         "--overwrite",
         action="store_true",

@@ -6,7 +6,7 @@ import argparse
 import time
 from pathlib import Path
 
-from billiard.cli.common import UserError, _note
+from billiard.cli.common import UserError, _note, add_set_argument
 
 
 def cmd_scenes(args: argparse.Namespace) -> int:
@@ -135,13 +135,7 @@ def add_parsers(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--low", type=float, help="lower end of the scan (default: value/4)")
     p.add_argument("--high", type=float, help="upper end of the scan (default: 4 x value)")
     p.add_argument("--impacts", type=int, default=1500, help="impacts per trial run (default 1500)")
-    p.add_argument(
-        "--set",
-        action="append",
-        default=[],
-        metavar="KEY=VALUE",
-        help="override a scene key first (repeatable)",
-    )
+    add_set_argument(p, "override a scene key first (repeatable)")
     p.add_argument("--json", action="store_true", help="print one JSON object")
     p.set_defaults(func=cmd_calibrate)
 
@@ -185,13 +179,7 @@ def add_parsers(sub: argparse._SubParsersAction) -> None:
         "radius). Exit status 3 when the exponent is undefined (a ball that never flies)",
     )
     p.add_argument("--method", choices=["event", "rk4"], help="default: the scene's")
-    p.add_argument(
-        "--set",
-        action="append",
-        default=[],
-        metavar="KEY=VALUE",
-        help="override a scene key first (repeatable)",
-    )
+    add_set_argument(p, "override a scene key first (repeatable)")
     p.set_defaults(func=cmd_lyapunov)
 
     from billiard.bench import add_bench_arguments  # argparse only: cheap

@@ -6,7 +6,7 @@ import argparse
 import sys
 from pathlib import Path
 
-from billiard.cli.common import UserError
+from billiard.cli.common import UserError, add_set_argument
 
 
 def cmd_sweep(args: argparse.Namespace) -> int:
@@ -126,13 +126,7 @@ def _add_sweep_parser(sub: argparse._SubParsersAction) -> None:
         help="a swept key: N values from START to STOP, or KEY=v1,v2,... (repeatable: a grid)",
     )
     p.add_argument("--file", metavar="SWEEP.toml", help="a sweep file (see docs/sweeps.md)")
-    p.add_argument(
-        "--set",
-        action="append",
-        default=[],
-        metavar="KEY=VALUE",
-        help="override a key of the base scene (repeatable)",
-    )
+    add_set_argument(p, "override a key of the base scene (repeatable)")
     p.add_argument(
         "--impacts", type=int, help="impacts measured per point, after the transient (2000)"
     )
