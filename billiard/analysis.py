@@ -23,7 +23,7 @@ from typing import Any
 import numpy as np
 
 from billiard.engine import Simulation
-from billiard.errors import SimulationError
+from billiard.errors import BallAtRest, SimulationError
 from billiard.state import BallState
 
 __all__ = [
@@ -93,6 +93,10 @@ class _NeverFlies(_Stopped):
     """The reference trajectory has no flight long enough to compare states in."""
 
 
+class _AtRest(_Stopped):
+    """The ball came to rest on the boundary (sustained contact): nothing more happens."""
+
+
 def _fly(sim: Simulation, state: BallState, tau: float) -> BallState:
     """State of the ball after flying for tau (s) from ``state`` with the simulation's own
     flight model (spin constant in flight)."""
@@ -116,6 +120,8 @@ def _advance(sim: Simulation, state: BallState, impacts: int) -> BallState:
             sim.step()
         if sim.pending_stop is not None:
             raise sim.pending_stop
+    except BallAtRest as exc:
+        raise _AtRest(str(exc)) from None
     except SimulationError as exc:
         raise _Stopped(str(exc)) from None
     b = sim.ball
@@ -261,6 +267,8 @@ def lyapunov_exponent(
             y = xv + (yv - xv) * (d0 / d)
     except _NeverFlies as exc:
         undefined = f"the ball never flies: {exc}"
+    except _AtRest:
+        undefined = "the ball rests on the wall: it comes to rest in a contact phase"
     except _Stopped as exc:
         stop_reason = str(exc)
     n_ref = sum(ref.counts.get(r, 0) for r in regimes) - impacts_before

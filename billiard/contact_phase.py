@@ -28,7 +28,7 @@ from dataclasses import dataclass
 from typing import Any
 
 from billiard.drive import Drive
-from billiard.errors import SimulationError
+from billiard.errors import BallAtRest, SimulationError
 from billiard.generated import contact as _c
 from billiard.status import Status
 
@@ -248,7 +248,7 @@ class ContactModel:
         # the drive moves, cannot change sign twice unseen within a step
         h_max = math.inf if self.static else 0.1 * math.pi / abs(omega)
         rest_span = 0.0 if self.static else 2.0 * math.pi / abs(omega)
-        rest_since = math.inf
+        rest_since = 0.0 if _at_rest(k1) else math.inf
         while tau < limit:
             h = min(h, limit - tau, h_max)
             for _ in range(60):
@@ -325,10 +325,7 @@ class ContactModel:
                 # at rest relative to the boundary, with every condition kept, for a
                 # whole drive period (or, on a static boundary, a few steps): the drive
                 # is periodic, so this repeats for ever
-                raise SimulationError(
-                    "the ball rests on the boundary, moving with it: nothing more happens",
-                    Status.TIME_LIMIT,
-                )
+                raise BallAtRest(rest_since)
         return PhaseEnd(limit, None, y)
 
 

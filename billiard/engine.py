@@ -486,7 +486,8 @@ class Simulation(ContactPhases):
                 if self._fault is not None:
                     raise self._fault
         except SimulationError as exc:
-            status, reason = exc.status, str(exc)
+            # a ball at rest ends the run complete: a status, not a stop reason
+            status, reason = exc.status, None if exc.status.finished else str(exc)
         finally:
             if progress is not None:
                 progress(self._impacts, collisions)

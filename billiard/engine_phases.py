@@ -9,7 +9,7 @@ import math
 from collections.abc import Callable, Iterator
 from typing import Any
 
-from billiard.errors import SimulationError
+from billiard.errors import BallAtRest, SimulationError
 from billiard.generated import ball as _ball
 from billiard.impact import Contact
 from billiard.record import ContactRecord, ImpactRecord
@@ -187,11 +187,16 @@ class ContactPhases:
             self.on_sample(t0 + tau, q1, q2, u1, u2, u3, energy, mode)
             self._samples += 1
 
-        end = model.run_phase(
-            wall, mode, sgn, theta0, (s, sd, ball.u3), until - t0, self._other_gaps(index),
-            sample_times() if self.on_sample is not None else (),
-            on_sample if self.on_sample is not None else None,
-        )  # fmt: skip
+        try:
+            end = model.run_phase(
+                wall, mode, sgn, theta0, (s, sd, ball.u3), until - t0, self._other_gaps(index),
+                sample_times() if self.on_sample is not None else (),
+                on_sample if self.on_sample is not None else None,
+            )  # fmt: skip
+        except BallAtRest as rest:
+            # the run ends here, complete: its clock stops where the rest was established
+            self.final_time = t0 + rest.tau
+            raise
         if end.reason is None:
             return None
         tau = end.tau

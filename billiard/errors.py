@@ -8,7 +8,7 @@ from __future__ import annotations
 
 from billiard.status import Status
 
-__all__ = ["GeometryError", "SimulationError"]
+__all__ = ["BallAtRest", "GeometryError", "SimulationError"]
 
 
 class GeometryError(ValueError):
@@ -31,3 +31,19 @@ class SimulationError(RuntimeError):
     def __init__(self, message: str, status: Status = Status.SOLVER_FAILED):
         super().__init__(message)
         self.status = status
+
+
+class BallAtRest(SimulationError):
+    """The ball rests on the boundary, moving with it, and nothing more happens: the run
+    ends complete (:attr:`~billiard.status.Status.AT_REST`), not stopped.
+
+    Attributes:
+        tau: time (s) into the contact phase from which the ball has been at rest.
+    """
+
+    def __init__(self, tau: float):
+        super().__init__(
+            "the ball rests on the boundary, moving with it: nothing more happens",
+            Status.AT_REST,
+        )
+        self.tau = tau

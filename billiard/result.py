@@ -114,6 +114,11 @@ class Result:
             return self.stop_reason
         if self.status is Status.TIME_LIMIT:
             return f"reached the simulated time t = {self.final_time:.6g} s"
+        if self.status is Status.AT_REST:
+            return (
+                "the ball rests on the boundary, moving with it, "
+                f"from t = {self.final_time:.6g} s: nothing more happens"
+            )
         return "all impacts simulated"
 
     @property
@@ -162,6 +167,8 @@ class Result:
             text += f"; resumed after impact {self.resumed_from}"
         if self.status is Status.TIME_LIMIT:
             text += "; reached run.duration"
+        if self.status is Status.AT_REST:
+            text += "; at rest on the boundary (moving with it): nothing more happens"
         if self.stop_reason:
             text += f"; stopped: {self.stop_reason}"
         return text

@@ -283,7 +283,7 @@ class ContactSpec:
     mu_static: float = 0.61
     mu_kinetic: float = 0.47
     elastic_below: float = 0.01
-    model: str = "impacts"
+    model: str = "phases"
 
     def __post_init__(self) -> None:
         _set(self, "restitution", limited("contact.restitution", self.restitution))

@@ -31,8 +31,12 @@ class Status(IntEnum):
     SOLVER_FAILED = 5
     #: an arithmetic fault (overflow, a math domain error) in the equations
     NUMERICAL_FAULT = 6
+    #: the ball rests on the boundary, moving with it, through a whole drive period (or
+    #: on a static boundary): nothing more happens, so the run ends early but complete
+    AT_REST = 7
 
     @property
     def finished(self) -> bool:
-        """True when the run did all it was asked for (no early stop)."""
-        return self in (Status.COMPLETE, Status.TIME_LIMIT)
+        """True when the run did all it was asked for, or all that can happen (no early
+        stop by a fault of the model or the numerics)."""
+        return self in (Status.COMPLETE, Status.TIME_LIMIT, Status.AT_REST)

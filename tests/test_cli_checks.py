@@ -129,15 +129,17 @@ def test_a_scene_file_that_sets_nothing_gets_a_note(in_tmp, capsys):
     scene = in_tmp / "empty.toml"
     scene.write_text('name = "empty"\n')
     assert main(["run", str(scene), "--collisions", "5", "--no-plot"]) == 0
-    err = capsys.readouterr().err
+    out, err = capsys.readouterr()
     assert (
         f"billiard: note: scene file '{scene}' sets no keys; this is the all-defaults scene" in err
     )
+    # the all-defaults scene has sustained contact: the ball lies at the bottom for ever
+    assert "0 impacts" in out and "at rest on the boundary" in out
 
 
 def test_the_summary_names_relaunches_of_a_resting_ball(in_tmp, capsys):
     scene = in_tmp / "resting.toml"
-    scene.write_text('name = "resting"\n[run]\ncollisions = 30\n')
+    scene.write_text('name = "resting"\n[contact]\nmodel = "impacts"\n[run]\ncollisions = 30\n')
     assert main(["run", str(scene), "--no-plot"]) == 0
     out = capsys.readouterr().out
     assert "30 impacts (0 stick, 0 slip, 30 elastic, of which 30 relaunches of a resting ball)" in (
@@ -210,7 +212,7 @@ def test_lyapunov_arguments_are_checked_first(capsys, args, fragment, monkeypatc
 
 def test_lyapunov_of_a_resting_ball_is_undefined(in_tmp, capsys):
     scene = in_tmp / "resting.toml"
-    scene.write_text('name = "resting"\n[run]\ncollisions = 10\n')
+    scene.write_text('name = "resting"\n[contact]\nmodel = "impacts"\n[run]\ncollisions = 10\n')
     assert main(["lyapunov", str(scene), "--impacts", "100"]) == 3
     out = capsys.readouterr().out
     assert out.startswith("largest Lyapunov exponent undefined: the ball rests on the wall")
@@ -355,3 +357,11 @@ def test_ctrl_c_says_what_is_true(in_tmp, capsys, monkeypatch, argv, module, nam
     assert err.strip() == message or err.startswith(message), err
     assert "rows written so far are kept" not in err
     assert not (in_tmp / "runs").exists()
+
+
+def test_lyapunov_of_a_ball_at_rest_in_a_contact_phase_is_undefined(in_tmp, capsys):
+    scene = in_tmp / "resting.toml"
+    scene.write_text('name = "resting"\n[contact]\nmodel = "phases"\n')
+    assert main(["lyapunov", str(scene), "--impacts", "100"]) == 3
+    out = capsys.readouterr().out
+    assert out.startswith("largest Lyapunov exponent undefined: the ball rests on the wall")

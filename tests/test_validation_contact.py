@@ -218,5 +218,5 @@ def test_a_ball_resting_on_a_shaken_table_ends_an_unlimited_run():
 
     sc, _ = table(0.9)
     result = simulate(sc, collisions=100)
-    assert len(result) == 0 and result.status is Status.TIME_LIMIT
-    assert "rests on the boundary" in result.stop_reason
+    assert len(result) == 0 and result.status is Status.AT_REST and result.status.finished
+    assert result.stop_reason is None and "rests on the boundary" in result.message
