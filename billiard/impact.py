@@ -201,10 +201,20 @@ class KaneLevinsonImpact:
         n1, n2, n3, rt, rn = _ball.impact_stick(v1, v2, u3, z, vb1, vb2, m, r, k, e)
         regime = STICK
         rounding = REGIME_RTOL * m * (abs(v1) + abs(v2) + r * abs(u3) + abs(vb1) + abs(vb2))
-        if abs(rt) > self.mu_s * rn + rounding:
+        # Friction is bounded by the normal impulse the ball actually receives. For a
+        # relaunched ball that is m (threshold - wn) from its true velocity, not the
+        # 2 m threshold of the shifted approach the maps see; the shift itself is no
+        # impulse of the contact. The normal impulse of a sphere does not depend on the
+        # friction (the normal passes through the centre), so scaling mu by the ratio
+        # sizes the slip impulse against the applied normal impulse exactly.
+        applied = 1.0
+        if resting and rn > 0.0:
+            c, s = math.cos(z), math.sin(z)
+            applied = m * (c * (n2 - u2) - s * (n1 - u1)) / rn
+        if abs(rt) > self.mu_s * applied * rn + rounding:
             sgn = math.copysign(1.0, wt)
             n1, n2, n3, rt, rn = _ball.impact_slip(
-                v1, v2, u3, z, vb1, vb2, m, r, k, e, self.mu_k, sgn
+                v1, v2, u3, z, vb1, vb2, m, r, k, e, self.mu_k * applied, sgn
             )
             regime = SLIP
         if low:
