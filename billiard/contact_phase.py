@@ -32,7 +32,7 @@ from billiard.errors import BallAtRest, SimulationError
 from billiard.generated import contact as _c
 from billiard.status import Status
 
-__all__ = ["CONTACT_MODES", "ContactModel", "PhaseEnd"]
+__all__ = ["CONTACT_MODES", "ContactModel", "PhaseEnd", "first_root"]
 
 #: the contact modes (motion states other than flight)
 CONTACT_MODES = ("roll", "slide")
@@ -301,7 +301,9 @@ class ContactModel:
             if crossed:
                 best = None
                 for i in crossed:
-                    t_root = _root(lambda t, i=i: conditions(t, dense(t))[i], t_a, t_b, c_prev[i])
+                    t_root = first_root(
+                        lambda t, i=i: conditions(t, dense(t))[i], t_a, t_b, c_prev[i]
+                    )
                     if best is None or t_root < best[0]:
                         best = (t_root, i)
                 end_t, end_i = best
@@ -333,7 +335,7 @@ def _at_rest(k: Vec) -> bool:
     return all(abs(x) <= 1e-15 for x in k)
 
 
-def _root(fn: Callable[[float], float], a: float, b: float, fa: float) -> float:
+def first_root(fn: Callable[[float], float], a: float, b: float, fa: float) -> float:
     """The first time in (a, b] where fn, positive at a (or zero and falling), reaches
     zero or below: Illinois regula falsi, to EVENT_TOL."""
     fb = fn(b)

@@ -44,6 +44,7 @@ from billiard.record import COLUMNS, ContactRecord, ImpactRecord
 from billiard.scene import SceneError, with_values
 from billiard.state import BallState, EngineState
 from billiard.status import Status
+from billiard.vertex import VertexHold
 
 __all__ = ["COLLAPSE_COUNT", "COLLAPSE_SPAN", "ZERO_FLIGHT_LIMIT", "Simulation"]
 
@@ -117,6 +118,8 @@ class Simulation(ContactPhases):
         #: ``contact.model = "phases"``: rolling and sliding phases besides impacts
         self.phases = getattr(scene.contact, "model", "impacts") == "phases"
         self.contact_model = ContactModel(scene, self.drive) if self.phases else None
+        #: the ball held by two walls at once (the wedge's vertex)
+        self.vertex_hold = VertexHold(scene, self.drive) if self.phases else None
         #: called with each finished contact phase's record (contacts.csv)
         self.on_contact: Callable[[ContactRecord], None] | None = None
         #: sampling: every ``sample_dt`` seconds of simulated time from the start,
@@ -189,7 +192,7 @@ class Simulation(ContactPhases):
         #: in contact: (surface index, s, s_dot, slip sign, phase start t, settle t)
         self._contact: tuple[float, ...] = ()
         self._samples = 0
-        self._phase_time = {"roll": 0.0, "slide": 0.0}
+        self._phase_time = {"roll": 0.0, "slide": 0.0, "held": 0.0}
         if self.phases:
             self._start_in_contact()
 
@@ -260,7 +263,7 @@ class Simulation(ContactPhases):
         self._mode = state.mode
         self._contact = tuple(state.contact)
         self._samples = state.samples
-        self._phase_time = {"roll": 0.0, "slide": 0.0, **state.phase_time}
+        self._phase_time = {"roll": 0.0, "slide": 0.0, "held": 0.0, **state.phase_time}
 
     # ------------------------------------------------------------------ one event
 

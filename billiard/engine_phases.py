@@ -15,6 +15,7 @@ from billiard.impact import Contact
 from billiard.record import ContactRecord, ImpactRecord
 from billiard.state import BallState
 from billiard.status import Status
+from billiard.vertex import HELD
 
 __all__ = [
     "compensated_add",
@@ -104,12 +105,22 @@ class ContactPhases:
             ball.theta, ball.q1, ball.q2, ball.u1, ball.u2
         )
         model = self.contact_model
+        touching = []
         for j, surface in enumerate(self.boundary.offsets):
             warm = list(self.warm[j])
             gap, rate = surface.gap_rate(px, py, vx, vy, warm)
             s, z, cz = surface.contact(px, warm)
             if abs(gap) > 1e-12 or abs(rate * cz) > 1e-12 or not surface.lo <= s <= surface.hi:
                 continue
+            touching.append((j, z))
+        if len(touching) == 2:
+            (a, za), (b, zb) = touching
+            if self.vertex_hold.holds(za, zb, ball.theta, ball.u3):
+                self._enter_hold(a, b, ball.t, ball.t)
+                return
+        for j, _ in touching:
+            surface = self.boundary.offsets[j]
+            s, _, _ = surface.contact(px, list(self.warm[j]))
             wall = surface.wall
             sd = model.s_dot(wall, ball.theta, s, ball.u1, ball.u2)
             mode, sgn = model.mode_for(wall, ball.theta, s, sd, ball.u3)
@@ -158,6 +169,8 @@ class ContactPhases:
 
     def _contact_step(self, until: float) -> ImpactRecord | ContactRecord | None:
         """One contact phase, to its end (or to ``until``: None, state unchanged)."""
+        if self._mode == HELD:
+            return self._hold_step(until)
         model = self.contact_model
         ball = self._ball
         index, s, sd, sgn, t_start, settle = self._contact
@@ -279,5 +292,132 @@ class ContactPhases:
         while t - recent[0] >= COLLAPSE_SPAN:
             recent.popleft()
         self._fault = self._collapse(n, t)
-        self._land(j, s_o, theta, res, t)
+        if not self._hold_after(index, j, theta, res, t):
+            self._land(j, s_o, theta, res, t)
         return record
+
+    # ------------------------------------------------------------------ two walls
+
+    def _hold_after(self, index: int, j: int, theta: float, res: Any, t: float) -> bool:
+        """After an impact on wall j of a ball in contact with wall ``index``: is it held
+        by both? Yes when the rebound speed is below the landing speed (as for landing
+        on one wall) and both walls press it. The chattering between the two walls that
+        this skips would carry the ball's velocity relative to the boundary, at most the
+        rebound speed, to zero: it is dropped (never energy created), the spin is kept."""
+        e = self.contact_model.e
+        rebound = e * abs(res.wn)
+        if not (rebound <= self.scene.contact.elastic_below or res.regime == "elastic"):
+            return False
+        ball = self._ball
+        px, _, _, _ = self.drive.to_boundary_frame(theta, ball.q1, ball.q2, ball.u1, ball.u2)
+        offsets = self.boundary.offsets
+        z_index = offsets[index].contact(px, list(self.warm[index]))[1]
+        z_j = offsets[j].contact(px, list(self.warm[j]))[1]
+        if not self.vertex_hold.holds(z_index, z_j, theta, res.u3):
+            return False
+        self._enter_hold(index, j, t, t)
+        return True
+
+    def _enter_hold(self, a: int, b: int, t: float, settle: float) -> None:
+        """Hold the ball in walls a and b: its centre stays where it is relative to the
+        boundary, and it moves with the boundary."""
+        ball = self._ball
+        px, py, _, _ = self.drive.to_boundary_frame(ball.theta, ball.q1, ball.q2, ball.u1, ball.u2)
+        u1, u2 = self.drive.boundary_velocity(ball.theta)
+        self._ball = BallState(ball.t, ball.theta, ball.q1, ball.q2, u1, u2, ball.u3, ball.q3)
+        self._mode = HELD
+        self._contact = (float(a), float(b), px, py, t, settle)
+
+    def _hold_step(self, until: float) -> ContactRecord | None:
+        """The ball held by two walls, to the release of one (or to ``until``: None)."""
+        hold = self.vertex_hold
+        ball = self._ball
+        ia, ib, px, py, t_start, settle = self._contact
+        a, b = int(ia), int(ib)
+        offsets = self.boundary.offsets
+        za = offsets[a].contact(px, list(self.warm[a]))[1]
+        zb = offsets[b].contact(px, list(self.warm[b]))[1]
+        t0, theta0 = ball.t, ball.theta
+        drive = self.drive
+        sc = self.scene
+
+        def lab(theta: float, u3: float) -> tuple[float, float, float, float, float]:
+            q1, q2 = drive.to_lab_frame(theta, px, py)
+            u1, u2 = drive.boundary_velocity(theta)
+            return q1, q2, u1, u2, u3
+
+        def sample_times() -> Iterator[float]:
+            k = self._samples
+            while True:
+                ts = self.initial.t + k * self.sample_dt
+                if ts > until:
+                    return
+                if ts >= t0:
+                    yield ts - t0
+                k += 1
+
+        def on_sample(tau: float, u3: float) -> None:
+            q1, q2, u1, u2, _ = lab(theta0 + drive.omega * tau, u3)
+            energy = _ball.energy(q2, u1, u2, u3, sc.ball.mass, sc.ball.radius,
+                                  sc.ball.inertia_factor, sc.run.gravity)  # fmt: skip
+            self.on_sample(t0 + tau, q1, q2, u1, u2, u3, energy, HELD)
+            self._samples += 1
+
+        sampling = self.on_sample is not None
+        try:
+            end = hold.run_hold(
+                za, zb, theta0, ball.u3, until - t0,
+                sample_times() if sampling else (), on_sample if sampling else None,
+            )  # fmt: skip
+        except BallAtRest as rest:
+            self.final_time = t0 + rest.tau
+            raise
+        if end.reason is None:
+            return None
+        tau = end.tau
+        total, error = compensated_add(self._clock, self._clock_error, tau)
+        t = total + error
+        theta = (theta0 + drive.omega * tau) % (2.0 * math.pi)
+        q1, q2, u1, u2, u3 = lab(theta, end.u3)
+        # the spin decays linearly in time on a static boundary: the trapezoid is exact
+        q3 = ball.q3 + 0.5 * (ball.u3 + u3) * tau
+        record = ContactRecord(
+            t_start, t, f"{offsets[a].label}+{offsets[b].label}", HELD, end.reason, settle,
+            *lab(theta0, ball.u3), q1, q2, u1, u2, u3,
+        )  # fmt: skip
+        self._ball = BallState(t, theta, q1, q2, u1, u2, u3, q3)
+        self._clock, self._clock_error = total, error
+        self._phase_time[HELD] += t - t_start
+        self.final_time = t
+        self._zero_flights = self._zero_flights + 1 if tau == 0.0 else 0
+        if self._zero_flights >= ZERO_FLIGHT_LIMIT:
+            self._fault = SimulationError(
+                f"contact phases of zero duration piled up at t = {t:.9g} s", Status.COLLAPSE
+            )
+        self._mode, self._contact = "flight", ()
+        keeps = (a, b)[end.keeps] if end.keeps >= 0 else -1
+        if keeps >= 0:
+            self._continue_on(keeps, px, theta, u3, t)
+        if self._mode == "flight":
+            # leave both walls along the sum of their normals (see LIFT_OFF_SPEED)
+            nx, ny = -math.sin(za) - math.sin(zb), math.cos(za) + math.cos(zb)
+            norm = math.hypot(nx, ny)
+            self._ball = BallState(
+                t, theta, q1, q2, u1 + LIFT_OFF_SPEED * nx / norm,
+                u2 + LIFT_OFF_SPEED * ny / norm, u3, q3,
+            )  # fmt: skip
+        if self.on_contact is not None:
+            self.on_contact(record)
+        return record
+
+    def _continue_on(self, j: int, px: float, theta: float, u3: float, t: float) -> None:
+        """Released by the other wall: roll or slide on wall j from rest relative to the
+        boundary, if it presses the ball (else the ball stays in flight)."""
+        model = self.contact_model
+        surface = self.boundary.offsets[j]
+        s = surface.contact(px, list(self.warm[j]))[0]
+        wall = surface.wall
+        mode, sgn = model.mode_for(wall, theta, s, 0.0, u3)
+        if model.forces(wall, mode, sgn, theta, (s, 0.0, u3))[2] > 0.0:
+            self._mode = mode
+            self._contact = (float(j), s, 0.0, sgn, t, t)

@@ -163,6 +163,8 @@ class Result:
                 f"; {m['flight']:.6g} s flying, {m['roll']:.6g} s rolling, "
                 f"{m['slide']:.6g} s sliding"
             )
+            if m.get("held"):
+                text += f", {m['held']:.6g} s held by two walls"
         if self.resumed_from is not None:
             text += f"; resumed after impact {self.resumed_from}"
         if self.status is Status.TIME_LIMIT:

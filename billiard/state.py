@@ -12,8 +12,8 @@ from billiard.checkpoint import CheckpointError
 __all__ = ["MOTION_STATES", "BallState", "EngineState"]
 
 #: Motion states of the ball: free flight between impacts, and (``contact.model =
-#: "phases"``) rolling and sliding on one wall.
-MOTION_STATES: tuple[str, ...] = ("flight", "roll", "slide")
+#: "phases"``) rolling and sliding on one wall, or held by two walls at once.
+MOTION_STATES: tuple[str, ...] = ("flight", "roll", "slide", "held")
 
 
 @dataclass(slots=True)
@@ -58,9 +58,12 @@ class EngineState:
         mode: the ball's motion state (one of :data:`MOTION_STATES`).
         contact: in contact (``roll`` or ``slide``): the wall's surface index, the contact
             abscissa s (m), ds/dt (m/s), the slip sign while sliding, the phase's start
-            time and its settle time (s); empty in flight.
+            time and its settle time (s); held (``held``): the two walls' surface
+            indices, the centre (m) in the boundary's frame, the start and settle
+            times (s); empty in flight.
         samples: trajectory samples reported so far (``--sample``).
-        phase_time: simulated time (s) spent in finished ``roll`` and ``slide`` phases.
+        phase_time: simulated time (s) spent in finished ``roll``, ``slide`` and ``held``
+            phases.
     """
 
     ball: BallState

@@ -21,7 +21,6 @@ with the engine's own equations:
 from __future__ import annotations
 
 import math
-import time
 
 import pytest
 from billiard.generated import contact as _c
@@ -151,12 +150,18 @@ def test_small_oscillations_in_a_bowl(mu, factor):
     assert swing < 1e-6 * 1.3028e-4 * G * s0 * s0 / (2 * rho)
 
 
-def test_rest_in_a_static_bowl_is_kept_cheaply():
+def test_rest_in_a_static_bowl_is_kept_cheaply(monkeypatch):
+    # the cost counted as evaluations of the contact forces (never as time in a test)
+    from billiard.contact_phase import ContactModel
+
+    calls = []
+    forces = ContactModel.forces
+    monkeypatch.setattr(ContactModel, "forces", lambda *a: calls.append(1) or forces(*a))
     sim = Simulation(bowl(10.0, 0.0, {}))
     assert sim.mode == "roll"
-    start = time.process_time()
+    calls.clear()
     assert sim.step(until=10.0) is None
-    assert time.process_time() - start < 0.05
+    assert len(calls) < 200
     assert sim.state.impacts == 0
     ball = sim.state.ball
     assert (ball.u1, ball.u2) == (0.0, 0.0)
