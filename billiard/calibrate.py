@@ -6,13 +6,10 @@ height), and a parameter is tuned until that height matches the experiment's. Th
 fitted the restitution e = 0.393 to an orbit height of about 0.075 m at 5.4 Hz; it does
 not state the drive amplitude A, which we infer the same way with e fixed.
 
-Normalized point of the orbit (the paper's phase plot), with E the ball's mechanical
-energy just after an impact (potential zero at q2 = 0, rotation included):
-
-    q2max = E / (m g)           the height the ball would have if all E were potential;
-    u4max = sqrt(2 E / m)       the speed it would have if all E were translational kinetic;
-
-and the point is (q2 / q2max, u4 / u4max), u4 the velocity along the wall's tangent.
+Normalized point of the orbit (the paper's phase plot): q2max and u4max are defined in
+:mod:`billiard.phase` (the candidates for the energy's zero and the spin, and the
+default, :data:`billiard.phase.DEFAULT_PHASE_REFERENCE`); the point is
+((q2 - h0) / q2max, u4 / u4max), u4 the velocity along the wall's tangent.
 """
 
 from __future__ import annotations
@@ -23,7 +20,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .errors import GeometryError
-from .phase import phase_point
+from .phase import PhaseFrame, phase_frame, phase_point
 from .scene import Scene, SceneError, with_values
 from .simulate import simulate
 
@@ -40,9 +37,11 @@ class Orbit:
     time_of_flight: float  # s
     u4: float  # tangential velocity after the impact (m/s), sign alternates wall to wall
     energy: float  # J
-    q2_normalized: float
+    q2_normalized: float  # (q2 - h0) / q2max under ``reference``
     u4_normalized: float
     impacts_to_lock: int  # impacts before the orbit was reached
+    omega: float = 0.0  # spin after the impact (rad/s)
+    reference: str = "lab-origin+spin"  # the phase reference of the normalized point
 
 
 def find_period_one(
@@ -52,11 +51,14 @@ def find_period_one(
     *,
     window: int = 40,
     tol: float = 1e-6,
+    reference: PhaseFrame | None = None,
 ) -> Orbit | None:
     """The period-one orbit at the end of a run, or None if the run did not lock.
 
     Locked means the last ``window`` impacts have one height and one time of flight, to
-    within ``tol`` (m and s).
+    within ``tol`` (m and s). The orbit's normalized point is taken under ``reference``
+    (:func:`billiard.phase.phase_frame` of the run's scene; None: E as it is, the
+    ``lab-origin+spin`` candidate).
     """
     q2, tof = columns["q2"], columns["tof"]
     if len(q2) < window + 1:
@@ -70,7 +72,10 @@ def find_period_one(
     lock = int(np.nonzero(off)[0][-1]) + 1 if off.any() else 0
     energy = float(columns["energy"][-1])
     u4 = float(columns["u4"][-1])
-    q2n, u4n = phase_point(float(ref_q2), u4, energy, mass, gravity)
+    omega = float(columns["omega"][-1]) if "omega" in columns else 0.0
+    q2n, u4n = phase_point(
+        float(ref_q2), u4, energy, mass, gravity, reference=reference, omega=omega
+    )
     return Orbit(
         height=float(ref_q2),
         time_of_flight=float(ref_tof),
@@ -79,6 +84,8 @@ def find_period_one(
         q2_normalized=float(q2n),
         u4_normalized=float(u4n),
         impacts_to_lock=lock,
+        omega=omega,
+        reference="lab-origin+spin" if reference is None else reference.reference.name,
     )
 
 
@@ -91,7 +98,11 @@ def orbit_for(scene: Scene, parameter: str, value: float, impacts: int) -> Orbit
         return None
     if result.stop_reason:
         return None
-    return find_period_one(result.columns, trial.ball.mass, trial.run.gravity)
+    try:
+        frame = phase_frame(trial)
+    except GeometryError:  # no bottom, so no lowest centre: E as it is (orbit.reference)
+        frame = None
+    return find_period_one(result.columns, trial.ball.mass, trial.run.gravity, reference=frame)
 
 
 @dataclass(frozen=True)
@@ -113,6 +124,7 @@ class Calibration:
             "time_of_flight": o.time_of_flight,
             "q2_normalized": o.q2_normalized,
             "u4_normalized": abs(o.u4_normalized),
+            "phase_reference": o.reference,
             "impacts_to_lock": o.impacts_to_lock,
             "evaluations": self.evaluations,
         }

@@ -26,12 +26,22 @@ def test_calibrated_amplitude_is_the_scenes_default(parabola_calibration):
     assert cal.orbit.height == pytest.approx(0.075, abs=1e-5)
     # Period one: the ball crosses from wall to wall in half a drive period.
     assert cal.orbit.time_of_flight == pytest.approx(0.5 / scene.drive.frequency, rel=1e-6)
-    # The normalized point, computed from its definition on the orbit's own numbers.
+    # The normalized point under the default reference (lowest-centre: potential zero at
+    # the resting ball's centre c + r, spin left out), from its definition on the orbit's
+    # own numbers.
     o = cal.orbit
     m, g = scene.ball.mass, scene.run.gravity
-    assert o.q2_normalized == pytest.approx(m * g * o.height / o.energy, rel=1e-12)
-    assert abs(o.u4_normalized) == pytest.approx(abs(o.u4) / math.sqrt(2 * o.energy / m), rel=1e-12)
+    r, k = scene.ball.radius, scene.ball.inertia_factor
+    h0 = 0.0063 + r  # c + r: the bottom is smooth (radius of curvature 19 mm > r)
+    e0 = o.energy - m * g * h0 - 0.5 * k * m * r**2 * o.omega**2
+    assert o.reference == "lowest-centre"
+    assert o.q2_normalized == pytest.approx((o.height - h0) * m * g / e0, rel=1e-9)
+    assert abs(o.u4_normalized) == pytest.approx(abs(o.u4) / math.sqrt(2 * e0 / m), rel=1e-9)
     assert 0 < o.q2_normalized < 1 and abs(o.u4_normalized) < 0.2
+    # The paper's point, (0.376, +-0.0372), to its own digits in height and within 1 %
+    # in tangential velocity.
+    assert round(o.q2_normalized, 3) == 0.376
+    assert abs(o.u4_normalized) == pytest.approx(0.0372, rel=0.01)
 
 
 def test_low_energy_state_is_not_a_period_one_orbit():

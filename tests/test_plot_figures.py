@@ -10,6 +10,7 @@ import numpy as np
 import pytest
 from matplotlib.colors import to_rgba
 from plot_support import (
+    C_CURVE,
     MASS,
     RADIUS,
     G,
@@ -138,32 +139,64 @@ def test_return_map_and_time_map_with_camera(bounce_columns):
 
 
 def test_phase_normalization_known_rows():
+    # The default reference: potential zero at the resting ball's centre h0 = c + r (the
+    # bounce scene's parabola has a smooth bottom), the spin's energy left out.
     h, v, omega = 0.05, 0.4, 30.0
     scene = scene_of(scene_toml())
+    h0 = C_CURVE + RADIUS
     spin = 0.5 * K * MASS * RADIUS**2 * omega**2
     columns = {
-        "q2": np.array([h, 0.0, h, h]),
+        "q2": np.array([h0 + h, h0, h0 + h, h0]),
         "u4": np.array([0.0, -v, v, 0.0]),
+        "omega": np.array([0.0, 0.0, omega, 0.0]),
         "energy": np.array(
-            [MASS * G * h, 0.5 * MASS * v**2, MASS * G * h + 0.5 * MASS * v**2 + spin, 0.0]
+            [
+                MASS * G * (h0 + h),
+                MASS * G * h0 + 0.5 * MASS * v**2,
+                MASS * G * (h0 + h) + 0.5 * MASS * v**2 + spin,
+                MASS * G * h0,
+            ]
         ),
     }
     x, y = plot.phase_coordinates(columns, scene)
-    # At rest at height h: all energy potential.
+    # At rest at height h above h0: all energy potential.
     assert x[0] == pytest.approx(0.0) and y[0] == pytest.approx(1.0)
-    # At q2 = 0 moving along the tangent: all energy kinetic.
-    assert x[1] == pytest.approx(-1.0) and y[1] == pytest.approx(0.0)
+    # At h0 moving along the tangent: all energy kinetic.
+    assert x[1] == pytest.approx(-1.0) and y[1] == pytest.approx(0.0, abs=1e-12)
+    e0 = MASS * G * h + 0.5 * MASS * v**2  # the spin is left out
+    assert y[2] == pytest.approx(h / (e0 / (MASS * G)))
+    assert x[2] == pytest.approx(v / math.sqrt(2 * e0 / MASS))
+    assert x[2] ** 2 + y[2] == pytest.approx(1.0)  # no normal velocity in this row
+    assert math.isnan(x[3]) and math.isnan(y[3])  # at rest at h0: E0 = 0, no point
+    # With the spin counted it holds some of the energy.
+    xs, ys = plot.phase_coordinates(columns, scene, "lowest-centre+spin")
+    assert xs[2] ** 2 + ys[2] < 1
+    assert ys[2] == pytest.approx(h / ((e0 + spin) / (MASS * G)))
+    # The lab origin (the definition before the default changed): E as it is.
+    xl, yl = plot.phase_coordinates(columns, scene, "lab-origin+spin")
     energy = columns["energy"][2]
-    assert y[2] == pytest.approx(h / (energy / (MASS * G)))
-    assert x[2] == pytest.approx(v / math.sqrt(2 * energy / MASS))
-    assert x[2] ** 2 + y[2] < 1  # spin holds some of the energy
-    assert math.isnan(x[3]) and math.isnan(y[3])  # zero energy cannot be normalized
+    assert yl[2] == pytest.approx((h0 + h) / (energy / (MASS * G)))
+    assert xl[2] == pytest.approx(v / math.sqrt(2 * energy / MASS))
+
+
+def test_phase_coordinates_of_an_unknown_reference_or_curve_are_one_line_errors(bounce_columns):
+    scene = scene_of(scene_toml())
+    with pytest.raises(plot.RunDataError, match="no-such-zero"):
+        plot.phase_coordinates(bounce_columns, scene, "no-such-zero")
+    without_spin = {k: v for k, v in bounce_columns.items() if k != "omega"}
+    with pytest.raises(plot.RunDataError, match="omega"):
+        plot.phase_coordinates(without_spin, scene)
+    # the lab origin with the spin counted needs neither the curve nor the spin
+    x, y = plot.phase_coordinates(without_spin, scene, "lab-origin+spin")
+    assert np.all(np.isfinite(y))
 
 
 def test_phase_plot_data_and_range(bounce_columns, bounce_scene):
+    # The vertically shaken table puts impacts below the resting centre at D = 0, where
+    # the default reference has no point; the lab origin has one for every impact.
     fig, ax = single_axes()
-    (line,) = plot.phase_plot(bounce_columns, bounce_scene, ax)
-    x, y = plot.phase_coordinates(bounce_columns, bounce_scene)
+    (line,) = plot.phase_plot(bounce_columns, bounce_scene, ax, reference="lab-origin+spin")
+    x, y = plot.phase_coordinates(bounce_columns, bounce_scene, "lab-origin+spin")
     np.testing.assert_allclose(line.get_xdata(), x)
     np.testing.assert_allclose(line.get_ydata(), y)
     np.testing.assert_allclose(line.get_xdata(), 0.0)  # vertical bounces: u4 = 0
@@ -174,10 +207,12 @@ def test_phase_plot_states_the_normalizations_with_units(bounce_columns, bounce_
     fig, ax = single_axes()
     model, camera = plot.phase_plot(bounce_columns, bounce_scene, ax, frame_interval=0.02)
     xlabel, ylabel = ax.get_xlabel(), ax.get_ylabel()
-    assert "u_{4,max} = \\sqrt{2E/m}" in xlabel and "(m/s)" in xlabel
-    assert "q_{2,max} = E/(m\\,g)" in ylabel and "(m)" in ylabel
+    assert "u_{4,max} = \\sqrt{2E_0/m}" in xlabel and "(m/s)" in xlabel
+    assert "q_{2,max} = E_0/(m\\,g)" in ylabel and "(q_2 - h_0)" in ylabel and "(m)" in ylabel
     caption = plot.phase.PHASE_CAPTION
-    assert "E (J)" in caption and "potential zero at $q_2$ = 0" in caption
+    assert "$E_0$ (J)" in caption and "spin left out" in caption
+    assert "centre at rest at the bottom" in caption and "'lowest-centre'" in caption
+    assert "lab frame" in plot.phase.phase_caption("lab-origin+spin")
     assert_camera_rings_beneath(model, camera)
 
 

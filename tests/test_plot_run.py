@@ -97,10 +97,10 @@ def test_every_axis_is_labelled_with_its_unit(bounce_run, monkeypatch):
     for name, (x_unit, y_unit) in units.items():
         ((xlabel, ylabel),) = labels[name]
         assert x_unit in xlabel and y_unit in ylabel, name
-    # the phase figure says what E, m and g are, with units
+    # the phase figure says what E0, h0, m and g are, with units
     caption = " ".join(texts["phase.png"])
-    assert "E (J): mechanical energy after each impact" in caption
-    assert "potential zero at $q_2$ = 0 in the lab frame" in caption
+    assert "$E_0$ (J): kinetic energy of translation (spin left out)" in caption
+    assert "$h_0$ (m): the ball's centre at rest at the bottom" in caption
     assert "m (kg)" in caption and "g (m/s$^2$)" in caption
     assert any("camera, frame 20 ms" in t for t in texts["return_map.png"])
 
@@ -300,8 +300,9 @@ def test_engine_run_plots(real_run, tmp_path):
         check_png(path)
     check_gif(written[-1])
     x, y = plot.phase_coordinates(columns, scene)
-    assert np.all((np.abs(x) <= 1) & (y > 0) & (y <= 1))
-    assert np.all(x**2 + y <= 1 + 1e-9)  # q2 > 0: the point lies under the energy bound
+    # The run starts at rest at the bottom, the default reference's zero: heights from 0.
+    assert np.all((np.abs(x) <= 1) & (y >= -1e-9) & (y <= 1))
+    assert np.all(x**2 + y <= 1 + 1e-9)  # q2 >= h0: the point lies under the energy bound
 
 
 def test_engine_run_billiard_plot_command(real_run, capsys):

@@ -27,7 +27,7 @@ One module per figure:
 | ``trajectory`` | :func:`trajectory`, :func:`default_window` |
 | ``animation`` | :func:`animate` (GIF) |
 | ``run`` | :func:`plot_run` (``billiard plot DIR``), :func:`load_run`, :func:`read_scene` |
-| ``paper`` | :func:`paper_figure`, :func:`paper_phase_figure` (``billiard reproduce``) |
+| ``paper`` | :func:`paper_figure`, :func:`paper_phase_figure`, :func:`paper_models_figure` |
 """
 
 from __future__ import annotations
@@ -38,7 +38,7 @@ from .flights import flight_positions
 from .inputs import parse_frame_interval, parse_window
 from .maps import return_map, time_map
 from .outline import drive_offset
-from .paper import paper_figure, paper_phase_figure
+from .paper import paper_figure, paper_models_figure, paper_phase_figure
 from .phase import phase_coordinates, phase_plot
 from .run import FIGURE_NAMES, load_run, plot_run, read_scene
 from .titles import scene_title
@@ -53,6 +53,7 @@ __all__ = [
     "flight_positions",
     "load_run",
     "paper_figure",
+    "paper_models_figure",
     "paper_phase_figure",
     "parse_frame_interval",
     "parse_window",

@@ -28,7 +28,7 @@ from .phase import PHASE_CAPTION, phase_plot
 from .run import load_run
 from .titles import short_label
 
-__all__ = ["paper_figure", "paper_phase_figure"]
+__all__ = ["paper_figure", "paper_models_figure", "paper_phase_figure"]
 
 Panel = Callable[[Columns, Scene, Axes], object]
 
@@ -163,8 +163,126 @@ def paper_phase_figure(
         interval,
         "all energy in $q_2$ and $u_4$",
         labels=(
-            "$u_4/u_{4,max}$, $u_{4,max} = \\sqrt{2E/m}$ (m/s)",
-            "$q_2/q_{2,max}$, $q_{2,max} = E/(m\\,g)$ (m)",
+            "$u_4/u_{4,max}$, $u_{4,max} = \\sqrt{2E_0/m}$ (m/s)",
+            "$(q_2 - h_0)/q_{2,max}$, $q_{2,max} = E_0/(m\\,g)$ (m)",
         ),
         caption=PHASE_CAPTION,
     )
+
+
+_MODEL_ROWS = (
+    ("return", "impacts"),
+    ("return", "phases"),
+    ("time", "impacts"),
+    ("time", "phases"),
+)
+_DIAGONALS = ("$q_{2,n} = q_{2,n+1}$", "$t_n = t_{n+1}$")
+
+
+def paper_models_figure(
+    impacts_dirs: Sequence[str | os.PathLike[str]],
+    phases_dirs: Sequence[str | os.PathLike[str]],
+    path: str | os.PathLike[str],
+    *,
+    labels: tuple[str, str] = ('contact.model = "impacts"', 'contact.model = "phases"'),
+) -> Path:
+    """The paper's Fig. 2 under two contact models, one column per scene: the return map
+    of impact heights (q2,n vs q2,n+1, mm) under the first model, then under the second,
+    then the map of times of flight (t_n vs t_n+1, s, logarithmic axes: flights from
+    microseconds to a tenth of a second) under each. The two panels of a map share their
+    limits, so the models compare at a glance; each panel's title gives its scene, model
+    and impact count.
+
+    Args:
+        impacts_dirs: run directories of the first model, one per scene.
+        phases_dirs: run directories of the second model, the same scenes in the same
+            order.
+        path: the figure file.
+        labels: the two models' names in the panel titles.
+
+    Returns:
+        The path written.
+
+    Raises:
+        RunDataError: no runs, or the two lists differ in length.
+    """
+    if not impacts_dirs or len(impacts_dirs) != len(phases_dirs):
+        raise RunDataError(
+            f"paper_models_figure: {len(impacts_dirs)} and {len(phases_dirs)} run "
+            "directories; give the same scenes under both models"
+        )
+    runs = {"impacts": [load_run(d) for d in impacts_dirs]}
+    runs["phases"] = [load_run(d) for d in phases_dirs]
+    names = dict(zip(("impacts", "phases"), labels, strict=True))
+    cols = len(impacts_dirs)
+    fig = new_figure((3.4 * cols + 0.4, 3.4 * len(_MODEL_ROWS) + 1.0))
+    axes = fig.subplots(len(_MODEL_ROWS), cols, squeeze=False)
+    for j in range(cols):
+        for i, (kind, model) in enumerate(_MODEL_ROWS):
+            columns, scene = runs[model][j]
+            ax = axes[i, j]
+            if kind == "return":
+                return_map(columns, ax)
+            else:
+                time_map(columns, ax, log=True)
+            ax.get_legend().remove()
+            ax.set_title(
+                f"{short_label(scene)}: {names[model]}\n{columns['t'].size} impacts", fontsize=8
+            )
+            ax.xaxis.label.set_fontsize(8)
+            ax.yaxis.label.set_fontsize(8)
+            ax.tick_params(labelsize=7)
+        for top in (0, 2):  # one set of limits for the two models' panels of a map
+            pair = (axes[top, j], axes[top + 1, j])
+            lo = min(min(ax.get_xlim()) for ax in pair)
+            hi = max(max(ax.get_xlim()) for ax in pair)
+            for ax in pair:
+                ax.set_xlim(lo, hi)
+                ax.set_ylim(lo, hi)
+                for line in ax.get_lines():
+                    if line.get_label() in _DIAGONALS:
+                        line.set_data([lo, hi], [lo, hi])
+    handles = [
+        Line2D(
+            [],
+            [],
+            linestyle="none",
+            marker="o",
+            markersize=4,
+            color=MODEL_COLOR,
+            label="every impact",
+        ),
+        Line2D(
+            [],
+            [],
+            color="0.35",
+            linewidth=0.8,
+            linestyle="--",
+            label="diagonal $q_{2,n} = q_{2,n+1}$, $t_n = t_{n+1}$",
+        ),
+    ]
+    if any(lid_mask(c).any() for model in runs.values() for c, _ in model):
+        handles.insert(
+            1,
+            Line2D(
+                [],
+                [],
+                linestyle="none",
+                marker="x",
+                markersize=4,
+                color=LID_COLOR,
+                label="pairs with a lid impact",
+            ),
+        )
+    fig.legend(
+        handles=handles,
+        loc="outside lower center",
+        ncol=len(handles),
+        fontsize=8,
+        frameon=False,
+    )
+    fig.suptitle(
+        f"Impact heights and times of flight: {labels[0]} (rows 1, 3) and {labels[1]} (rows 2, 4)",
+        fontsize=10,
+    )
+    return save(fig, path)

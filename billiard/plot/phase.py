@@ -8,11 +8,13 @@ from matplotlib.axes import Axes
 from matplotlib.lines import Line2D
 from matplotlib.ticker import MultipleLocator
 
-from ..phase import phase_point
+from ..errors import GeometryError
+from ..phase import DEFAULT_PHASE_REFERENCE, PHASE_REFERENCES, normalized_points, phase_frame
 from ..scene import Scene
 from .common import (
     MODEL_COLOR,
     Columns,
+    RunDataError,
     camera_filter,
     column,
     dots,
@@ -27,69 +29,105 @@ __all__ = [
     "PHASE_CAPTION",
     "PHASE_XLABEL",
     "PHASE_YLABEL",
+    "phase_caption",
     "phase_coordinates",
     "phase_plot",
 ]
 
-#: Axis labels of the phase plot: the normalizations, with their units.
+#: Axis labels of the phase plot: the normalizations, with their units (h0 and E0 are
+#: defined in :mod:`billiard.phase`, and for a caption by :func:`phase_caption`).
 PHASE_XLABEL = (
     "normalized tangential velocity $u_4/u_{4,max}$\n"
-    "$u_4$ (m/s) over $u_{4,max} = \\sqrt{2E/m}$ (m/s)"
+    "$u_4$ (m/s) over $u_{4,max} = \\sqrt{2E_0/m}$ (m/s)"
 )
 PHASE_YLABEL = (
-    "normalized impact height $q_2/q_{2,max}$\n$q_2$ (m) over $q_{2,max} = E/(m\\,g)$ (m)"
-)
-#: What E is, for a caption under the phase plot.
-PHASE_CAPTION = (
-    "E (J): mechanical energy after each impact (translation, spin and m g $q_2$,\n"
-    "potential zero at $q_2$ = 0 in the lab frame); m (kg): ball mass; g (m/s$^2$): gravity"
+    "normalized impact height $(q_2 - h_0)/q_{2,max}$\n"
+    "$q_2 - h_0$ (m) over $q_{2,max} = E_0/(m\\,g)$ (m)"
 )
 
+_ZERO_TEXT = {
+    "lab-origin": "$h_0$ = 0, the lab frame's $q_2$ = 0",
+    "vertex": "$h_0$ (m): the boundary's vertex",
+    "lowest-centre": "$h_0$ (m): the ball's centre at rest at the bottom",
+}
 
-def phase_coordinates(columns: Columns, scene: Scene) -> tuple[np.ndarray, np.ndarray]:
+
+def phase_caption(reference: str = DEFAULT_PHASE_REFERENCE) -> str:
+    """What E0 and h0 are under a phase reference (a key of
+    :data:`billiard.phase.PHASE_REFERENCES`), for a caption under the phase plot."""
+    ref = PHASE_REFERENCES[reference]
+    kinds = "translation and spin" if ref.spin else "translation (spin left out)"
+    return (
+        f"$E_0$ (J): kinetic energy of {kinds} after each impact plus m g ($q_2 - h_0$);\n"
+        f"{_ZERO_TEXT[ref.zero]} (phase reference {ref.name!r}); "
+        "m (kg): ball mass; g (m/s$^2$): gravity"
+    )
+
+
+#: What E0 and h0 are under the default reference, for a caption under the phase plot.
+PHASE_CAPTION = phase_caption()
+
+
+def phase_coordinates(
+    columns: Columns, scene: Scene, reference: str = DEFAULT_PHASE_REFERENCE
+) -> tuple[np.ndarray, np.ndarray]:
     """Normalized tangential velocity and height after each impact.
 
-    With E the mechanical energy after the impact (the ``energy`` column, J; kinetic
-    energy of translation and spin plus m g q2, potential zero at q2 = 0), m the ball's
-    mass (``scene.ball.mass``, kg) and g the gravity (``scene.run.gravity``, m/s^2):
+    Under a phase reference of :data:`billiard.phase.PHASE_REFERENCES` (default
+    :data:`billiard.phase.DEFAULT_PHASE_REFERENCE`), with h0 its zero of potential energy
+    (m) and E0 the energy it shares out (J; from the ``energy`` column, the height h0 and,
+    when the spin is left out, the ``omega`` column), m the ball's mass
+    (``scene.ball.mass``, kg) and g the gravity (``scene.run.gravity``, m/s^2):
 
-    - q2max = E / (m g), the height (m) the ball would reach if all of E were potential
-      energy, and
-    - u4max = sqrt(2 E / m), the speed (m/s) it would have if all of E were kinetic
+    - q2max = E0 / (m g), the height (m) above h0 the ball would reach if all of E0 were
+      potential energy, and
+    - u4max = sqrt(2 E0 / m), the speed (m/s) it would have if all of it were kinetic
       energy of translation.
 
-    So a ball at rest at height h has E = m g h and the point (0, 1); the ball's energy
-    bounds every point to the half disc (u4/u4max)^2 + q2/q2max <= 1 when q2 >= 0 and the
-    spin is zero (spin energy moves points further inside).
+    So a ball at rest at a height above h0 is the point (0, 1); every point with
+    q2 >= h0 lies in the half disc (u4/u4max)^2 + (q2 - h0)/q2max <= 1 (the normal
+    velocity, and the spin when it counts, move points further inside).
 
     Returns:
-        ``(u4 / u4max, q2 / q2max)``, both dimensionless, one entry per impact. Rows whose
-        energy is not positive and finite give NaN (they cannot be normalized).
+        ``(u4 / u4max, (q2 - h0) / q2max)``, both dimensionless, one entry per impact.
+        Rows whose E0 is not positive and finite give NaN (they cannot be normalized).
     """
-    energy = column(columns, "energy")
-    q2 = column(columns, "q2")
-    u4 = column(columns, "u4")
-    m = scene.ball.mass
-    g = scene.run.gravity
-    good = np.isfinite(energy) & (energy > 0)
-    safe = np.where(good, energy, np.nan)
-    q2n, u4n = phase_point(q2, u4, safe, m, g)
+    for name in ("energy", "q2", "u4"):
+        column(columns, name)  # a missing column is a RunDataError
+    try:
+        frame = phase_frame(scene, reference)
+    except (ValueError, ArithmeticError, GeometryError) as exc:
+        raise RunDataError(
+            f"phase reference {reference!r} for boundary curve {scene.boundary.curve!r}: "
+            + " ".join(str(exc).split())
+        ) from None
+    if "omega" not in columns and not frame.reference.spin:
+        raise RunDataError(
+            f"collisions data have no column 'omega' (phase reference {reference!r})"
+        )
+    q2n, u4n = normalized_points(columns, scene, frame)
     return u4n, q2n
 
 
 def phase_plot(
-    columns: Columns, scene: Scene, ax: Axes, *, frame_interval: float | None = None
+    columns: Columns,
+    scene: Scene,
+    ax: Axes,
+    *,
+    frame_interval: float | None = None,
+    reference: str = DEFAULT_PHASE_REFERENCE,
 ) -> list[Line2D]:
     """Phase plot: normalized impact height q2/q2max (y) against normalized tangential
     velocity u4/u4max (x) after each impact (both dimensionless).
 
-    q2max = E/(m g) (m) is the height the ball would reach if all its mechanical energy E
-    (the ``energy`` column, J) were potential, and u4max = sqrt(2 E / m) (m/s) the speed it
+    q2max = E0/(m g) (m) is the height above h0 the ball would reach if all the energy E0
+    of ``reference`` (J) were potential, and u4max = sqrt(2 E0 / m) (m/s) the speed it
     would have if all of it were kinetic; u4 is the centre's velocity along the contact
     tangent just after the impact (m/s). See :func:`phase_coordinates`. The axis labels
-    state both definitions with their units (:data:`PHASE_CAPTION` defines E, for a
-    caption). A period-one orbit is a single point (the paper's parabola at 5.4 Hz:
-    (+-0.0372, 0.376)). The dashed curve is the energy bound (u4/u4max)^2 + q2/q2max = 1.
+    state both definitions with their units (:func:`phase_caption` defines E0 and h0, for
+    a caption). A period-one orbit is a single point (the paper's parabola at 5.4 Hz:
+    (+-0.0372, 0.376)). The dashed curve is the energy bound
+    (u4/u4max)^2 + (q2 - h0)/q2max = 1.
     The axes span x in [-1, 1] and y in [0, 1], widened if some points lie outside.
 
     Args:
@@ -103,12 +141,12 @@ def phase_plot(
         The data lines (x = u4/u4max, y = q2/q2max): the model's, then the camera's.
     """
     interval = checked_interval(frame_interval)
-    x, y = phase_coordinates(columns, scene)
+    x, y = phase_coordinates(columns, scene, reference)
     size = marker_size(x, y, (2.0, 1.0))
     lines = [dots(ax, x, y, f"model: all {x.size} impacts", MODEL_COLOR, size)]
     xs, ys = [x], [y]
     if interval is not None:
-        sx, sy = phase_coordinates(camera_filter(columns, interval), scene)
+        sx, sy = phase_coordinates(camera_filter(columns, interval), scene, reference)
         lines.append(rings(ax, sx, sy, camera_label(interval, sx.size), size))
         xs.append(sx)
         ys.append(sy)
