@@ -10,6 +10,8 @@ import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 
+from bench.contact import paired_ratios  # noqa: E402
+
 COLORS = {"event": "C0", "rk4": "C1", "DOP853": "C2", "DOP853 careful": "C3"}
 #: errors below this are drawn on it (an error of exactly 0 has no place on a log axis)
 FLOOR = 1e-16
@@ -232,4 +234,84 @@ def throughput(rates: list[dict], memory: list[dict], path: Path, command: str) 
     axes[1].legend(fontsize=8)
     for ax in axes:
         ax.grid(True, alpha=0.3)
+    return _save(fig, path, command)
+
+
+def contact(rows: list[dict], path: Path, command: str) -> Path:
+    """CPU per simulated second under each contact model, and their ratio, per case."""
+    fig, axes = plt.subplots(1, 2, figsize=(13, 5.2))
+    names = [r["case"] for r in rows]
+    x = list(range(len(rows)))
+    for k, (model, color) in enumerate((("impacts", "C0"), ("phases", "C1"))):
+        values = [r[model]["cpu_per_s"] for r in rows]
+        shown = [
+            v if math.isfinite(v) and r[model]["comparable"] else 0.0
+            for v, r in zip(values, rows, strict=True)
+        ]
+        axes[0].bar(
+            [i + (k - 0.5) * 0.4 for i in x],
+            shown,
+            0.4,
+            color=color,
+            label=f'contact.model = "{model}"',
+        )
+        for i, r in enumerate(rows):
+            if not r[model]["comparable"]:
+                axes[0].text(
+                    i + (k - 0.5) * 0.4,
+                    1e-4,
+                    f" {r[model]['ended']}",
+                    rotation=90,
+                    va="bottom",
+                    ha="center",
+                    fontsize=7,
+                    color="red",
+                )
+    axes[0].set_yscale("log")
+    axes[0].set_ylabel("CPU s per simulated s (median)")
+    axes[0].set_title("cost of simulated time\n(median of the repeats)", fontsize=10)
+    axes[0].legend(fontsize=8)
+    ratios = [r.get("ratio") for r in rows]
+    colors = ["C3" if r.get("chatter") else "0.6" for r in rows]
+    axes[1].bar(x, [v if v is not None else 0.0 for v in ratios], 0.6, color=colors)
+    for i, r in enumerate(rows):
+        pairs = paired_ratios(r)
+        if pairs and r["ratio"] is not None:
+            low, high = r["ratio"] - min(pairs), max(pairs) - r["ratio"]
+            axes[1].errorbar(
+                i, r["ratio"], [[max(low, 0.0)], [max(high, 0.0)]], color="k", lw=1, capsize=3
+            )
+    for i, v in enumerate(ratios):
+        label = "not compared" if v is None else (f"{v:,.0f}x" if v >= 100 else f"{v:.3g}x")
+        y = max(paired_ratios(rows[i]) + [v]) * 1.08 if v is not None else 1.0
+        axes[1].text(
+            i, y, label, ha="center", va="bottom", fontsize=7, rotation=90 if v is None else 0
+        )
+    axes[1].axhline(10.0, color="k", ls="--", lw=1, label="target: 10x where chatter dominates")
+    axes[1].axhline(1.0, color="k", lw=0.8)
+    axes[1].set_yscale("log")
+    axes[1].set_ylabel(
+        'CPU per simulated s, "impacts" / "phases"\n(bars: medians; lines: each repeat\'s pair)'
+    )
+    axes[1].set_title(
+        "speed-up of the contact phases\n(red: most impacts relaunch a resting ball)", fontsize=10
+    )
+    low = min(
+        [v for v in ratios if v is not None]
+        + [min(paired_ratios(r) or [1.0]) for r in rows]
+        + [1.0]
+    )
+    axes[1].set_ylim(bottom=low / 2)
+    axes[1].legend(fontsize=8)
+    labels = [
+        f"{n}\n{100 * r['impacts']['resting_share']:.0f} % resting"
+        for n, r in zip(names, rows, strict=True)
+    ]
+    for ax in axes:
+        ax.set_xticks(x, labels, fontsize=7, rotation=45, ha="right")
+        ax.grid(True, axis="y", alpha=0.3)
+    fig.suptitle(
+        "Contact phases against the hops they replace: the same start, the same simulated time",
+        fontsize=10,
+    )
     return _save(fig, path, command)

@@ -54,6 +54,10 @@ class Config:
     startup_repeats: int
     memory_sizes: tuple[int, ...]
     profile_impacts: int
+    contact_paper_duration: float  # simulated s per run of a paper scene (contact section)
+    contact_duration: float  # simulated s per run of a closed-form case (contact section)
+    contact_repeats: int  # runs of each case and contact model (median kept)
+    contact_max_impacts: int  # impact cap of one run (contact section)
 
     @classmethod
     def full(cls) -> Config:
@@ -76,6 +80,10 @@ class Config:
             startup_repeats=5,
             memory_sizes=(10_000, 100_000, 1_000_000),
             profile_impacts=25000,
+            contact_paper_duration=600.0,
+            contact_duration=30.0,
+            contact_repeats=5,
+            contact_max_impacts=200_000,
         )
 
     @classmethod
@@ -99,6 +107,10 @@ class Config:
             startup_repeats=3,
             memory_sizes=(5_000, 20_000),
             profile_impacts=3000,
+            contact_paper_duration=60.0,
+            contact_duration=5.0,
+            contact_repeats=3,
+            contact_max_impacts=20_000,
         )
 
 

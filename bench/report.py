@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import math
 
+from bench import contact as contact_mod
 from bench import ladder as ladder_mod
 from bench.workprecision import cost_at
 
@@ -91,6 +92,8 @@ def targets(results: dict, command: str) -> str:
                 "met" if big["peak_mb"] < 200 else "missed",
             ]
         )
+    if "contact" in s:
+        rows.append(contact_target(s["contact"]))
     if "workprecision" in s:
         ratios = speed_ratios(s["workprecision"])
         for method in dict.fromkeys(r["method"] for r in ratios):
@@ -533,7 +536,178 @@ def render(results: dict, command: str) -> str:
         out.append(text.THROUGHPUT + "\n" + section_throughput(s["throughput"], command))
     if "profile" in s:
         out.append(text.PROFILE + "\n" + section_profile(s["profile"]) + "\n" + text.PROFILE_AFTER)
+    if "contact" in s:
+        out.append(text.CONTACT + "\n" + section_contact(s["contact"], command))
     return "\n".join(out).rstrip() + "\n"
+
+
+def _ratio(x) -> str:
+    if x is None:
+        return "-"
+    if math.isinf(x):
+        return "inf"
+    return f"{x:,.0f}x" if x >= 100 else f"{x:.3g}x"
+
+
+def _rate(x: float) -> str:
+    return f"{x:,.0f}" if x >= 100 else f"{x:.3g}"
+
+
+def _paired(row: dict) -> str:
+    pairs = contact_mod.paired_ratios(row)
+    return f"{_ratio(min(pairs))} to {_ratio(max(pairs))}" if pairs else "-"
+
+
+def contact_target(c: dict) -> list[str]:
+    """The targets-table row of the contact section."""
+    rows = c["rows"]
+    v = contact_mod.verdict(rows)
+    chatter = [r for r in rows if r["case"] in v["compared"]]
+    measured = "; ".join(f"{r['case']}: {_ratio(r['ratio'])}" for r in chatter)
+    if v["not_compared"]:
+        measured += "; not compared: " + ", ".join(v["not_compared"])
+    if not v["compared"]:
+        verdict = "no comparable case where chatter dominates"
+    elif v["met"]:
+        verdict = "met"
+    else:
+        verdict = f"missed in {len(v['short'])} of {len(v['compared'])}: " + ", ".join(v["short"])
+    return [
+        f"a contact phase >= {c['target']:g}x cheaper than the hops it replaces, where "
+        f"chatter dominates (>= {100 * c['chatter_share']:.0f} % of the impact model's "
+        "impacts relaunch a resting ball)",
+        measured,
+        verdict,
+    ]
+
+
+def _in_contact(m: dict) -> float:
+    """Share of the simulated time spent rolling or sliding."""
+    return (m["times"]["roll"] + m["times"]["slide"]) / m["simulated"]
+
+
+def _times(m: dict) -> str:
+    t = m["times"]
+    return f"{t['flight']:.3g} / {t['roll']:.3g} / {t['slide']:.3g}"
+
+
+def _ended(m: dict) -> str:
+    if m["ended"] == "time":
+        return "duration"
+    if m["ended"] == "at rest":
+        return "at rest: ended early, counted to the duration"
+    return f"{m['ended']} at t = {m['reached']:.3g} s"
+
+
+def section_contact(c: dict, command: str) -> str:
+    parts = [figure("contact.png", "contact phases against impacts", f"{command} --only contact")]
+    parts.append(
+        f"Measured {c.get('date', '')}: paper scenes {c['paper_duration']:g} s of simulated "
+        f"time, closed-form cases {c['duration']:g} s (or less where the case says so), "
+        f"each model run {c['repeats']} times, alternately; at most "
+        f"{c['max_impacts']:,} impacts per run; code: {c.get('code', 'unknown')}. Load "
+        "average at the end: "
+        f"{', '.join(f'{x:.1f}' for x in c['load'])} (1, 5, 15 min).\n"
+    )
+    body = []
+    for r in c["rows"]:
+        for model in contact_mod.MODELS:
+            m = r[model]
+            ok = m["comparable"] and math.isfinite(m["cpu_per_s"])
+            body.append(
+                [
+                    r["case"] if model == "impacts" else "",
+                    model,
+                    f"{m['simulated']:.3g}",
+                    f"{1e3 * m['cpu_per_s']:.3g}" if ok else "-",
+                    ", ".join(_rate(1e3 * x) for x in m["cpus"]),
+                    _rate(m["impacts_per_s"]) if ok else f"({m['impacts']} impacts)",
+                    f"{m['resting']} ({100 * m['resting_share']:.0f} %)",
+                    m["phases"],
+                    _times(m),
+                    _ended(m),
+                    _ratio(r.get("ratio")) if model == "phases" else "",
+                    _paired(r) if model == "phases" else "",
+                ]
+            )
+    parts.append(
+        table(
+            [
+                "case",
+                "contact.model",
+                "simulated s",
+                "CPU ms per simulated s",
+                "CPU ms of each run",
+                "impacts per simulated s",
+                "resting relaunches",
+                "contact phases",
+                "flying / rolling / sliding (s)",
+                "ended",
+                "CPU ratio impacts / phases (of the medians)",
+                "ratio of each repeat's pair",
+            ],
+            body,
+        )
+        + "\n"
+    )
+    parts.append(
+        "Cases: "
+        + "; ".join(f"**{r['case']}**: {r['what']} ({r['duration']:.3g} s)" for r in c["rows"])
+        + ".\n"
+    )
+    parts.append(contact_findings(c) + "\n")
+    parts.append(text_contact_after())
+    return "\n".join(parts)
+
+
+def contact_findings(c: dict) -> str:
+    """The verdict on the target and the cases where the phases do not pay, as a list."""
+    v = contact_mod.verdict(c["rows"])
+    by = {r["case"]: r for r in c["rows"]}
+
+    def listed(names: list[str]) -> str:
+        return ", ".join(f"{n} {_ratio(by[n]['ratio'])}" for n in names)
+
+    lines = []
+    if v["compared"]:
+        ratios = [by[n]["ratio"] for n in v["compared"]]
+        state = "holds" if v["met"] else "does not hold everywhere"
+        lines.append(
+            f"- **Target ({c['target']:g}x where chatter dominates) {state}**: "
+            f"{len(v['compared']) - len(v['short'])} of {len(v['compared'])} such cases reach "
+            f"it (ratios {_ratio(min(ratios))} to {_ratio(max(ratios))})"
+            + (f"; short: {listed(v['short'])}" if v["short"] else "")
+            + "."
+        )
+    for name in v["not_compared"]:
+        m = by[name]["phases"]
+        lines.append(
+            f'- **{name}** is not compared: under "phases" the run ended with '
+            f"{_ended(m)} ({m['stop'][:90]})."
+        )
+    if v["equal"]:
+        shares = ", ".join(f"{100 * _in_contact(by[n]['phases']):.2g} %" for n in v["equal"])
+        lines.append(
+            f"- **About equal** (ratio within {100 * contact_mod.NOISE:.0f} % of 1, the noise "
+            f"of these times): {listed(v['equal'])}; the ball is in contact {shares} of the "
+            'time there under "phases".'
+        )
+    for name in v["slower"]:
+        a, b = by[name]["impacts"], by[name]["phases"]
+        lines.append(
+            f"- **{name}**: phases are slower ({_ratio(by[name]['ratio'])}; the repeats' "
+            f"pairs {_paired(by[name])}): the ball is in "
+            f'contact {100 * _in_contact(b):.1f} % of the time; "phases" makes '
+            f'{b["impacts"]:,} impacts and {b["phases"]} contact phases where "impacts" makes '
+            f"{a['impacts']:,} ({100 * a['resting_share']:.0f} % resting relaunches)."
+        )
+    return "\n".join(lines)
+
+
+def text_contact_after() -> str:
+    from bench import text
+
+    return text.CONTACT_AFTER
 
 
 RECOMMENDATION_INTRO = (

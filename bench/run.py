@@ -13,13 +13,21 @@ import subprocess
 import time
 from pathlib import Path
 
-from bench import charts, failures, ladder, report, throughput, workprecision
+from bench import charts, contact, failures, ladder, report, throughput, workprecision
 from bench import sweep as sweep_bench
 from bench.common import Config, start_scene
 
 #: The sections of the page; ``sweep`` keeps its own results (docs/figures/sweeps/bench.json)
 #: and its own part of the page, between markers.
-SECTIONS = ("workprecision", "failures", "ladder", "throughput", "profile", "sweep")
+SECTIONS = (
+    "workprecision",
+    "failures",
+    "ladder",
+    "throughput",
+    "profile",
+    "contact",
+    "sweep",
+)
 
 
 class Starts(dict):
@@ -59,6 +67,8 @@ def measure(section: str, cfg: Config, starts: Starts) -> dict:
         }
     if section == "profile":
         return {"profiles": [throughput.profile(n, cfg.profile_impacts) for n in cfg.scenes]}
+    if section == "contact":
+        return {**contact.measure(cfg), "code": code_version()}
     raise ValueError(f"unknown section {section!r}")
 
 
@@ -85,6 +95,10 @@ def draw(results: dict, figures: Path, command: str) -> None:
         t = sections["throughput"]
         charts.throughput(
             t["rates"], t["memory"], figures / "throughput.png", f"{command} --only throughput"
+        )
+    if "contact" in sections:
+        charts.contact(
+            sections["contact"]["rows"], figures / "contact.png", f"{command} --only contact"
         )
 
 

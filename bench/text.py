@@ -230,3 +230,90 @@ PROFILE_AFTER = """Where the time goes, and what would make it shorter (in order
    in `sys.modules` at the time of the error (a module never imported cannot have
    raised) brings the start-up to the ~0.15 s of importing the run path.
 """
+
+CONTACT = """## 6. Contact phases against the hops they replace
+
+`contact.model = "impacts"` (the paper's model) has no contact: a ball lying on a wall is
+relaunched at `contact.elastic_below` (0.01 m/s) by every impact and hops, about 500
+times per simulated second on a flat bottom. `contact.model = "phases"` replaces the
+hops by rolling and sliding phases, integrated as one smooth motion
+(`billiard/contact_phase.py`). This section measures what a simulated second costs under each
+model (`bench/contact.py`): every case is built twice, differing only in
+`contact.model`, started from the same state and run for the same simulated time
+(`run.duration`); the two models are run alternately and the CPU time of the run loop
+(`time.process_time`, building the simulation and deriving a curve excluded) is the
+median of the repeats. The ratio is the impact model's CPU per simulated second over
+the phase model's, from the same run of the benchmark; the ratio of each repeat's pair of
+runs (one right after the other) shows how far the load moved it.
+
+The cases: the four paper scenes as built in (drag as each scene says, the ball from rest
+at the bottom, as `billiard run` starts it), and closed-form cases of the validation tests
+(`tests/test_validation_contact.py`) with the paper's ball, restitution and friction: a
+ball at rest at the bottom of the static parabola and in the static wedge's vertex,
+small rolling oscillations in the static parabola, a drop onto a static flat floor
+(`boundary.curve = "0.001"`), a slide down a straight wall too steep to roll on
+(slope 3 > 7/2 mu_s), stopped before it reaches the vertex, and a ball resting on a
+table shaken vertically with Gamma = A w^2 / g = 0.9.
+
+"Chatter dominates" where most of the impact model's impacts relaunch a resting ball
+(`Result.counts["resting"]`, the "resting relaunches" column). "Contact phases" counts
+the finished phases plus the one still open at the end. Times spent flying, rolling and
+sliding are the engine's (`Result.mode_times`); the impact model only flies.
+A run under "phases" that ends early because the ball rests on the boundary for good
+(`Status.TIME_LIMIT` with a stop reason, or `Status.AT_REST`) has simulated its whole
+duration: its CPU per simulated second uses the requested duration and the rest of it
+counts as time in contact (the "ended" column says "at rest"; with a finite
+`run.duration` the present engine integrates the rest to the end instead). A run that
+stops for another reason (an inelastic collapse, the impact cap) is measured over the
+time it reached and not compared.
+"""
+
+CONTACT_AFTER = """Why the ratios are what they are (the step counts are from `cProfile` runs of the
+same cases, 30 s of simulated time):
+
+* **A ball at rest** (bowl at rest, the floor after the drop): the impact model relaunches
+  it about 490 times per simulated second, each hop a flight whose impact is located
+  like any other (65-80 us per hop). Under "phases" the ball lies in one rolling
+  phase; on a static boundary the phase's step grows fivefold per step when the error
+  estimate is zero, so the whole run takes a handful of steps (3 for 30 s) and its cost
+  hardly depends on the duration: the ratio grows with the simulated time and is not
+  a constant. The slide down the steep wall is one sliding phase against about 180 hops
+  per second.
+* **Rolling oscillations in the bowl**: the phase is integrated with Dormand-Prince 5(4)
+  at the scene's `run.rtol` (1e-10, the flights' tolerance): about 500 steps per
+  simulated second, each with six right-hand-side calls and the end conditions (normal
+  force, friction cone, wall interval), 35-40 us per step in Python. The impact
+  model's 580 hops per second cost about twice as much: 2x, not 10x.
+* **The shaken table** (Gamma = 0.9): on a driven boundary a step is at most 1/20 of the
+  drive period, so that the end conditions, which the drive moves, cannot change sign
+  twice unseen within a step: 400 steps per simulated second at 20 Hz, against the
+  impact model's 580 hops. Within a factor 1.5 of the same cost.
+* **The paper scenes**: in the wedge and the hyperbola at 5.8 Hz most *impacts* are
+  relaunches of a resting ball (60-70 %), but most of the *CPU* goes to the long flights
+  between them; the hops are short exact parabolas, cheap to locate. Under "phases" the
+  ball is in contact a few per cent of the time, and each contact phase takes about 8
+  steps of at most 1/20 of the drive period plus the root search of its end (profiled
+  on the wedge): dropping two thirds or more of the impacts saves about what the phases
+  cost, and the ratio is near 1 either way. In the parabola and the hyperbola at 4.5 Hz the ball is
+  in contact only in the first second, before it settles on its stable orbit: the two
+  models cost the same. In the chaotic scenes the two models follow different
+  trajectories after the first contact, so their ratio compares two samples of the same
+  attractor; with the machine's load it moves by tens of per cent from one measurement
+  to the next (see the ratio of each repeat's pair, and the quick mode's 60 s runs).
+* **The ball in the wedge's vertex** cannot be held by "phases": a contact phase is on
+  one wall at a time, and in the vertex a rolling phase on one wall ends at once at an
+  impact on the other, whose rebound is below the landing speed, so a phase starts on
+  that wall and ends at once too; 200 such impacts within 1e-6 s trip the
+  inelastic-collapse stop, at t = 0 for the ball at rest in the vertex (a ball dropped
+  1 mm into the vertex does the same after 0.02 s). The engine has no contact mode for
+  a ball wedged between two walls. The driven wedge scene did not run into it in these
+  runs (its runs reached their duration).
+
+The target of 10x therefore holds where a contact phase replaces hops of a ball that
+lies still or slides on a static wall, and not where the phase itself must be integrated
+finely (rolling oscillations, a shaken wall) or where the hops are a small part of the
+work (the paper scenes). A looser error tolerance for contact phases than for flights,
+or the closed-form motion where the equations have one (a static straight wall:
+constant acceleration), would cut the step counts above; they are suggestions, not
+measured.
+"""

@@ -18,7 +18,15 @@ from types import ModuleType
 from billiard.cli import UserError
 
 # the sections of bench/run.py (checked before the checkout's bench package is imported)
-_SECTIONS = ("workprecision", "failures", "ladder", "throughput", "profile", "sweep")
+_SECTIONS = (
+    "workprecision",
+    "failures",
+    "ladder",
+    "throughput",
+    "profile",
+    "contact",
+    "sweep",
+)
 _PROJECT = "realworld-billiard"
 
 
