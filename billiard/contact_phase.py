@@ -23,7 +23,7 @@ the dense output to 1e-13 s.
 from __future__ import annotations
 
 import math
-from collections.abc import Callable, Iterable, Sequence
+from collections.abc import Callable, Iterable, Iterator, Sequence
 from dataclasses import dataclass
 from typing import Any
 
@@ -32,7 +32,7 @@ from billiard.errors import BallAtRest, SimulationError
 from billiard.generated import contact as _c
 from billiard.status import Status
 
-__all__ = ["CONTACT_MODES", "ContactModel", "PhaseEnd", "first_root"]
+__all__ = ["CONTACT_MODES", "ContactModel", "PhaseEnd", "first_root", "skip_periods"]
 
 #: the contact modes (motion states other than flight)
 CONTACT_MODES = ("roll", "slide")
@@ -328,7 +328,36 @@ class ContactModel:
                 # whole drive period (or, on a static boundary, a few steps): the drive
                 # is periodic, so this repeats for ever
                 raise BallAtRest(rest_since)
+            if rest_span > 0.0 and steps > 4 and tau - rest_since >= rest_span:
+                # the same argument with a time limit: whole drive periods repeat the one
+                # just simulated exactly, so they are skipped (samples at the rest state)
+                tau, next_sample = skip_periods(tau, limit, rest_span, y, next_sample,
+                                                samples, on_sample)  # fmt: skip
+                rest_since = tau
         return PhaseEnd(limit, None, y)
+
+
+def skip_periods(
+    tau: float,
+    limit: float,
+    period: float,
+    y: Any,
+    next_sample: float,
+    samples: Iterator[float],
+    on_sample: Callable[[float, Any], None] | None,
+) -> tuple[float, float]:
+    """Skip the whole drive periods (s) left before ``limit`` of a state at rest relative
+    to the boundary; report the samples in the skipped span at that state. Returns the
+    new time and the next sample time."""
+    whole = math.floor((limit - tau) / period)
+    if whole < 1:
+        return tau, next_sample
+    tau += whole * period
+    while next_sample <= tau:
+        if on_sample is not None:
+            on_sample(next_sample, y)
+        next_sample = next(samples, math.inf)
+    return tau, next_sample
 
 
 def _at_rest(k: Vec) -> bool:

@@ -31,7 +31,7 @@ from collections.abc import Callable, Iterable
 from dataclasses import dataclass
 from typing import Any
 
-from billiard.contact_phase import first_root
+from billiard.contact_phase import first_root, skip_periods
 from billiard.drive import Drive
 from billiard.errors import BallAtRest
 
@@ -146,6 +146,11 @@ class VertexHold:
         while True:
             if math.isinf(limit) and tau - rest_since >= rest_span:
                 raise BallAtRest(rest_since)
+            if rest_span > 0.0 and tau - rest_since >= rest_span:
+                # at rest through a whole period: the next ones repeat it exactly
+                tau, next_sample = skip_periods(tau, limit, rest_span, 0.0, next_sample,
+                                                samples, on_sample)  # fmt: skip
+                rest_since = tau
             t_b = min(tau + h, limit)
             stops = math.inf
             if sigma != 0.0 and self.static:

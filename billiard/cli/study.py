@@ -7,6 +7,7 @@ import time
 from pathlib import Path
 
 from billiard.cli.common import UserError, _note, add_set_argument
+from billiard.phase import DEFAULT_PHASE_REFERENCE
 
 
 def cmd_scenes(args: argparse.Namespace) -> int:
@@ -54,8 +55,10 @@ def cmd_calibrate(args: argparse.Namespace) -> int:
         f"+-{abs(o.u4_normalized):.4f})   paper: (0.376, +-0.0372)"
     )
     print(
-        "q2max = E/(m g), u4max = sqrt(2 E/m), E the mechanical energy after the impact "
-        "(potential zero at q2 = 0, spin included)"
+        "q2max = E0/(m g), u4max = sqrt(2 E0/m), E0 the energy after the impact above the "
+        f"lowest position of the ball's centre, spin left out (phase reference "
+        f"{DEFAULT_PHASE_REFERENCE!r}; the candidates are compared in "
+        "docs/paper-reproduction.md)"
     )
     print(f"{result.evaluations} runs, {time.perf_counter() - started:.1f} s")
     return 0
