@@ -8,6 +8,7 @@ the header carries no timestamp, only the source, the sympy version and a conten
 from __future__ import annotations
 
 import sympy as sm
+from sympy.printing.precedence import precedence
 from sympy.printing.pycode import PythonCodePrinter
 
 from .contenthash import HASH_PREFIX, content_hash, hash_matches, split_module
@@ -41,6 +42,17 @@ def _refuse(what: str):
 class _Printer(PythonCodePrinter):
     def __init__(self):
         super().__init__({"fully_qualified_modules": True, "standard": "python3"})
+
+    def _print_Pow(self, expr, rational=False):
+        # A square prints as a product: CPython's x**2 calls libm's pow, which differs
+        # from the correctly rounded x*x in about 1 case in 1,000, while compiled code
+        # turns x**2 into x*x; the product makes both agree by construction (and is
+        # faster). Parenthesized, since the product must stay one factor wherever it
+        # stands (a/(x*x), not a/x*x).
+        if expr.exp == 2:
+            base = self.parenthesize(expr.base, precedence(expr))
+            return f"({base}*{base})"
+        return super()._print_Pow(expr, rational=rational)
 
     def _print_Rational(self, expr):
         # Exact rational constants print as float literals: Python folds them anyway.

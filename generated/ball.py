@@ -2,7 +2,7 @@
 # Source: derivation/ball.py (Kane's method)
 # sympy 1.14.0
 # Functions: mass_matrix, forcing_drag, flight_rhs_drag, flight_rhs_magnus, flight_exact, contact_velocity, frame_velocity, impact_stick, impact_slip, energy
-# content sha256: e7d9f6f53671ed23d2e81948d2e156b301f9fd672c67125a979723bca250a1f1
+# content sha256: f6c4b9834e09ce9e12da46b62abb86b437e6e551153c29fdd91d088b7b22f99b
 """Dynamics and impact maps of the rotating ball (Kane's method, Kane-Levinson impacts).
 
 Symbols and conventions: see docs/design.md and docs/derivation.md. SI units.
@@ -17,13 +17,13 @@ def mass_matrix(m, r, k):
     return (
         (m, 0, 0),
         (0, m, 0),
-        (0, 0, k*m*r**2),
+        (0, 0, k*m*(r*r)),
     )
 
 
 def forcing_drag(u1, u2, u3, m, g, c_lin, c_quad):
     """Kane's forcing vector with gravity and Fowles drag (N, N, N m)."""
-    _c0 = -c_lin - c_quad*math.sqrt(u1**2 + u2**2)
+    _c0 = -c_lin - c_quad*math.sqrt((u1*u1) + (u2*u2))
     return (
         _c0*u1,
         _c0*u2 - g*m,
@@ -34,7 +34,7 @@ def forcing_drag(u1, u2, u3, m, g, c_lin, c_quad):
 def flight_rhs_drag(u1, u2, m, g, c_lin, c_quad):
     """Accelerations (du1/dt, du2/dt) in flight with gravity and drag (m/s^2)."""
     _c0 = 1/m
-    _c1 = -c_lin - c_quad*math.sqrt(u1**2 + u2**2)
+    _c1 = -c_lin - c_quad*math.sqrt((u1*u1) + (u2*u2))
     return (
         _c0*_c1*u1,
         _c0*(_c1*u2 - g*m),
@@ -45,7 +45,7 @@ def flight_rhs_magnus(u1, u2, u3, m, g, c_lin, c_quad, c_magnus):
     """Accelerations (du1/dt, du2/dt) with gravity, drag and the Magnus force (m/s^2)."""
     _c0 = 1/m
     _c1 = c_magnus*u3
-    _c2 = -c_lin - c_quad*math.sqrt(u1**2 + u2**2)
+    _c2 = -c_lin - c_quad*math.sqrt((u1*u1) + (u2*u2))
     return (
         _c0*(-_c1*u2 + _c2*u1),
         _c0*(_c1*u1 + _c2*u2 - g*m),
@@ -56,7 +56,7 @@ def flight_exact(t, q1, q2, u1, u2, g):
     """State (q1, q2, u1, u2) after a drag-free flight of duration t (m, m/s)."""
     return (
         q1 + t*u1,
-        -0.5*g*t**2 + q2 + t*u2,
+        -0.5*g*(t*t) + q2 + t*u2,
         u1,
         -g*t + u2,
     )
@@ -141,4 +141,4 @@ def impact_slip(u1, u2, u3, z, vb1, vb2, m, r, k, e, mu_k, sgn):
 def energy(q2, u1, u2, u3, m, r, k, g):
     """Mechanical energy (J): translation + rotation + gravity, zero at q2 = 0."""
     _c0 = (0.5)*m
-    return _c0*k*r**2*u3**2 + _c0*(u1**2 + u2**2) + g*m*q2
+    return _c0*k*(r*r)*(u3*u3) + _c0*((u1*u1) + (u2*u2)) + g*m*q2

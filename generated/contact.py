@@ -2,7 +2,7 @@
 # Source: derivation/contact.py (Kane's method)
 # sympy 1.14.0
 # Functions: roll_rhs, roll_spin, slide_rhs, slip_velocity, centre_state, s_dot_of_velocity, contact_energy
-# content sha256: 3a94f0852e7dfd72211a437892f20c31806e985d1740f9e74c972a6b9ad6c393
+# content sha256: b6bc4e6dbe2f1ebd8f436925880adf0c0baca1e8ea556b2551c26ad68e312dd5
 """Sustained contact of the ball with one wall of the moving boundary: rolling and sliding
 (Kane's method, contact forces from auxiliary speeds).
 
@@ -23,7 +23,7 @@ def roll_rhs(s_dot, fp, f2, f3, ab1, ab2, vb1, vb2, m, r, k, g, c_lin, c_quad):
     """
     _c0 = k + 1
     _c1 = 1/_c0
-    _c2 = fp**2 + 1
+    _c2 = (fp*fp) + 1
     _c3 = math.sqrt(_c2)
     _c4 = f2/_c2
     _c5 = _c4*r
@@ -33,13 +33,13 @@ def roll_rhs(s_dot, fp, f2, f3, ab1, ab2, vb1, vb2, m, r, k, g, c_lin, c_quad):
     _c9 = _c7*ab2
     _c10 = _c7*g
     _c11 = m*(_c10*fp + _c8 + _c9*fp)
-    _c12 = m*s_dot**2
+    _c12 = m*(s_dot*s_dot)
     _c13 = _c7*vb1
     _c14 = _c13 + _c7*fp*vb2
     _c15 = _c7*(_c3*s_dot - _c5*s_dot)
-    _c16 = c_lin + c_quad*math.sqrt((_c15 + vb1)**2 + (_c15*fp + vb2)**2)
+    _c16 = c_lin + c_quad*math.sqrt(((_c15 + vb1)*(_c15 + vb1)) + ((_c15*fp + vb2)*(_c15*fp + vb2)))
     return (
-        _c1*(-_c0*_c12*(-_c7*f2*fp + r*(_c2*f3 - 2*f2**2*fp)/_c2**2) + _c11 + _c16*(_c14 - _c6*s_dot))/(_c6*m),
+        _c1*(-_c0*_c12*(-_c7*f2*fp + r*(_c2*f3 - 2*(f2*f2)*fp)/(_c2*_c2)) + _c11 + _c16*(_c14 - _c6*s_dot))/(_c6*m),
         -_c12*_c4*_c6 + _c16*(-_c13*fp + _c7*vb2) + m*(_c10 - _c8*fp + _c9),
         _c1*k*(_c11 + _c16*(_c14 - _c6*s_dot)),
     )
@@ -50,7 +50,7 @@ def roll_spin(s_dot, fp, f2, r):
 
     Arguments: s_dot = ds/dt (m/s); fp = f'(s); f2 = f''(s) (1/m); r the radius (m).
     """
-    _c0 = fp**2 + 1
+    _c0 = (fp*fp) + 1
     return s_dot*(-math.sqrt(_c0) + f2*r/_c0)/r
 
 
@@ -60,7 +60,7 @@ def slide_rhs(s_dot, fp, f2, f3, ab1, ab2, vb1, vb2, m, r, k, g, c_lin, c_quad, 
     Arguments: s_dot = ds/dt (m/s); fp = f'(s); f2 = f''(s) (1/m); f3 = f'''(s) (1/m^2); ab1, ab2 the boundary's acceleration in N (m/s^2); vb1, vb2 the boundary's velocity in N (m/s); m the mass (kg); r the radius (m); k the inertia factor (I = k m r^2); g gravity (m/s^2); c_lin (N s/m) and c_quad (N s^2/m^2) Fowles drag on the centre's lab velocity; mu_k kinetic friction; sgn = +1 or -1 the sign of the slip (slip_velocity).
     """
     _c0 = 1/m
-    _c1 = fp**2 + 1
+    _c1 = (fp*fp) + 1
     _c2 = math.sqrt(_c1)
     _c3 = f2/_c1
     _c4 = _c3*r
@@ -69,7 +69,7 @@ def slide_rhs(s_dot, fp, f2, f3, ab1, ab2, vb1, vb2, m, r, k, g, c_lin, c_quad, 
     _c7 = _c6*ab1
     _c8 = _c6*ab2
     _c9 = _c6*g
-    _c10 = s_dot**2
+    _c10 = (s_dot*s_dot)
     _c11 = _c10*m
     _c12 = _c7*fp
     _c13 = _c3*_c5
@@ -79,11 +79,11 @@ def slide_rhs(s_dot, fp, f2, f3, ab1, ab2, vb1, vb2, m, r, k, g, c_lin, c_quad, 
     _c17 = _c6*vb2
     _c18 = _c16*fp
     _c19 = _c6*(_c2*s_dot - _c4*s_dot)
-    _c20 = c_lin + c_quad*math.sqrt((_c19 + vb1)**2 + (_c19*fp + vb2)**2)
+    _c20 = c_lin + c_quad*math.sqrt(((_c19 + vb1)*(_c19 + vb1)) + ((_c19*fp + vb2)*(_c19*fp + vb2)))
     _c21 = _c20*(-_c18 + _c6*vb2)
     _c22 = -_c11*_c13 + _c21 + m*(-_c12 + _c8 + _c9)
     return (
-        _c0*(-_c11*(-_c6*f2*fp + r*(_c1*f3 - 2*f2**2*fp)/_c1**2) - _c14*_c15*m + _c20*(_c15*_c17 - _c15*_c18 + _c16 + _c17*fp - _c5*s_dot) + m*(_c7 + _c8*fp + _c9*fp))/_c5,
+        _c0*(-_c11*(-_c6*f2*fp + r*(_c1*f3 - 2*(f2*f2)*fp)/(_c1*_c1)) - _c14*_c15*m + _c20*(_c15*_c17 - _c15*_c18 + _c16 + _c17*fp - _c5*s_dot) + m*(_c7 + _c8*fp + _c9*fp))/_c5,
         _c0*_c15*(_c14*m - _c21)/(k*r),
         _c22,
         -_c15*_c22,
@@ -95,7 +95,7 @@ def slip_velocity(s_dot, u3, fp, f2, r):
 
     Arguments: s_dot = ds/dt (m/s); u3 the spin about n3 (rad/s, counter-clockwise positive); fp = f'(s); f2 = f''(s) (1/m); r the radius (m).
     """
-    _c0 = fp**2 + 1
+    _c0 = (fp*fp) + 1
     return math.sqrt(_c0)*s_dot + r*u3 - f2*r*s_dot/_c0
 
 
@@ -104,7 +104,7 @@ def centre_state(s, s_dot, f0, fp, f2, d1, d2, vb1, vb2, r):
 
     Arguments: s the contact point's abscissa in the boundary's frame (m); s_dot = ds/dt (m/s); f0 = f(s) (m); fp = f'(s); f2 = f''(s) (1/m); d1, d2 the boundary's displacement in N (m); vb1, vb2 the boundary's velocity in N (m/s); r the radius (m).
     """
-    _c0 = fp**2 + 1
+    _c0 = (fp*fp) + 1
     _c1 = math.sqrt(_c0)
     _c2 = 1/_c1
     _c3 = _c2*r
@@ -122,7 +122,7 @@ def s_dot_of_velocity(u1, u2, fp, f2, vb1, vb2, r):
 
     Arguments: u1, u2 a lab velocity of the centre (m/s); fp = f'(s); f2 = f''(s) (1/m); vb1, vb2 the boundary's velocity in N (m/s); r the radius (m).
     """
-    _c0 = fp**2 + 1
+    _c0 = (fp*fp) + 1
     _c1 = math.sqrt(_c0)
     _c2 = 1/_c1
     _c3 = _c2*fp
@@ -134,6 +134,6 @@ def contact_energy(s_dot, u3, f0, fp, f2, m, r, k, g):
 
     Arguments: s_dot = ds/dt (m/s); u3 the spin about n3 (rad/s, counter-clockwise positive); f0 = f(s) (m); fp = f'(s); f2 = f''(s) (1/m); m the mass (kg); r the radius (m); k the inertia factor (I = k m r^2); g gravity (m/s^2).
     """
-    _c0 = fp**2 + 1
+    _c0 = (fp*fp) + 1
     _c1 = math.sqrt(_c0)
-    return m*(g*(f0 + r/_c1) + (0.5)*k*r**2*u3**2 + (0.5)*s_dot**2*(_c1 - f2*r/_c0)**2)
+    return m*(g*(f0 + r/_c1) + (0.5)*k*(r*r)*(u3*u3) + (0.5)*(s_dot*s_dot)*((_c1 - f2*r/_c0)*(_c1 - f2*r/_c0)))

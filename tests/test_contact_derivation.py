@@ -345,7 +345,7 @@ def test_paper_curves_supply_the_third_derivative():
 
     from billiard import walls
 
-    assert build.CURVE_FORMAT == walls.CURVE_FORMAT == 3
+    assert build.CURVE_FORMAT == walls.CURVE_FORMAT >= 3
     xs = np.linspace(-0.06, 0.06, 25)
     for name in ("parabola", "wedge"):
         for w in load_curve(name).walls:

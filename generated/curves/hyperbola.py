@@ -4,7 +4,7 @@
 # Curve 'hyperbola': f(x) = sqrt(alpha*(1 + beta*x**2)) - delta
 # Parameters: alpha = 0.00403, beta = 800, delta = 0.0445
 # Walls: 1; nearest-point polynomial degree: 4
-# content sha256: 4472b8fbc7d5ddf3411a85f7647e5006034c4843f91883ac609c688ab41f1bdf
+# content sha256: 99044ade4bc1c723b8f88b3778eb749797197d17afce81a515a5aa013de91776
 """Boundary curve 'hyperbola': f(x) = sqrt(alpha*(1 + beta*x**2)) - delta (x and f in metres).
 
 Every function takes the curve's parameters as its last argument, an array in the
@@ -14,7 +14,7 @@ nearest-point condition is not a polynomial."""
 
 import math
 
-FORMAT = 3
+FORMAT = 4
 NAME = 'hyperbola'
 EXPRESSION = 'sqrt(alpha*(1 + beta*x**2)) - delta'
 PARAMETER_NAMES = ('alpha', 'beta', 'delta')
@@ -31,14 +31,14 @@ def f_0(x, _p):
     alpha = _p[0]
     beta = _p[1]
     delta = _p[2]
-    return -delta + math.sqrt(alpha*(beta*x**2 + 1))
+    return -delta + math.sqrt(alpha*(beta*(x*x) + 1))
 
 
 def df_0(x, _p):
     """Slope f'(x)."""
     alpha = _p[0]
     beta = _p[1]
-    _c0 = beta*x**2 + 1
+    _c0 = beta*(x*x) + 1
     return beta*x*math.sqrt(_c0*alpha)/_c0
 
 
@@ -46,19 +46,19 @@ def d2f_0(x, _p):
     """Second derivative f''(x) (1/m)."""
     alpha = _p[0]
     beta = _p[1]
-    _c0 = x**2
+    _c0 = (x*x)
     _c1 = _c0*beta + 1
     _c2 = math.sqrt(_c1*alpha)
-    return -_c0*_c2*beta**2/_c1**2 + _c2*beta/_c1
+    return -_c0*_c2*(beta*beta)/(_c1*_c1) + _c2*beta/_c1
 
 
 def d3f_0(x, _p):
     """Third derivative f'''(x) (1/m^2)."""
     alpha = _p[0]
     beta = _p[1]
-    _c0 = beta*x**2 + 1
+    _c0 = beta*(x*x) + 1
     _c1 = 3*math.sqrt(_c0*alpha)
-    return -_c1*beta**2*x/_c0**2 + _c1*beta**3*x**3/_c0**3
+    return -_c1*(beta*beta)*x/(_c0*_c0) + _c1*beta**3*x**3/_c0**3
 
 
 def near_0(s, px, py, _p):
@@ -66,7 +66,7 @@ def near_0(s, px, py, _p):
     alpha = _p[0]
     beta = _p[1]
     delta = _p[2]
-    _c0 = beta*s**2 + 1
+    _c0 = beta*(s*s) + 1
     _c1 = math.sqrt(_c0*alpha)
     return -px + s + _c1*beta*s*(_c1 - delta - py)/_c0
 
@@ -76,13 +76,13 @@ def dnear_0(s, px, py, _p):
     alpha = _p[0]
     beta = _p[1]
     delta = _p[2]
-    _c0 = s**2
+    _c0 = (s*s)
     _c1 = _c0*beta + 1
     _c2 = 1/_c1
-    _c3 = _c0*beta**2
+    _c3 = _c0*(beta*beta)
     _c4 = math.sqrt(_c1*alpha)
     _c5 = _c4*(_c4 - delta - py)
-    return _c2*_c3*alpha + _c2*_c5*beta + 1 - _c3*_c5/_c1**2
+    return _c2*_c3*alpha + _c2*_c5*beta + 1 - _c3*_c5/(_c1*_c1)
 
 
 def poly_0(px, py, _p):
@@ -91,15 +91,15 @@ def poly_0(px, py, _p):
     beta = _p[1]
     delta = _p[2]
     _c0 = alpha*beta
-    _c1 = beta**2
-    _c2 = 2*_c0 + _c1*alpha**2 + 1
+    _c1 = (beta*beta)
+    _c2 = 2*_c0 + _c1*(alpha*alpha) + 1
     _c3 = 2*px*(_c0 + 1)
-    _c4 = px**2
+    _c4 = (px*px)
     _c5 = _c1*alpha
     return (
         _c2*beta,
         -_c3*beta,
-        _c2 + _c4*beta - _c5*delta**2 - 2*_c5*delta*py - _c5*py**2,
+        _c2 + _c4*beta - _c5*(delta*delta) - 2*_c5*delta*py - _c5*(py*py),
         -_c3,
         _c4,
     )

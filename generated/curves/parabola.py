@@ -4,7 +4,7 @@
 # Curve 'parabola': f(x) = a*x**2 + c
 # Parameters: a = 26, c = 0.0063
 # Walls: 1; nearest-point polynomial degree: 3
-# content sha256: 7c7dcd39b40f02982c0264b61eafbe511407f4e941e4f0816b89d63aaae566d0
+# content sha256: 9c1a7d82b3e0220b57e09c35b3bb234266021e3f47eaf2e005bddf8506d802e0
 """Boundary curve 'parabola': f(x) = a*x**2 + c (x and f in metres).
 
 Every function takes the curve's parameters as its last argument, an array in the
@@ -14,7 +14,7 @@ nearest-point condition is not a polynomial."""
 
 import math
 
-FORMAT = 3
+FORMAT = 4
 NAME = 'parabola'
 EXPRESSION = 'a*x**2 + c'
 PARAMETER_NAMES = ('a', 'c')
@@ -30,7 +30,7 @@ def f_0(x, _p):
     """Height of the wall (m)."""
     a = _p[0]
     c = _p[1]
-    return a*x**2 + c
+    return a*(x*x) + c
 
 
 def df_0(x, _p):
@@ -54,15 +54,15 @@ def near_0(s, px, py, _p):
     """Nearest-point condition g(s) = (s - px) + (f(s) - py) f'(s) (m)."""
     a = _p[0]
     c = _p[1]
-    return 2*a*s*(a*s**2 + c - py) - px + s
+    return 2*a*s*(a*(s*s) + c - py) - px + s
 
 
 def dnear_0(s, px, py, _p):
     """Derivative dg/ds."""
     a = _p[0]
     c = _p[1]
-    _c0 = s**2
-    return 4*_c0*a**2 + 2*a*(_c0*a + c - py) + 1
+    _c0 = (s*s)
+    return 4*_c0*(a*a) + 2*a*(_c0*a + c - py) + 1
 
 
 def poly_0(px, py, _p):
@@ -71,7 +71,7 @@ def poly_0(px, py, _p):
     c = _p[1]
     _c0 = 2*a
     return (
-        2*a**2,
+        2*(a*a),
         0.0,
         _c0*c - _c0*py + 1,
         -px,

@@ -4,7 +4,7 @@
 # Curve 'wedge': f(x) = b*abs(x) + c
 # Parameters: b = 1.85, c = 0.0063
 # Walls: 2; nearest-point polynomial degree: 1, 1
-# content sha256: 23216700bd5ca8c36c6ef482e9577db2aa8a336f8f9f18908eaea3c89df9c9c8
+# content sha256: bb80def9500b8074916d1543016859d3f755c35aafc6c4866e538f95b3c2f771
 """Boundary curve 'wedge': f(x) = b*abs(x) + c (x and f in metres).
 
 Every function takes the curve's parameters as its last argument, an array in the
@@ -14,7 +14,7 @@ nearest-point condition is not a polynomial."""
 
 import math
 
-FORMAT = 3
+FORMAT = 4
 NAME = 'wedge'
 EXPRESSION = 'b*abs(x) + c'
 PARAMETER_NAMES = ('b', 'c')
@@ -59,7 +59,7 @@ def near_0(s, px, py, _p):
 def dnear_0(s, px, py, _p):
     """Derivative dg/ds."""
     b = _p[0]
-    return b**2 + 1
+    return (b*b) + 1
 
 
 def poly_0(px, py, _p):
@@ -67,7 +67,7 @@ def poly_0(px, py, _p):
     b = _p[0]
     c = _p[1]
     return (
-        b**2 + 1,
+        (b*b) + 1,
         -b*c + b*py - px,
     )
 
@@ -110,7 +110,7 @@ def near_1(s, px, py, _p):
 def dnear_1(s, px, py, _p):
     """Derivative dg/ds."""
     b = _p[0]
-    return b**2 + 1
+    return (b*b) + 1
 
 
 def poly_1(px, py, _p):
@@ -118,7 +118,7 @@ def poly_1(px, py, _p):
     b = _p[0]
     c = _p[1]
     return (
-        b**2 + 1,
+        (b*b) + 1,
         b*c - b*py - px,
     )
 
