@@ -13,8 +13,9 @@ fourth-order continuous extension, on which the phase's end is located:
   can hold, else the ball slides the other way);
 * ``wall-end``: s leaves the wall's interval [lo, hi] (a kink, the end of the curve):
   the ball flies on from there;
-* ``impact``: the centre reaches another wall's offset curve (the wedge's vertex): the
-  engine applies the impact law there. A phase that starts on the other wall's offset
+* ``impact``: the centre reaches another wall's offset curve (the wedge's vertex) or
+  the lid: the engine applies the impact law there (at the escape level of an open
+  container the run ends). A phase that starts on the other wall's offset
   curve too (in the vertex, where that gap is zero to rounding and may be -1e-18 m)
   ends there at once when the centre moves into that wall (by more than 1e-12 m).
 
@@ -202,8 +203,9 @@ class ContactModel:
         ``limit`` seconds.
 
         Args:
-            gaps: for each other wall, gap(px, py) (m) of the centre (relative to the
-                boundary) from that wall's offset curve; its zero is an ``impact``.
+            gaps: for each other surface (wall, lid, escape level), gap(px, py) (m)
+                of the centre (relative to the boundary) from it (a wall's offset curve,
+                the lid's level less r, the escape level); its zero is an ``impact``.
             samples: increasing times (s, from the phase's start; an iterable, read as
                 far as the phase goes) at which to report the state to
                 ``on_sample(tau, y)``.

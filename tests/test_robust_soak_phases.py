@@ -1,11 +1,15 @@
 """Contact phases (``contact.model = "phases"``): regressions of the faults the soak
-found (a phase that starts in the wedge's vertex slid through the other wall)."""
+found (a phase that starts in the wedge's vertex slid through the other wall; a ball
+rolling or sliding up a wall went through the lid, or on above the escape level)."""
 
 from __future__ import annotations
 
+import pytest
+
 from billiard.record import MemoryRecorder
-from billiard.scene import load_scene
+from billiard.scene import load_scene, with_values
 from billiard.simulate import Simulation
+from billiard.status import Status
 
 GAP_LIMIT = 1e-9  # m, as bench.soak.GAP_LIMIT
 
@@ -92,3 +96,44 @@ def test_a_phase_starting_in_the_wedges_vertex_does_not_slide_through_the_other_
     assert worst[1] >= -GAP_LIMIT, worst
     ends = {(p.mode, p.end) for p in phases}
     assert ("slide", "wall-end") not in ends and ("roll", "wall-end") not in ends
+
+
+def rolling_up(**values):
+    """A ball started on the bottom of the fixed parabola with 1.5 m/s along it: rolling
+    and sliding, it would rise 8 cm."""
+    base = {
+        "contact.model": "phases",
+        "drive.amplitude": 0.0,
+        "drive.frequency": 0.0,
+        "air.drag": "none",
+        "initial.v1": 1.5,
+        "run.duration": 0.5,
+    }
+    return with_values(load_scene("parabola-5.4hz"), {**base, **values})
+
+
+def test_a_ball_rolling_up_a_wall_meets_the_lid():
+    """Regression (found by the soak): a contact phase watched the other walls but not
+    the lid, so a ball rolling or sliding up the wall went through it (soak: clearance
+    down to -0.188 m at a phase's end, and impacts on the lid from inside it). With the
+    lid at 3 cm the ball used to roll up to q2 = 8.8 cm; now the phase ends at the lid
+    with an impact there."""
+    sim, columns, phases, reason = run_events(rolling_up(**{"boundary.ceiling": 0.03}), 20)
+    assert reason is None
+    level = sim.boundary.lid.level
+    assert phases[1].end == "impact" and phases[1].q2_end == pytest.approx(level, abs=1e-12)
+    assert "lid" in set(columns["wall"].tolist())
+    worst = min(clearances(sim, columns, phases), key=lambda item: item[1])
+    assert worst[1] >= -GAP_LIMIT, worst
+    for p in phases:
+        assert max(p.q2_start, p.q2_end) <= level + GAP_LIMIT
+
+
+def test_a_ball_rolling_up_above_the_escape_level_escapes():
+    """Regression: in an open container the escape level ends a contact phase too (the
+    ball used to roll on above it and come back)."""
+    scene = rolling_up(**{"boundary.ceiling": None, "boundary.escape_height": 0.03})
+    sim, columns, phases, reason = run_events(scene, 20)
+    assert sim.status == Status.ESCAPED
+    assert reason.startswith("ball escaped above escape_height = 0.03 m at t = ")
+    assert phases[-1].end == "impact" and phases[-1].q2_end == pytest.approx(0.03, abs=1e-12)
