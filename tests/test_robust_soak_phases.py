@@ -1,9 +1,13 @@
 """Contact phases (``contact.model = "phases"``): regressions of the faults the soak
 found (a phase that starts in the wedge's vertex slid through the other wall; a ball
-rolling or sliding up a wall went through the lid, or on above the escape level)."""
+rolling or sliding up a wall went through the lid, or on above the escape level), and
+the soak's audits of contact phases: clean on real runs, and able to fail."""
 
 from __future__ import annotations
 
+import math
+
+import numpy as np
 import pytest
 
 from billiard.record import MemoryRecorder
@@ -137,3 +141,158 @@ def test_a_ball_rolling_up_above_the_escape_level_escapes():
     assert sim.status == Status.ESCAPED
     assert reason.startswith("ball escaped above escape_height = 0.03 m at t = ")
     assert phases[-1].end == "impact" and phases[-1].q2_end == pytest.approx(0.03, abs=1e-12)
+
+
+# ---------------------------------------------------------------------------------
+# The soak's audits of contact phases (bench.soak): clean on real runs, and able to fail.
+
+STATIC_DRAW = {  # a fixed parabola, ball thrown inside: sliding and rolling phases
+    "curve": "parabola",
+    "lid": True,
+    "top": 0.14322037755054962,
+    "amplitude": 0.0,
+    "frequency": 9.291484184287023,
+    "direction": "vertical",
+    "phase": 4.146839500264662,
+    "restitution": 0.4419324807696866,
+    "mu_static": 0.30699626412765785,
+    "mu_kinetic_fraction": 0.891726920317737,
+    "elastic_below": 0.01,
+    "radius_fraction": 0.42237659582962933,
+    "log_mass": -4.248202088508626,
+    "inertia_factor": 0.6707558154151272,
+    "drag": "fowles",
+    "magnus": 3.84418682899903e-09,
+    "start": "inside",
+    "x_fraction": 0.9208034002519163,
+    "y_fraction": 0.1278250990185416,
+    "v1": -0.5970194388301491,
+    "v2": 1.582611645720014,
+    "omega": -275.6565360223453,
+    "t0": 3.206950780004314,
+    "model": "phases",
+}
+SHAKEN_DRAW = {  # a vertically shaken parabola with a lid: landings, lift-offs, slips
+    "curve": "parabola",
+    "lid": True,
+    "top": 0.4586707684431828,
+    "amplitude": 0.011530336737222495,
+    "frequency": 6.691772422665341,
+    "direction": "vertical",
+    "phase": 3.2186388591630335,
+    "restitution": 0.06429079259075188,
+    "mu_static": 0.8665810021694228,
+    "mu_kinetic_fraction": 0.9850832441340993,
+    "elastic_below": 0.001,
+    "radius_fraction": 0.9439602819553082,
+    "log_mass": -4.685661217181505,
+    "inertia_factor": 0.3390078451091678,
+    "drag": "fowles",
+    "magnus": 1.8155139141117104e-09,
+    "start": "rest",
+    "x_fraction": 0.819777268337117,
+    "y_fraction": 0.6421749556662888,
+    "v1": 1.7840062456908528,
+    "v2": -0.37620868833756616,
+    "omega": 21.95933425056114,
+    "t0": 25.739130962861672,
+    "model": "phases",
+}
+
+
+def test_the_soak_audits_phases_scenes_and_finds_nothing():
+    """The soak's unit of work on phases scenes: every event audited (impacts, contact
+    phases and the transitions into them), the static scene's phase energies too, and a
+    run interrupted by a real SIGTERM, resumed, and compared byte for byte (collisions.csv
+    and contacts.csv)."""
+    from bench.soak import MUST_BE_ZERO, Job, run_job
+
+    static = run_job(Job("random-static", 60, draw=STATIC_DRAW))
+    shaken = run_job(Job("random-shaken", 150, draw=SHAKEN_DRAW, resume_at=97))
+    for report in (static, shaken):
+        assert report["model"] == "phases" and report["contact_phases"] >= 3, report
+        assert report["events"] == report["impacts"] + report["contact_rows"]
+        assert report["contact_rows"] == report["contact_phases"]
+        assert report["transitions"] == report["contact_phases"]
+        for key in MUST_BE_ZERO:
+            assert report.get(key, 0) == 0, (key, report)
+    assert static["static"] == 1 and static["static_phases"] == static["contact_phases"]
+    assert static["worst_phase_energy_ratio"] < 1.0  # drag on: energy only lost
+    assert shaken["static"] == 0 and shaken["static_phases"] == 0
+    assert shaken["impacts"] == 150 and shaken["stop"] == "complete"
+    assert {"slide/lift-off", "roll/slip"} <= set(shaken["phase_ends"])
+    assert shaken["resume_interrupted"] == 1 and shaken["resume_phases"] == 1
+    assert shaken["resume_mismatches"] == 0
+
+
+def recorded_phases():
+    """A static scene's contact phases, audited as the soak audits them: (simulation,
+    its records)."""
+    from bench.soak import AuditedSimulation
+
+    sim = AuditedSimulation(rolling_up(**{"run.duration": 1.0}))
+    records = []
+    sim.on_contact = records.append
+    assert sim.run(50, MemoryRecorder()) is None
+    assert len(records) >= 4 and records[0].t_start == sim.initial.t
+    return sim, records
+
+
+def test_the_phase_audit_counts_a_doctored_record():
+    """A contact record that gains energy over its phase, starts with more kinetic
+    energy than the event before it left, jumps, or starts at no event is counted."""
+    from bench.soak import PhaseAudit
+
+    sim, records = recorded_phases()
+    audit = sim.phase_audit
+    assert audit.phases == len(records) and audit.static_phases == len(records)
+    assert audit.transition_energy_created == audit.phase_energy_created == 0
+    assert audit.transition_jumps == audit.unlinked == 0
+    assert audit.worst_phase < 1.0 and audit.worst_transition <= 1e-12
+
+    def audited(*recs):
+        fresh = PhaseAudit.of(sim)
+        for rec in recs:
+            fresh.contact(rec, steps=1000)
+        return fresh
+
+    first, second = records[0], records[1]
+    assert (second.mode, second.end) == ("roll", "slip")  # rolling, drag off: conserving
+    assert audited(first, second).examples == []
+    gains = audited(first, second._replace(v1_end=second.v1_end * 1.0001))
+    assert gains.phase_energy_created == 1 and gains.worst_phase > 1.0
+    rises = audited(first, second._replace(q2_end=second.q2_end + 1e-6))
+    assert rises.phase_energy_created == 1 and rises.transition_energy_created == 0
+    kick = audited(first, second._replace(v2_start=second.v2_start * (1.0 + 1e-9)))
+    assert kick.transition_energy_created == 1 and kick.phase_energy_created == 0
+    jump = audited(first, second._replace(q1_start=second.q1_start + 1e-8))
+    assert jump.transition_jumps == 1 and jump.transition_energy_created == 0
+    late = audited(first, second._replace(t_start=second.t_start + 1e-9))
+    assert late.unlinked == 1 and late.transitions == 1
+
+
+def test_the_contact_rows_audit_counts_a_ball_off_the_wall():
+    """A contacts.csv row whose end leaves the wall's offset curve by 1 um either way, or
+    holds a NaN, is counted."""
+    from bench.soak import audit_contact_rows
+
+    sim, records = recorded_phases()
+
+    def rows(recs):
+        return {name: np.array([getattr(r, name) for r in recs]) for name in records[0]._fields}
+
+    clean = audit_contact_rows(sim.boundary, sim.drive, rows(records))
+    assert clean["contact_rows"] == len(records)
+    assert clean["contact_penetrations"] == clean["contact_detached"] == 0
+    assert clean["contact_non_finite_rows"] == 0
+    assert abs(clean["contact_lowest_clearance"]) < 1e-12
+
+    last = records[-1]
+    for change, key in ((1e-6, "contact_detached"), (-1e-6, "contact_penetrations")):
+        doctored = records[:-1] + [last._replace(q2_end=last.q2_end + change)]
+        report = audit_contact_rows(sim.boundary, sim.drive, rows(doctored))
+        assert report[key] == 1, report
+        assert report["contact_examples"][0].startswith(f"contact phase {len(records)} end")
+    broken = records[:-1] + [last._replace(omega_end=math.nan)]
+    report = audit_contact_rows(sim.boundary, sim.drive, rows(broken))
+    assert report["contact_non_finite_rows"] == 1
