@@ -1,16 +1,20 @@
-"""Soak test: many impacts across the paper's scenes and random valid scenes, every impact
-audited.
+"""Soak test: many events across the paper's scenes and random valid scenes with either
+contact model, every event audited.
 
-    python -m bench.soak --impacts 1000000     # the full soak (a few minutes, 2 cores)
-    python -m bench.soak --quick               # 20,000 impacts (seconds)
+    python -m bench.soak --events 1000000      # the full soak (--impacts is the same)
+    python -m bench.soak --quick               # 20,000 events (seconds)
 
 Run from the root of a source checkout (it is a test harness, not part of the installed
 package).
 
-Every run is streamed to a temporary directory exactly as ``billiard run`` streams it
-(CSV, scene file, checkpoints), with the impact law wrapped by :class:`ImpactAudit`;
-afterwards every CSV row is checked against the geometry with :func:`audit_rows`.
-Counted, and required to be zero:
+An event is an impact or, in a scene with ``contact.model = "phases"``, a finished contact
+phase (rolling or sliding on a wall, one row of contacts.csv); the requested total counts
+both. Every run is streamed to a temporary directory exactly as ``billiard run`` streams
+it (CSV files, scene file, checkpoints) by an :class:`AuditedSimulation`: the impact law
+wrapped by :class:`ImpactAudit` and, with phases, every finished phase given to a
+:class:`PhaseAudit` in the order the engine makes the events; afterwards every row of
+collisions.csv is checked against the geometry with :func:`audit_rows`, and every row of
+contacts.csv with :func:`audit_contact_rows`. Counted, and required to be zero:
 
 penetrations
     impacts at which the ball overlaps the wall or the lid by more than ``GAP_LIMIT``
@@ -19,7 +23,8 @@ penetrations
 detached impacts
     impacts recorded with the ball more than ``GAP_LIMIT`` away from every surface.
 non-finite values
-    in any CSV row.
+    in any row of collisions.csv (``non_finite_rows``) or contacts.csv
+    (``contact_non_finite_rows``).
 energy created
     impacts after which the kinetic energy relative to the boundary (translation
     relative to the boundary's velocity at the impact, plus spin) exceeds the energy
@@ -27,15 +32,33 @@ energy created
     rule's lift of a ball lying on the surface adds energy by design: it is allowed
     exactly the designed amount, m (v_e^2 - w_n^2) / 2 (v_e = ``elastic_below``, w_n the
     normal velocity it replaces), and counted separately.
+contact penetrations, contact detached
+    contact phases at whose start or end the centre is off the wall's offset curve:
+    clearance below -``GAP_LIMIT`` (in a wall or the lid) or above it (off the wall).
+    Only a phase's two ends are checked, not the path between them.
+transition energy created, transition jumps, unlinked phases
+    transitions into a contact phase (landing at an impact, roll -> slide, slide ->
+    roll, the start in contact) that raise the kinetic energy relative to the boundary
+    beyond rounding, or move the centre by more than ``GAP_LIMIT``; phases that start
+    at no event. Exact on any drive: see :class:`PhaseAudit`.
+phase energy created
+    on a static boundary, contact phases whose mechanical energy at the end exceeds
+    that at the start by more than the integrator's tolerance (``rtol`` per step of the
+    energies involved, see :class:`PhaseAudit`). On a shaken boundary the drive does
+    work on the ball during a phase, and the balance in the boundary's (accelerating)
+    frame is a path integral that the phase's ends do not fix: not audited there.
 resume mismatches
-    for every few random scenes the run is also interrupted (a real SIGTERM the process
-    sends itself after a random impact, ``BILLIARD_STOP_AFTER``), resumed from its
-    checkpoint, and compared byte for byte with the audited uninterrupted run.
+    for every fifth random scene the run is also interrupted (a real SIGTERM the process
+    sends itself after a random impact of those the run made, ``BILLIARD_STOP_AFTER``),
+    resumed from its checkpoint, and compared byte for byte with the audited
+    uninterrupted run: collisions.csv, and contacts.csv for a phases scene.
 
 Early stops (escape from an open container, inelastic collapse, numerical faults) end
 a run with a documented reason; they are tallied by kind, and random scenes are added
-until the requested number of impacts has been simulated. The scene generator
-:func:`scene_from_draw` is shared with the property-based tests.
+until the requested number of events has been simulated. The scene generator
+:func:`scene_from_draw` is shared with the property-based tests; half its scenes use
+each contact model, and a phases scene runs for at most ``PHASES_DURATION`` (30 s) of
+simulated time (a ball rolling to and fro in a drag-free bowl never ends its phase).
 """
 
 from __future__ import annotations
@@ -52,7 +75,7 @@ import sys
 import tempfile
 import time
 from collections import Counter
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -66,7 +89,9 @@ from billiard.impact import ImpactResult
 from billiard.interrupt import signal_after
 from billiard.record import read_collisions
 from billiard.scene import PAPER_SCENES, Scene, fowles_coefficients, load_scene, with_values
+from billiard.sidecsv import CONTACTS_NAME, read_side_csv
 from billiard.simulate import (
+    CSV_NAME,
     RunInterrupted,
     Simulation,
     resume,
@@ -78,8 +103,13 @@ from billiard.status import Status
 __all__ = [
     "CURVES",
     "GAP_LIMIT",
+    "MODELS",
     "PAPER_SCENES",
+    "PHASES_DURATION",
+    "AuditedSimulation",
     "ImpactAudit",
+    "PhaseAudit",
+    "audit_contact_rows",
     "audit_rows",
     "random_draw",
     "scene_from_draw",
@@ -94,6 +124,10 @@ CURVES = ("parabola", "wedge", "hyperbola", "30*x**4 + 0.0063", "sqrt(0.0001 + 2
 GAP_LIMIT = 1e-9
 #: Relative rounding allowance of the energy audit.
 ENERGY_ROUNDING = 1e-12
+#: Contact models of the random scenes (``contact.model``).
+MODELS = ("impacts", "phases")
+#: Simulated time (s) a random ``phases`` scene runs at most (``run.duration``).
+PHASES_DURATION = 30.0
 _LARGEST_RADIUS = 4e-3  # m; random balls are at most this large
 _STOP_KINDS = {
     Status.COMPLETE: "complete",
@@ -139,6 +173,7 @@ def random_draw(rng: random.Random) -> dict[str, Any]:
         "v2": uniform(-2.0, 2.0),
         "omega": uniform(-300.0, 300.0),
         "t0": uniform(0.0, 50.0),
+        "model": rng.choice(MODELS),
     }
 
 
@@ -171,7 +206,8 @@ def scene_from_draw(draw: Mapping[str, Any]) -> Scene:
     Every parameter is within its documented range: mu_k <= mu_s, a ball radius below
     the curve's smallest radius of curvature, a lid (or escape level) above the bottom,
     and an initial position inside the container (on or above the wall, below the lid),
-    or at rest on the bottom.
+    or at rest on the bottom. ``contact.model`` is the draw's ``model``, always set
+    explicitly; a ``phases`` scene also gets ``run.duration = PHASES_DURATION``.
     """
     curve = draw["curve"]
     bottom = load_curve(curve).f(0.0)
@@ -192,6 +228,7 @@ def scene_from_draw(draw: Mapping[str, Any]) -> Scene:
         "contact.mu_static": draw["mu_static"],
         "contact.mu_kinetic": draw["mu_static"] * draw["mu_kinetic_fraction"],
         "contact.elastic_below": draw["elastic_below"],
+        "contact.model": draw["model"],
         "ball.radius": radius,
         "ball.mass": 10.0 ** draw["log_mass"],
         "ball.inertia_factor": draw["inertia_factor"],
@@ -205,6 +242,9 @@ def scene_from_draw(draw: Mapping[str, Any]) -> Scene:
         "initial.v2": 0.0,
         "initial.omega": 0.0,
         "initial.t": draw["t0"],
+        # a ball rolling to and fro in a drag-free bowl never ends its phase: a phases
+        # scene runs for a bounded simulated time
+        "run.duration": PHASES_DURATION if draw["model"] == "phases" else None,
     }
     scene = with_values(load_scene("parabola-5.4hz"), values)
     scene = with_values(scene, {"name": "random", "description": "random valid scene"})
@@ -265,6 +305,9 @@ class ImpactAudit:
     examples: list[str] = field(default_factory=list)
     #: when a list, gets (energy before, energy after, allowance) of every impact
     history: list[tuple[float, float, float]] | None = None
+    #: called as ``on_impact(state before, result)`` after every impact (how
+    #: :class:`PhaseAudit` learns the state each landing starts from)
+    on_impact: Callable[[Any, ImpactResult], None] | None = None
 
     @property
     def regimes(self) -> tuple[str, ...]:
@@ -306,6 +349,8 @@ class ImpactAudit:
                     f"Rn = {res.Rn:.3g} N s): relative-frame energy {before!r} -> {after!r} J "
                     f"(+{(after - before) / before:.2g}), allowance {allowance!r} J"
                 )
+        if self.on_impact is not None:
+            self.on_impact(state, res)
         return res
 
 
@@ -345,6 +390,314 @@ def audit_rows(boundary: Boundary, drive: Any, columns: Mapping[str, np.ndarray]
     }
 
 
+#: Absolute error allowed per step of a contact phase on s (m) and s_dot (m/s), as in
+#: :mod:`billiard.contact_phase` (its ``_ATOL``): the absolute part of the phase-energy
+#: tolerance.
+PHASE_ATOL = 1e-12
+#: Evaluations of the contact equations per accepted step of a contact phase, at least:
+#: five stages and the end of the Dormand-Prince step, and the transition functions at
+#: its end (``ContactModel.run_phase``); evaluations // 7 bounds the steps from above.
+EVALUATIONS_PER_STEP = 7
+
+
+@dataclass
+class PhaseAudit:
+    """Energy audit of the contact phases of a ``contact.model = "phases"`` run and of
+    the transitions into them, in the boundary's frame. Build it with
+    :meth:`PhaseAudit.of`; it gets every impact's outcome (``ImpactAudit.on_impact``)
+    and every finished phase (:meth:`contact`, a
+    :class:`billiard.record.ContactRecord`) in the order the engine makes them, so each
+    phase is linked to the event it starts from.
+
+    Transitions (any drive; exact). A phase starts at a landing (an impact, also one at a
+    second wall, after which the rebound's normal speed is dropped), at a roll -> slide
+    or slide -> roll transition (the end of the previous phase), or at the run's start.
+    All happen at one instant t, so the boundary frame's potential energies (gravity,
+    and the fictitious potential m D''(t) of the drive's acceleration) change only with
+    the position: the audit requires the position to be continuous (a jump beyond
+    ``GAP_LIMIT`` is a ``transition_jump``) and the kinetic energy relative to the
+    boundary, 0.5 m |v - V_B(t)|^2 + 0.5 I omega^2, not to grow beyond rounding
+    (``ENERGY_ROUNDING`` of the energies involved): ``transition_energy_created``. One
+    designed change is allowed exactly: a phase that starts rolling takes the rolling
+    spin, which differs from the spin it starts from by the slip it snaps to zero;
+    ``ContactModel.mode_for`` snaps only a slip |w| <= 1e-12 m/s + 1e-9 of the contact
+    speeds (|s_dot| sqrt(1 + f'^2) + r |omega|), recomputed here: within that
+    (``snaps``, the largest energy change in ``worst_snap``) the spin energy's change
+    is allowed, beyond it it is not. The
+    other transitions are audited elsewhere: the impact at a second wall (the wedge's
+    vertex) by :class:`ImpactAudit`, like every impact; lift-off and the wall's end
+    give the ball ``LIFT_OFF_SPEED`` (1e-6 m/s) along the wall's normal by design,
+    0.5 m (1e-6 m/s)^2 relative to the boundary, after the phase's recorded end.
+
+    Phases (static boundary only). On a boundary at rest (amplitude or frequency 0) the
+    normal force does no work, rolling friction none, sliding friction and drag only
+    take energy: the mechanical energy E = 0.5 m |v|^2 + 0.5 I omega^2 + m g q2 at a
+    phase's end must not exceed that at its start by more than the integrator's
+    tolerance: per step, ``rtol`` (``run.rtol``) of the energies involved,
+    KE_start + KE_end + m g (|q2_start| + |q2_end|), plus the absolute tolerance
+    ``PHASE_ATOL`` times m (g + |v_start| + |v_end|); times the phase's steps (bounded
+    from above by the evaluations of the contact equations counted over the phase,
+    ``// EVALUATIONS_PER_STEP``). Measured, the growth per step stays below 1e-3 of it
+    (rolling without drag, rtol = 1e-10). On a shaken boundary the drive does work
+    through the normal force and friction, and in the boundary's frame the fictitious
+    force -m D''(t) is not conservative (D'' depends on time): the energy balance over
+    a phase is a path integral that the phase's two ends do not determine, so it is not
+    audited there; its transitions are.
+
+    Attributes:
+        phases: phases seen; ``ends`` counts them by "mode/end reason".
+        transitions: transitions into a phase checked.
+        transition_energy_created, transition_jumps: see above.
+        snaps: rolling starts whose spin snap was allowed; ``worst_snap`` the largest
+            energy it added, relative to the energies involved.
+        unlinked: phases whose start matched no previous event (time differs).
+        static_phases: phases whose energy was checked (static boundary).
+        phase_energy_created: phases that gained energy beyond the tolerance.
+        worst_transition: largest relative kinetic-energy growth at a transition.
+        worst_phase: largest energy growth over a phase, as a fraction of its tolerance.
+        examples: the first few violations, for a report.
+    """
+
+    m: float
+    inertia: float
+    g: float
+    rtol: float
+    drive: Any
+    static: bool
+    #: the engine's boundary and contact model (to recompute the snap's tolerance)
+    boundary: Any = None
+    model: Any = None
+    phases: int = 0
+    ends: Counter = field(default_factory=Counter)
+    transitions: int = 0
+    transition_energy_created: int = 0
+    transition_jumps: int = 0
+    snaps: int = 0
+    worst_snap: float = -math.inf
+    unlinked: int = 0
+    static_phases: int = 0
+    phase_energy_created: int = 0
+    worst_transition: float = -math.inf
+    worst_phase: float = -math.inf
+    examples: list[str] = field(default_factory=list)
+    #: the state after the last event: (what, t, q1, q2, v1, v2, omega)
+    last: tuple[Any, ...] | None = None
+
+    @classmethod
+    def of(cls, sim: Simulation) -> PhaseAudit:
+        """The audit of ``sim``'s scene, starting from its initial state."""
+        sc = sim.scene
+        m, r = sc.ball.mass, sc.ball.radius
+        audit = cls(
+            m,
+            sc.ball.inertia_factor * m * r * r,
+            sc.run.gravity,
+            sc.run.rtol,
+            sim.drive,
+            sim.drive.amplitude == 0.0 or sim.drive.omega == 0.0,
+            sim.boundary,
+            sim.contact_model,
+        )
+        b = sim.initial
+        audit.last = ("start", b.t, b.q1, b.q2, b.u1, b.u2, b.u3)
+        return audit
+
+    def impact(self, state: Any, res: ImpactResult) -> None:
+        """After an impact at ``state`` with outcome ``res``."""
+        self.last = ("impact", state.t, state.q1, state.q2, res.u1, res.u2, res.u3)
+
+    def _note(self, text: str) -> None:
+        if len(self.examples) < 5:
+            self.examples.append(text)
+
+    def contact(self, rec: Any, steps: int = 1) -> None:
+        """Audit a finished phase ``rec`` (a ContactRecord) of at most ``steps``
+        integration steps."""
+        self.phases += 1
+        self.ends[f"{rec.mode}/{rec.end}"] += 1
+        m, inertia = self.m, self.inertia
+        last = self.last
+        self.last = ("phase", rec.t_end, rec.q1_end, rec.q2_end, rec.v1_end, rec.v2_end,
+                     rec.omega_end)  # fmt: skip
+        where = f"phase {self.phases} ({rec.mode}, end {rec.end}, t = {rec.t_start!r} s)"
+        if last is None or last[1] != rec.t_start:
+            self.unlinked += 1
+            self._note(f"{where}: starts at no event (last event at t = {last and last[1]!r})")
+        else:
+            what, t, q1, q2, u1, u2, u3 = last
+            self.transitions += 1
+            vb1, vb2 = self.drive.boundary_velocity(self.drive.angle(t))
+            v1, v2, w = rec.v1_start, rec.v2_start, rec.omega_start
+            before = 0.5 * m * ((u1 - vb1) ** 2 + (u2 - vb2) ** 2) + 0.5 * inertia * u3 * u3
+            after = 0.5 * m * ((v1 - vb1) ** 2 + (v2 - vb2) ** 2) + 0.5 * inertia * w * w
+            scale = (
+                before
+                + 0.5 * m * (u1 * u1 + u2 * u2 + v1 * v1 + v2 * v2 + 2.0 * (vb1 * vb1 + vb2 * vb2))
+                + 0.5 * inertia * (u3 * u3 + w * w)
+            )
+            if rec.mode == "roll" and w != u3 and self._snapped(rec, t, u3):
+                snap = 0.5 * inertia * (w * w - u3 * u3)
+                before += max(0.0, snap)
+                self.snaps += 1
+                self.worst_snap = max(self.worst_snap, snap / scale)
+            excess = (after - before) / scale if scale > 0.0 else 0.0
+            self.worst_transition = max(self.worst_transition, excess)
+            if excess > ENERGY_ROUNDING:
+                self.transition_energy_created += 1
+                self._note(
+                    f"{where}: from the {what}, kinetic energy relative to the boundary "
+                    f"{before!r} -> {after!r} J (+{excess:.2g} of {scale:.3g} J)"
+                )
+            jump = math.hypot(rec.q1_start - q1, rec.q2_start - q2)
+            if jump > GAP_LIMIT:
+                self.transition_jumps += 1
+                self._note(f"{where}: from the {what}, the centre jumps {jump:.3g} m")
+        if not self.static:
+            return
+        self.static_phases += 1
+        g = self.g
+        ke0 = 0.5 * m * (rec.v1_start**2 + rec.v2_start**2) + 0.5 * inertia * rec.omega_start**2
+        ke1 = 0.5 * m * (rec.v1_end**2 + rec.v2_end**2) + 0.5 * inertia * rec.omega_end**2
+        growth = (ke1 + m * g * rec.q2_end) - (ke0 + m * g * rec.q2_start)
+        speeds = math.hypot(rec.v1_start, rec.v2_start) + math.hypot(rec.v1_end, rec.v2_end)
+        tolerance = max(1, steps) * (
+            self.rtol * (ke0 + ke1 + m * g * (abs(rec.q2_start) + abs(rec.q2_end)))
+            + PHASE_ATOL * m * (g + speeds)
+        )
+        ratio = growth / tolerance
+        self.worst_phase = max(self.worst_phase, ratio)
+        if not growth <= tolerance:
+            self.phase_energy_created += 1
+            self._note(
+                f"{where}: mechanical energy {ke0 + m * g * rec.q2_start!r} -> "
+                f"{ke1 + m * g * rec.q2_end!r} J over {steps} steps at most "
+                f"(+{growth:.3g} J, {ratio:.3g} times the tolerance)"
+            )
+
+    def _snapped(self, rec: Any, t: float, spin: float) -> bool:
+        """Is the spin change from ``spin`` to the rolling phase's start spin the snap of
+        a slip within ``ContactModel.mode_for``'s tolerance?"""
+        if self.boundary is None or self.model is None:
+            return False
+        surface = self.boundary.offsets[int(rec.wall)]
+        theta = self.drive.angle(t)
+        px, _, _, _ = self.drive.to_boundary_frame(theta, rec.q1_start, rec.q2_start, 0.0, 0.0)
+        s = surface.contact(px, list(surface.initial_warm()))[0]
+        wall = surface.wall
+        sd = self.model.s_dot(wall, theta, s, rec.v1_start, rec.v2_start)
+        fp = wall.df(s, wall.p)
+        slip = self.model.slip(wall, s, sd, spin)
+        speeds = abs(sd) * math.sqrt(1.0 + fp * fp) + self.model.r * abs(spin)
+        return abs(slip) <= 1e-12 + 1e-9 * speeds
+
+    def report(self) -> dict[str, Any]:
+        """The tallies, for a job's report."""
+        return {
+            "contact_phases": self.phases,
+            "phase_ends": dict(self.ends),
+            "transitions": self.transitions,
+            "transition_energy_created": self.transition_energy_created,
+            "transition_jumps": self.transition_jumps,
+            "unlinked_phases": self.unlinked,
+            "snaps": self.snaps,
+            "worst_snap": self.worst_snap,
+            "static_phases": self.static_phases,
+            "phase_energy_created": self.phase_energy_created,
+            "worst_transition_excess": self.worst_transition,
+            "worst_phase_energy_ratio": self.worst_phase,
+            "phase_examples": list(self.examples),
+        }
+
+
+class AuditedSimulation(Simulation):
+    """The engine with every event audited: the impact law wrapped by
+    :class:`ImpactAudit` (``impact_audit``) and, with ``contact.model = "phases"``,
+    every finished contact phase also given to a :class:`PhaseAudit`
+    (``phase_audit``) before it goes wherever ``on_contact`` sends it (a streamed run
+    sets that to contacts.csv). On a static boundary the evaluations of the contact
+    equations are counted per phase: the bound on its steps the energy tolerance needs.
+    """
+
+    def __init__(self, scene: Any, method: str | None = None, history: list | None = None):
+        self._forward: Callable[[Any], None] | None = None
+        self.phase_audit: PhaseAudit | None = None
+        self._evaluations = 0
+        super().__init__(scene, method)
+        self.impact_audit = ImpactAudit(self.impact, history=history)
+        self.impact = self.impact_audit
+        if self.phases:
+            self.phase_audit = PhaseAudit.of(self)
+            self.impact_audit.on_impact = self.phase_audit.impact
+            if self.phase_audit.static:
+                model = self.contact_model
+                forces = model.forces
+
+                def counted(*args: Any) -> tuple:
+                    self._evaluations += 1
+                    return forces(*args)
+
+                model.forces = counted
+
+    @property  # type: ignore[override]
+    def on_contact(self) -> Callable[[Any], None] | None:
+        return self._forward if self.phase_audit is None else self._tap
+
+    @on_contact.setter
+    def on_contact(self, forward: Callable[[Any], None] | None) -> None:
+        self._forward = forward
+
+    def _tap(self, record: Any) -> None:
+        steps = self._evaluations // EVALUATIONS_PER_STEP
+        self._evaluations = 0
+        self.phase_audit.contact(record, steps)
+        if self._forward is not None:
+            self._forward(record)
+
+
+def audit_contact_rows(
+    boundary: Boundary, drive: Any, columns: Mapping[str, np.ndarray]
+) -> dict[str, Any]:
+    """Check contacts.csv rows against the geometry: at each phase's start and end the
+    centre is on the wall's offset curve, |clearance| <= ``GAP_LIMIT`` (else a
+    penetration, of a wall or the lid, or detached: off the wall); non-finite values."""
+    floats = [name for name, values in columns.items() if values.dtype.kind == "f"]
+    rows = len(columns["t_start"])
+    finite = np.ones(rows, dtype=bool)
+    for name in floats:
+        finite &= np.isfinite(columns[name])
+    penetrations = detached = 0
+    lowest, highest = math.inf, -math.inf
+    examples: list[str] = []
+    for i in range(rows):
+        if not finite[i]:
+            continue
+        for end in ("start", "end"):
+            t = float(columns[f"t_{end}"][i])
+            q1, q2 = float(columns[f"q1_{end}"][i]), float(columns[f"q2_{end}"][i])
+            px, py, _, _ = drive.to_boundary_frame(drive.angle(t), q1, q2, 0.0, 0.0)
+            gap = boundary.clearance(px, py)
+            lowest, highest = min(lowest, gap), max(highest, gap)
+            if gap < -GAP_LIMIT or gap > GAP_LIMIT:
+                if gap < 0.0:
+                    penetrations += 1
+                else:
+                    detached += 1
+                if len(examples) < 5:
+                    examples.append(
+                        f"contact phase {i + 1} {end} ({columns['mode'][i]}, end "
+                        f"{columns['end'][i]}, t = {t!r} s): clearance {gap:.3g} m"
+                    )
+    return {
+        "contact_rows": rows,
+        "contact_penetrations": penetrations,
+        "contact_detached": detached,
+        "contact_non_finite_rows": int((~finite).sum()),
+        "contact_lowest_clearance": lowest,
+        "contact_highest_clearance": highest,
+        "contact_examples": examples,
+    }
+
+
 def stop_kind(status: Status) -> str:
     """Category of a run's status: complete, escape, collapse, non-finite, numerical, or
     root (a root or step-size solve that failed)."""
@@ -368,23 +721,31 @@ class Job:
 
 
 def run_job(job: Job) -> dict[str, Any]:
-    """Run one job (in a worker process) and return its report."""
+    """Run one job (in a worker process) and return its report. Its ``events`` are its
+    impacts plus, with ``contact.model = "phases"``, its finished contact phases."""
     started = time.process_time()
-    report: dict[str, Any] = {"label": job.label, "method": job.method, "impacts": 0}
+    report: dict[str, Any] = {
+        "label": job.label,
+        "method": job.method,
+        "impacts": 0,
+        "events": 0,
+        "draw": job.draw,
+    }
     try:
         scene = load_scene(job.scene_name) if job.scene_name else scene_from_draw(job.draw or {})
-        sim = Simulation(scene, job.method)
+        sim = AuditedSimulation(scene, job.method)
     except GeometryError as exc:
         report.update(stop="geometry", reason=str(exc), cpu=time.process_time() - started)
         return report
-    audit = ImpactAudit(sim.impact)
-    sim.impact = audit
+    audit = sim.impact_audit
+    report["model"] = scene.contact.model
     with tempfile.TemporaryDirectory(prefix="billiard-soak-") as tmp:
         result = run_streamed(sim, Path(tmp) / "a", collisions=job.impacts)
         columns = read_collisions(Path(tmp) / "a" / "collisions.csv")
         report.update(audit_rows(sim.boundary, sim.drive, columns))
         report.update(
             impacts=len(result),
+            events=len(result),
             stop=stop_kind(result.status),
             reason=result.stop_reason,
             energy_created=audit.created,
@@ -394,7 +755,16 @@ def run_job(job: Job) -> dict[str, Any]:
             worst_energy_excess=audit.worst,
             energy_examples=audit.examples,
         )
-        if job.resume_at is not None:
+        contacts = Path(tmp) / "a" / CONTACTS_NAME
+        if sim.phase_audit is not None:
+            report.update(sim.phase_audit.report())
+            report.update(audit_contact_rows(sim.boundary, sim.drive, read_side_csv(contacts)))
+            report["events"] = len(result) + report["contact_rows"]
+            report["static"] = int(sim.phase_audit.static)
+        if job.resume_at is not None and len(result) >= 1:
+            # interrupt within the impacts the run made (a phases scene may make far
+            # fewer than it asked for before its time limit)
+            at = 1 + (job.resume_at - 1) % len(result)
             report["resume_checked"] = 1
             try:
                 simulate(
@@ -402,40 +772,42 @@ def run_job(job: Job) -> dict[str, Any]:
                     collisions=job.impacts,
                     method=job.method,
                     out_dir=Path(tmp) / "b",
-                    on_record=signal_after(job.resume_at, signal.SIGTERM),
+                    on_record=signal_after(at, signal.SIGTERM),
                 )
                 interrupted = False
             except RunInterrupted:
                 interrupted = True
             if interrupted:
                 resume(Path(tmp) / "b")
-            same = filecmp.cmp(
-                Path(tmp) / "a" / "collisions.csv",
-                Path(tmp) / "b" / "collisions.csv",
-                shallow=False,
+            names = [CSV_NAME] + ([CONTACTS_NAME] if contacts.exists() else [])
+            same = all(
+                filecmp.cmp(Path(tmp) / "a" / name, Path(tmp) / "b" / name, shallow=False)
+                for name in names
             )
             report["resume_mismatches"] = 0 if same else 1
             report["resume_interrupted"] = int(interrupted)
+            report["resume_phases"] = int(contacts.exists())
     report["cpu"] = time.process_time() - started
     return report
 
 
 def plan(total: int, seed: int) -> tuple[list[Job], random.Random]:
-    """The paper-scene jobs for ``total`` impacts (60 %, 15 % per scene, each one long
-    run from rest) and the random generator of the rest."""
+    """The paper-scene jobs for ``total`` events (40 %, 10 % per scene, each one long
+    run from rest; their events are impacts) and the random generator of the rest."""
     rng = random.Random(seed)
-    paper = int(0.15 * total)
+    paper = int(0.10 * total)
     jobs = [Job(name, paper, scene_name=name) for name in PAPER_SCENES]
     return jobs, rng
 
 
-def random_jobs(rng: random.Random, impacts: int, quick: bool, start: int) -> list[Job]:
-    """Random-scene jobs worth about ``impacts`` impacts; every fifth is also
-    interrupted and resumed; one scene in sixteen uses rk4 (with a quarter of the
-    impacts)."""
+def random_jobs(rng: random.Random, events: int, quick: bool, start: int) -> list[Job]:
+    """Random-scene jobs worth about ``events`` events (each asks for ``size`` impacts;
+    a phases scene also makes contact phases, and stops at ``PHASES_DURATION`` of
+    simulated time); every fifth is also interrupted and resumed; one scene in sixteen
+    uses rk4 (with a quarter of the impacts)."""
     size = 1000 if quick else 4000
     jobs: list[Job] = []
-    count = max(1, math.ceil(impacts / size))
+    count = max(1, math.ceil(events / size))
     for i in range(start, start + count):
         draw = random_draw(rng)
         method = "rk4" if rng.random() < 1 / 16 else "event"
@@ -453,18 +825,18 @@ def soak(
     for curve in CURVES:  # derive the expressions once, before the workers need them
         load_curve(curve)
     jobs, rng = plan(total, seed)
-    paper_impacts = sum(job.impacts for job in jobs)
+    paper_events = sum(job.impacts for job in jobs)
     reports: list[dict[str, Any]] = []
     context = multiprocessing.get_context("fork" if sys.platform != "win32" else "spawn")
     with context.Pool(workers, maxtasksperchild=20) as pool:
-        pending = jobs + random_jobs(rng, total - paper_impacts, quick, 0)
+        pending = jobs + random_jobs(rng, total - paper_events, quick, 0)
         made = len(pending) - len(jobs)
         while pending:
             for report in pool.imap_unordered(run_job, pending):
                 reports.append(report)
                 echo(_job_line(report))
-            done = sum(r["impacts"] for r in reports)
-            # runs that stopped early leave impacts to make up with more random scenes
+            done = sum(r["events"] for r in reports)
+            # runs that stopped early leave events to make up with more random scenes
             pending = random_jobs(rng, total - done, quick, made) if done < total else []
             made += len(pending)
     summary = _aggregate(reports)
@@ -479,37 +851,69 @@ def soak(
 
 def _job_line(report: dict[str, Any]) -> str:
     extra = f" ({report['reason']})" if report.get("stop") not in (None, "complete") else ""
+    phases = ""
+    if report.get("model") == "phases":
+        phases = (
+            f" +{report.get('contact_phases', 0)} phases: pen "
+            f"{report.get('contact_penetrations', 0)} det {report.get('contact_detached', 0)} "
+            f"nonfin {report.get('contact_non_finite_rows', 0)} transition "
+            f"{report.get('transition_energy_created', 0)}/{report.get('transition_jumps', 0)}"
+            f" phase-energy {report.get('phase_energy_created', 0)}"
+        )
     return (
-        f"{report['label']:>14} {report['method']:>5} e_below {report.get('elastic_below')} "
-        f"{report['impacts']:>7} impacts "
+        f"{report['label']:>14} {report['method']:>5} {report.get('model', '-'):>7} "
+        f"e_below {report.get('elastic_below')} {report['impacts']:>7} impacts "
         f"{report.get('cpu', 0.0):6.1f} s  pen {report.get('penetrations', 0)} "
         f"det {report.get('detached', 0)} nonfin {report.get('non_finite_rows', 0)} "
-        f"energy {report.get('energy_created', 0)} "
+        f"energy {report.get('energy_created', 0)}{phases} "
         f"resume {report.get('resume_mismatches', '-')}  {report.get('stop')}{extra}"
     )
 
 
 def _aggregate(reports: list[dict[str, Any]]) -> dict[str, Any]:
-    def total(key: str) -> int:
-        return int(sum(r.get(key, 0) for r in reports))
+    def total(key: str, runs: list[dict[str, Any]] = reports) -> int:
+        return int(sum(r.get(key, 0) for r in runs))
+
+    def extreme(key: str, pick: Any, empty: float) -> float:
+        return pick((r.get(key, empty) for r in reports), default=empty)
 
     paper = [r for r in reports if r["label"] in PAPER_SCENES]
     random_runs = [r for r in reports if r["label"] not in PAPER_SCENES]
+    phase_runs = [r for r in random_runs if r.get("model") == "phases"]
     stops = Counter(r.get("stop", "?") for r in random_runs)
-    lowest = min((r.get("lowest_clearance", math.inf) for r in reports), default=math.inf)
-    highest = max((r.get("highest_clearance", -math.inf) for r in reports), default=-math.inf)
-    worst = max((r.get("worst_energy_excess", -math.inf) for r in reports), default=-math.inf)
+    phase_stops = Counter(r.get("stop", "?") for r in phase_runs)
+    ends: Counter = Counter()
+    for r in phase_runs:
+        ends.update(r.get("phase_ends", {}))
     return {
+        "events": total("events"),
         "impacts": total("impacts"),
+        "contact_phases": total("contact_phases"),
+        "phase_ends": dict(sorted(ends.items())),
         "paper_impacts": sum(r["impacts"] for r in paper),
         "random_impacts": sum(r["impacts"] for r in random_runs),
+        "phases_scene_events": total("events", phase_runs),
+        "phases_scene_impacts": total("impacts", phase_runs),
         "rk4_impacts": sum(r["impacts"] for r in reports if r["method"] == "rk4"),
         "runs": len(reports),
         "random_scenes": len(random_runs),
+        "phases_scenes": len(phase_runs),
+        "static_phases_scenes": total("static", phase_runs),
         "penetrations": total("penetrations"),
         "detached": total("detached"),
         "non_finite_rows": total("non_finite_rows"),
         "energy_created": total("energy_created"),
+        "contact_penetrations": total("contact_penetrations"),
+        "contact_detached": total("contact_detached"),
+        "contact_non_finite_rows": total("contact_non_finite_rows"),
+        "transition_energy_created": total("transition_energy_created"),
+        "transition_jumps": total("transition_jumps"),
+        "unlinked_phases": total("unlinked_phases"),
+        "phase_energy_created": total("phase_energy_created"),
+        "transitions": total("transitions"),
+        "snaps": total("snaps"),
+        "worst_snap": extreme("worst_snap", max, -math.inf),
+        "static_phases": total("static_phases"),
         "lifts": total("lifts"),
         "separating": total("separating"),
         "separating_rule_on": int(
@@ -523,18 +927,35 @@ def _aggregate(reports: list[dict[str, Any]]) -> dict[str, Any]:
         ),
         "resume_checks": total("resume_checked"),
         "resume_interrupted": total("resume_interrupted"),
+        "resume_phases": total("resume_phases"),
+        "resume_phases_interrupted": int(
+            sum(r.get("resume_interrupted", 0) for r in reports if r.get("resume_phases"))
+        ),
         "resume_mismatches": total("resume_mismatches"),
-        "lowest_clearance": lowest,
-        "highest_clearance": highest,
-        "worst_energy_excess": worst,
+        "lowest_clearance": extreme("lowest_clearance", min, math.inf),
+        "highest_clearance": extreme("highest_clearance", max, -math.inf),
+        "contact_lowest_clearance": extreme("contact_lowest_clearance", min, math.inf),
+        "contact_highest_clearance": extreme("contact_highest_clearance", max, -math.inf),
+        "worst_energy_excess": extreme("worst_energy_excess", max, -math.inf),
+        "worst_transition_excess": extreme("worst_transition_excess", max, -math.inf),
+        "worst_phase_energy_ratio": extreme("worst_phase_energy_ratio", max, -math.inf),
         "stops": dict(sorted(stops.items())),
+        "phases_stops": dict(sorted(phase_stops.items())),
         "paper": {r["label"]: {"impacts": r["impacts"], "stop": r.get("stop")} for r in paper},
         "cpu": sum(r.get("cpu", 0.0) for r in reports),
         "violations": [
             f"{r['label']}: {e}"
             for r in reports
-            for e in r.get("examples", []) + r.get("energy_examples", [])
+            for e in r.get("examples", [])
+            + r.get("energy_examples", [])
+            + r.get("contact_examples", [])
+            + r.get("phase_examples", [])
         ][:20],
+        "violating_draws": [
+            {"label": r["label"], "method": r["method"], "draw": r["draw"]}
+            for r in reports
+            if r.get("draw") is not None and any(r.get(key) for key in MUST_BE_ZERO)
+        ][:10],
         "stop_reasons": sorted(
             {
                 f"{r['stop']}: {r['reason']}"
@@ -550,6 +971,13 @@ MUST_BE_ZERO = (
     "detached",
     "non_finite_rows",
     "energy_created",
+    "contact_penetrations",
+    "contact_detached",
+    "contact_non_finite_rows",
+    "transition_energy_created",
+    "transition_jumps",
+    "unlinked_phases",
+    "phase_energy_created",
     "resume_mismatches",
 )
 
@@ -557,26 +985,42 @@ MUST_BE_ZERO = (
 def format_summary(s: dict[str, Any]) -> str:
     """The aggregated report as text."""
     lines = [
-        f"soak: {s['impacts']:,} impacts in {s['runs']} runs "
-        f"({s['paper_impacts']:,} on the paper scenes, {s['random_impacts']:,} on "
-        f"{s['random_scenes']} random scenes, {s['rk4_impacts']:,} of them with rk4), "
+        f"soak: {s['events']:,} events ({s['impacts']:,} impacts, {s['contact_phases']:,} "
+        f"contact phases) in {s['runs']} runs ({s['paper_impacts']:,} impacts on the paper "
+        f"scenes, {s['random_impacts']:,} on {s['random_scenes']} random scenes, "
+        f"{s['rk4_impacts']:,} of them with rk4; {s['phases_scenes']} random scenes with "
+        f'contact.model = "phases", {s["static_phases_scenes"]} of them static: '
+        f"{s['phases_scene_events']:,} events, {s['phases_scene_impacts']:,} impacts), "
         f"seed {s['seed']}, {s['workers']} workers, {s['wall_time']:.0f} s wall, "
         f"{s['cpu']:.0f} s CPU",
+        "  contact phases by mode/end: "
+        + ", ".join(f"{key} {n:,}" for key, n in s["phase_ends"].items()),
     ]
     for key in MUST_BE_ZERO:
-        lines.append(f"  {key:<20} {s[key]}")
+        lines.append(f"  {key:<26} {s[key]}")
     lines += [
         f"  clearance at impacts: {s['lowest_clearance']:.3g} .. {s['highest_clearance']:.3g} m",
-        f"  worst energy excess (relative): {s['worst_energy_excess']:.3g}",
+        f"  clearance at contact phases' ends: {s['contact_lowest_clearance']:.3g} .. "
+        f"{s['contact_highest_clearance']:.3g} m",
+        f"  worst energy excess at impacts (relative): {s['worst_energy_excess']:.3g}",
+        f"  transitions into a phase audited: {s['transitions']:,}, worst relative "
+        f"kinetic-energy excess {s['worst_transition_excess']:.3g} ({s['snaps']:,} rolling "
+        f"starts with the spin snapped within mode_for's tolerance, largest energy change "
+        f"{s['worst_snap']:.3g})",
+        f"  phases on a static boundary audited: {s['static_phases']:,}, worst energy "
+        f"growth {s['worst_phase_energy_ratio']:.3g} of the tolerance",
         f"  lifts of a lying ball (designed energy input, audited): {s['lifts']:,}",
         f"  impacts at a separating contact (w_n >= 0, no lift): {s['separating']:,} "
         f"({s['separating_rule_on']:,} with elastic_below > 0)",
         f"  energy created with elastic_below = 0: {s['energy_created_rule_off']}, "
         f"with rk4: {s['energy_created_rk4']}",
-        f"  resume checks: {s['resume_checks']} ({s['resume_interrupted']} interrupted mid-run)",
-        f"  random-scene outcomes: {s['stops']}",
+        f"  resume checks: {s['resume_checks']} ({s['resume_interrupted']} interrupted "
+        f"mid-run; {s['resume_phases']} phases scenes, {s['resume_phases_interrupted']} "
+        f"interrupted)",
+        f"  random-scene outcomes: {s['stops']} (phases scenes: {s['phases_stops']})",
     ]
     lines += [f"  violation: {v}" for v in s["violations"]]
+    lines += [f"  violating draw: {json.dumps(d)}" for d in s["violating_draws"]]
     lines += [f"  stop: {r}" for r in s["stop_reasons"]]
     return "\n".join(lines)
 
@@ -584,12 +1028,19 @@ def format_summary(s: dict[str, Any]) -> str:
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(
         prog="python -m bench.soak",
-        description="Soak test: impacts on the paper scenes and random valid scenes, "
-        "each audited for penetration, non-finite values, energy creation "
+        description="Soak test: impacts and contact phases on the paper scenes and random "
+        "valid scenes, each audited for penetration, non-finite values, energy creation "
         "and resume equality.",
     )
-    parser.add_argument("--impacts", type=int, default=1_000_000, help="total impacts")
-    parser.add_argument("--quick", action="store_true", help="20,000 impacts, small jobs")
+    parser.add_argument(
+        "--impacts",
+        "--events",
+        dest="events",
+        type=int,
+        default=1_000_000,
+        help="total events: impacts, plus contact phases in phases scenes (default 10^6)",
+    )
+    parser.add_argument("--quick", action="store_true", help="20,000 events, small jobs")
     parser.add_argument("--seed", type=int, default=2024, help="random seed (default 2024)")
     parser.add_argument(
         "--workers",
@@ -600,7 +1051,7 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--json", metavar="PATH", help="also write the report as JSON")
     parser.add_argument("--verbose", action="store_true", help="one line per run")
     args = parser.parse_args(argv)
-    total = 20_000 if args.quick else args.impacts
+    total = 20_000 if args.quick else args.events
     echo = (lambda line: print(line, flush=True)) if args.verbose else (lambda line: None)
     summary = soak(total, seed=args.seed, workers=args.workers, quick=args.quick, echo=echo)
     print(format_summary(summary))

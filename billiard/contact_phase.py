@@ -13,8 +13,11 @@ fourth-order continuous extension, on which the phase's end is located:
   can hold, else the ball slides the other way);
 * ``wall-end``: s leaves the wall's interval [lo, hi] (a kink, the end of the curve):
   the ball flies on from there;
-* ``impact``: the centre reaches another wall's offset curve (the wedge's vertex): the
-  engine applies the impact law there.
+* ``impact``: the centre reaches another wall's offset curve (the wedge's vertex) or
+  the lid: the engine applies the impact law there (at the escape level of an open
+  container the run ends). A phase that starts on the other wall's offset
+  curve too (in the vertex, where that gap is zero to rounding and may be -1e-18 m)
+  ends there at once when the centre moves into that wall (by more than 1e-12 m).
 
 Each end is a root of a smooth function of time found by bisection-secant (Illinois) on
 the dense output to 1e-13 s.
@@ -39,6 +42,10 @@ CONTACT_MODES = ("roll", "slide")
 
 #: time resolution (s) of a phase's end
 EVENT_TOL = 1e-13
+#: A phase that starts touching another wall (its gap zero to rounding, possibly just
+#: below zero, as in the wedge's vertex) ends with an impact there at once when the
+#: centre then goes deeper into it than this (m; the impact locator's resolution).
+CONTACT_GAP = 1e-12
 #: absolute error allowed per step on s (m), s_dot (m/s) and u3 (rad/s), added to
 #: rtol times the size of each
 _ATOL = (1e-12, 1e-12, 1e-9)
@@ -196,8 +203,9 @@ class ContactModel:
         ``limit`` seconds.
 
         Args:
-            gaps: for each other wall, gap(px, py) (m) of the centre (relative to the
-                boundary) from that wall's offset curve; its zero is an ``impact``.
+            gaps: for each other surface (wall, lid, escape level), gap(px, py) (m)
+                of the centre (relative to the boundary) from it (a wall's offset curve,
+                the lid's level less r, the escape level); its zero is an ``impact``.
             samples: increasing times (s, from the phase's start; an iterable, read as
                 far as the phase goes) at which to report the state to
                 ``on_sample(tau, y)``.
@@ -295,7 +303,11 @@ class ContactModel:
             crossed = [
                 i
                 for i, (a, b) in enumerate(zip(c_prev, c_new, strict=True))
-                if a > 0.0 >= b or (a == 0.0 and b < 0.0)
+                if a > 0.0 >= b
+                or (a == 0.0 and b < 0.0)
+                # another wall touched at the start (the wedge's vertex: its gap is 0
+                # to rounding, either sign) and then entered: an impact at the start
+                or (i >= 4 and a < 0.0 and b < -CONTACT_GAP)
             ]
             end_t, end_y, end_i = t_b, y_new, -1
             if crossed:

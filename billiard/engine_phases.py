@@ -130,11 +130,18 @@ class ContactPhases:
                 return
 
     def _other_gaps(self, index: int) -> list[Callable[[float, float], float]]:
+        """The gaps (m) a phase on surface ``index`` watches, in the order of
+        ``boundary.surfaces`` without ``index``: the other walls' offset curves, the lid
+        and the escape level (a ball rolling or sliding up a wall reaches them too)."""
         gaps = []
-        for j, surface in enumerate(self.boundary.offsets):
-            if j != index:
+        for j, surface in enumerate(self.boundary.surfaces):
+            if j == index:
+                continue
+            if surface.kind == "wall":
                 warm = self.warm[j]
                 gaps.append(lambda px, py, o=surface, w=warm: py - o.height(px, w))
+            else:
+                gaps.append(lambda px, py, level=surface.level: level - py)
         return gaps
 
     def _emit_samples(self, t_from: float, t_to: float, state_at: Callable) -> None:
@@ -267,14 +274,29 @@ class ContactPhases:
     def _impact_from_contact(
         self, other: int, index: int, t: float, tau: float, theta: float, q3: float
     ) -> ImpactRecord:
-        """The ball in contact with one wall reaches another (the wedge's vertex)."""
+        """The ball in contact with one wall reaches another (the wedge's vertex), the
+        lid, or the escape level (which ends the run)."""
         j = other if other < index else other + 1
-        surface = self.boundary.offsets[j]
+        surface = self.boundary.surfaces[j]
         ball = self._ball
-        px, _, _, _ = self.drive.to_boundary_frame(theta, ball.q1, ball.q2, ball.u1, ball.u2)
+        if surface.kind == "escape":
+            raise SimulationError(
+                f"ball escaped above escape_height = {self.scene.boundary.escape_height!r} m "
+                f"at t = {t:.9g} s after impact {self._impacts}",
+                Status.ESCAPED,
+            )
+        px, py, vx, vy = self.drive.to_boundary_frame(theta, ball.q1, ball.q2, ball.u1, ball.u2)
         s_o, z, _ = surface.contact(px, self.warm[j])
         vb1, vb2 = self.drive.boundary_velocity(theta)
-        res = self.impact.apply(ball, Contact(z, vb1, vb2, True))
+        pressing = True
+        if surface.kind == "lid":
+            # pressed into the lid when the ball's free acceleration relative to the
+            # boundary points up into it
+            a1, a2 = self.flight.acceleration(ball.u1, ball.u2)
+            ab = self.drive.acceleration(theta)
+            ax, ay = (a1 - ab, a2) if self.drive.horizontal else (a1, a2 - ab)
+            pressing = surface.gap_accel(px, py, vx, vy, ax, ay, self.warm[j]) < 0.0
+        res = self.impact.apply(ball, Contact(z, vb1, vb2, pressing))
         sc = self.scene
         u4, un = _ball.frame_velocity(res.u1, res.u2, z)
         energy = _ball.energy(ball.q2, res.u1, res.u2, res.u3, sc.ball.mass, sc.ball.radius,

@@ -8,6 +8,10 @@ initial position inside the container, any velocities and spin.
 * With the drive off, no impact creates energy (the low-velocity rule's lift of a
   lying ball adds exactly its designed amount), and with drag off the mechanical energy
   recorded after each impact never exceeds the one before by more than that.
+* Both contact models are drawn (``contact.model`` "impacts" or "phases"); with
+  "phases" the contact phases and the transitions into them are audited too
+  (:class:`bench.soak.PhaseAudit`: no energy created in the boundary's frame, no jump),
+  and a phases scene runs for at most ``PHASES_TEST_DURATION`` of simulated time.
 
 The default runs take well under a minute (fixed examples, ``derandomize``); the
 ``slow`` variants explore many more random examples with longer runs.
@@ -24,12 +28,14 @@ import pytest
 from hypothesis import HealthCheck, event, given, settings
 from hypothesis import strategies as st
 
-from bench.soak import CURVES, ImpactAudit, scene_from_draw, stop_kind
+from bench.soak import CURVES, MODELS, AuditedSimulation, scene_from_draw, stop_kind
 from billiard.checkpoint import read_checkpoint
 from billiard.curves import load_curve
 from billiard.errors import GeometryError
 from billiard.record import MemoryRecorder
+from billiard.scene import with_values
 from billiard.simulate import CHECKPOINT_NAME, Simulation, simulate
+from billiard.status import Status
 
 DOCUMENTED_STOPS = [
     re.compile(p)
@@ -48,8 +54,16 @@ DOCUMENTED_STOPS = [
         r"run.step = \S+ s is too coarse for this scene \(use run.step <= \S+ s\): 3 impacts "
         r"in a row were found within \S+ s of the previous one, where the ball had just left "
         r"the wall \(it comes back within one step\) after impact \d+ \(t = \S+ s\)",
+        # contact.model = "phases"
+        r"the ball rests on the boundary, moving with it: nothing more happens",
+        r"contact phases of zero duration piled up at t = \S+ s",
+        r"the contact phase's step-size control failed \(60 rejected steps\)",
+        r"non-finite state at the end of a contact phase \(t = \S+ s\)",
     )
 ]
+#: Simulated time (s) a phases scene of the property tests runs at most (the soak's
+#: scenes run for bench.soak.PHASES_DURATION).
+PHASES_TEST_DURATION = 2.0
 DOCUMENTED_GEOMETRY = re.compile(
     r"(ball radius .* exceeds the boundary's radius of curvature .*"
     r"|initial position .* puts the ball .* into the (wall|lid).*"
@@ -58,7 +72,7 @@ DOCUMENTED_GEOMETRY = re.compile(
 )
 
 
-def draws(elastic_below=(0.0, 1e-3, 1e-2, 3e-2), amplitude=None):
+def draws(elastic_below=(0.0, 1e-3, 1e-2, 3e-2), amplitude=None, models=MODELS):
     """The primitive choices of :func:`bench.soak.scene_from_draw`."""
     two_pi = 2.0 * math.pi
     unit = st.floats(0.0, 1.0)
@@ -89,6 +103,7 @@ def draws(elastic_below=(0.0, 1e-3, 1e-2, 3e-2), amplitude=None):
             "v2": st.floats(-2.0, 2.0),
             "omega": st.floats(-300.0, 300.0),
             "t0": st.floats(0.0, 50.0),
+            "model": st.sampled_from(models),
         }
     )
 
@@ -106,10 +121,19 @@ def curve_cache(tmp_path_factory):
         yield
 
 
+def scene_for_test(draw: dict):
+    """The soak's scene of a draw; a phases scene with the tests' shorter time limit."""
+    scene = scene_from_draw(draw)
+    assert scene.contact.model == draw["model"]
+    if draw["model"] == "phases":
+        scene = with_values(scene, {"run.duration": PHASES_TEST_DURATION})
+    return scene
+
+
 def check_run(draw: dict, method: str, impacts: int) -> None:
     n = impacts if method == "event" else max(1, impacts // 25)  # rk4: ~1 ms per step
     try:
-        scene = scene_from_draw(draw)
+        scene = scene_for_test(draw)
         with tempfile.TemporaryDirectory() as out:
             result = simulate(scene, collisions=n, method=method, out_dir=out)
             status = read_checkpoint(f"{out}/{CHECKPOINT_NAME}")["status"]
@@ -119,8 +143,10 @@ def check_run(draw: dict, method: str, impacts: int) -> None:
         event("geometry error")
         return
     reason = result.stop_reason
-    event(f"{method}: {stop_kind(result.status)}")
-    if reason is None:
+    event(f"{method} {draw['model']}: {stop_kind(result.status)}")
+    if reason is None and result.status == Status.TIME_LIMIT:
+        assert draw["model"] == "phases" and len(result) <= n and status == "complete"
+    elif reason is None:
         assert len(result) == n and status == "complete"
     else:
         assert "\n" not in reason
@@ -140,18 +166,27 @@ def check_run(draw: dict, method: str, impacts: int) -> None:
 
 def check_energy(draw: dict, method: str, impacts: int) -> None:
     try:
-        simulation = Simulation(scene_from_draw(draw), method)
+        simulation = AuditedSimulation(scene_for_test(draw), method, history=[])
     except GeometryError:
         return
     scene = simulation.scene
-    audit = ImpactAudit(simulation.impact, history=[])
-    simulation.impact = audit
+    audit = simulation.impact_audit
     rows = MemoryRecorder()
     simulation.run(impacts, rows)
     assert audit.created == 0, audit.examples
+    phases = simulation.phase_audit
+    if phases is not None:
+        event(f"phases: {'some' if phases.phases else 'no'} contact phases")
+        assert phases.transitions + phases.unlinked == phases.phases
+        for count in ("transition_energy_created", "transition_jumps", "unlinked"):
+            assert getattr(phases, count) == 0, (count, phases.examples)
+        assert phases.phase_energy_created == 0, phases.examples
+        if phases.static:
+            assert phases.static_phases == phases.phases
     c = rows.columns()
     drag_free = scene.air.coefficients == (0.0, 0.0) and not scene.air.magnus
-    if len(c["n"]) < 2 or not drag_free or scene.drive.amplitude != 0.0:
+    if len(c["n"]) < 2 or not drag_free or scene.drive.amplitude != 0.0 or phases is not None:
+        # (with phases, the contact phases between impacts are audited above instead)
         return
     # a fixed boundary and drag-free flights conserve energy: each impact's record can
     # exceed the previous one only by a lift's allowance (and rounding)
@@ -230,6 +265,7 @@ RULE_OFF = {  # a drive-off scene with the low-velocity rule disabled
     "v2": 0.722504758897192,
     "omega": 211.17248570827564,
     "t0": 6.962526447157391,
+    "model": "impacts",
 }
 RK4_DEPARTURE = {  # rk4, rule on, a vertical drive
     "curve": "parabola",
@@ -255,6 +291,7 @@ RK4_DEPARTURE = {  # rk4, rule on, a vertical drive
     "v2": 0.15216389256099339,
     "omega": -177.07670539813535,
     "t0": 40.78181529175555,
+    "model": "impacts",
 }
 
 
@@ -282,6 +319,7 @@ def test_soak_jobs_audit_runs_and_resumes():
     paper = run_job(Job("wedge-6.6hz", 300, scene_name="wedge-6.6hz"))
     rng = random.Random(7)
     draw = {**random_draw(rng), "elastic_below": 0.01, "lid": True, "start": "rest"}
+    draw["model"] = "impacts"
     scene = run_job(Job("random-0", 300, draw=draw, resume_at=123))
     for report in (paper, scene):
         assert report["impacts"] >= 1 and report["stop"] in ("complete", "collapse")
