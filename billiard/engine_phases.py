@@ -326,6 +326,8 @@ class ContactPhases:
         on one wall) and both walls press it. The chattering between the two walls that
         this skips would carry the ball's velocity relative to the boundary, at most the
         rebound speed, to zero: it is dropped (never energy created), the spin is kept."""
+        if self.boundary.surfaces[j].kind != "wall":
+            return False  # the lid holds nothing
         e = self.contact_model.e
         rebound = e * abs(res.wn)
         if not (rebound <= self.scene.contact.elastic_below or res.regime == "elastic"):
