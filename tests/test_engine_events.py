@@ -125,10 +125,13 @@ def check_flights(scene, c, first, last, samples=300):
             g_lo, g_hi = gap_at(lo), gap_at(hi)
             if delta < tof and g_lo > 0.0 > g_hi:
                 root = brentq(gap_at, lo, hi, xtol=1e-16, rtol=4 * np.finfo(float).eps)
-                # the reference's own rounding: ~1e-15 m of position at t ~ 10 s (drive
-                # phase w t of hundreds of rad), which is > 1e-12 s for a slow approach
+                # the reference's own rounding: its boundary position A sin(w t + phase)
+                # carries the rounding of the drive phase, eps (w t), times A (1e-15 m at
+                # t ~ 10 s, 8e-15 m at t ~ 80 s), plus ~1e-14 m of the clearance itself;
+                # for a slow approach that exceeds 1e-12 s
                 rate = (g_hi - g_lo) / (hi - lo)
-                tol = max(1e-12, 1e-14 / abs(rate))
+                phase_rounding = np.finfo(float).eps * ref.w * t1 * ref.a
+                tol = max(1e-12, (1e-14 + 2.0 * phase_rounding) / abs(rate))
                 assert abs(root - t1) <= tol, f"impact {n}: {t1!r} vs reference {root!r}"
                 checked += 1
                 break
