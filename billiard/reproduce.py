@@ -622,8 +622,8 @@ def _models_section(
     for a, b in zip(stats, phases, strict=True):
         extra_a = a.impacts - a.camera_impacts
         extra_b = b.impacts - b.camera_impacts
-        removed = a.impacts - b.impacts
-        accounted = f"{removed / extra_a:.0%}" if extra_a > 0 else "-"
+        # the extra impacts (beyond the camera's count) that phases no longer make
+        accounted = f"{(extra_a - extra_b) / extra_a:.0%}" if extra_a > 0 else "-"
         extra_lines.append(
             f"| {a.scene} | {a.impacts} | {a.camera_impacts} | {extra_a} | {b.impacts} | "
             f"{b.camera_impacts} | {extra_b} | {accounted} |"
@@ -643,7 +643,10 @@ def _models_section(
             f"{a.scene} {a.impacts / a.camera_impacts:.2f} -> {b.impacts / b.camera_impacts:.2f}"
             for a, b in chaotic
         )
-        accounted = [(a.impacts - b.impacts) / (a.impacts - a.camera_impacts) for a, b in chaotic]
+        accounted = [
+            1.0 - (b.impacts - b.camera_impacts) / (a.impacts - a.camera_impacts)
+            for a, b in chaotic
+        ]
         extra_text = (
             f"Where the impact model's count exceeds the camera's by more than a tenth "
             f"({', '.join(a.scene for a, _ in chaotic)}), the ratio of all impacts to "
