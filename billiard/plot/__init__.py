@@ -22,11 +22,12 @@ One module per figure:
 | ``titles`` | figure titles and legend labels: :func:`scene_title` |
 | ``outline`` | the boundary's outline y = f(x) and the drive's displacement D(t) |
 | ``flights`` | flight arcs between impacts (exact parabola, or integrated with drag) |
+| ``contacts`` | a phases run's path: flights, and rolling, sliding and held stretches |
 | ``maps`` | :func:`return_map`, :func:`time_map` |
 | ``phase`` | :func:`phase_plot`, :func:`phase_coordinates` |
 | ``trajectory`` | :func:`trajectory`, :func:`default_window` |
 | ``animation`` | :func:`animate` (GIF) |
-| ``run`` | :func:`plot_run` (``billiard plot DIR``), :func:`load_run`, :func:`read_scene` |
+| ``run`` | :func:`plot_run` (``billiard plot DIR``), :func:`load_run`, :func:`load_sides` |
 | ``paper`` | :func:`paper_figure`, :func:`paper_phase_figure`, :func:`paper_models_figure` |
 """
 
@@ -40,7 +41,7 @@ from .maps import return_map, time_map
 from .outline import drive_offset
 from .paper import paper_figure, paper_models_figure, paper_phase_figure
 from .phase import phase_coordinates, phase_plot
-from .run import FIGURE_NAMES, load_run, plot_run, read_scene
+from .run import FIGURE_NAMES, load_run, load_sides, plot_run, read_scene
 from .titles import scene_title
 from .trajectory import default_window, trajectory
 
@@ -52,6 +53,7 @@ __all__ = [
     "drive_offset",
     "flight_positions",
     "load_run",
+    "load_sides",
     "paper_figure",
     "paper_models_figure",
     "paper_phase_figure",

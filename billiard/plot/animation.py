@@ -13,6 +13,7 @@ from PIL import Image
 
 from ..scene import Scene
 from .common import MM, Columns, Window, cannot_write, column, new_figure
+from .contacts import MODE_LABELS, MODE_STYLES, PhasePath, Side, joined, phase_path
 from .flights import arcs, flight_positions
 from .outline import drive_offset
 from .trajectory import boundary_positions, view, window_rows
@@ -36,6 +37,40 @@ def _ball_centres(
     return x, y, starts
 
 
+def _phase_centres(
+    path: PhasePath, frame_times: np.ndarray
+) -> tuple[np.ndarray, np.ndarray, list[str], list[str]]:
+    """The centre (m) at each frame time (s) on the piece of ``path`` holding it, what the
+    ball is doing then (for the clock) and the mode (``flight`` or a contact mode).
+
+    A frame in no piece (the run's start before its first recorded event, or a gap the
+    run files do not describe) keeps the ball where the last piece before it ended (or
+    the first after it starts)."""
+    x = np.full(frame_times.shape, np.nan)
+    y = np.full(frame_times.shape, np.nan)
+    what = [""] * frame_times.size
+    modes = ["flight"] * frame_times.size
+    pieces = path.pieces
+    for piece in pieces:
+        inside = np.flatnonzero((frame_times >= piece.t[0]) & (frame_times <= piece.t[-1]))
+        if inside.size == 0:
+            continue
+        x[inside], y[inside] = piece.positions(frame_times[inside])
+        if piece.kind == "flight":
+            text = piece.source if piece.source.startswith("impact") else "flight"
+            text = text if text == "flight" else f"flight after {text}"
+        else:
+            text = f"{MODE_LABELS[piece.kind]}, wall {piece.wall}"
+        for i in inside:
+            what[i], modes[i] = text, piece.kind
+    ends = sorted((p.t[-1], p.x[-1], p.y[-1]) for p in pieces)
+    firsts = sorted((p.t[0], p.x[0], p.y[0]) for p in pieces)
+    for i in np.flatnonzero(np.isnan(x)):
+        before = [e for e in ends if e[0] <= frame_times[i]]
+        _, x[i], y[i] = before[-1] if before else firsts[0]
+    return x, y, what, modes
+
+
 def animate(
     columns: Columns,
     scene: Scene,
@@ -45,6 +80,8 @@ def animate(
     *,
     max_frames: int = 150,
     dpi: int = 80,
+    contacts: Side | None = None,
+    samples: Side | None = None,
 ) -> Path:
     """Write an animated GIF of the ball inside the moving boundary.
 
@@ -60,6 +97,13 @@ def animate(
     per second, so it is in slow or fast motion; the speed relative to real time is
     written in the frame.
 
+    With ``contacts`` (a run of ``contact.model = "phases"``) the frames span the window's
+    flights and contact phases (see :mod:`billiard.plot.contacts`): the ball flies only
+    between an impact or a phase's end and the next impact or phase, and rolls, slides
+    or is held along the wall in between (from ``samples`` when given, else rebuilt); the
+    ball and the faint path take the colour of the contact mode there, and the clock
+    names the motion.
+
     Args:
         columns: a run's columns.
         scene: the run's scene.
@@ -70,6 +114,8 @@ def animate(
         max_frames: number of frames (at most; fewer if the window has one impact).
         dpi: pixels per inch of the frame, 5 inches wide (400 px at 80 dpi), as high
             as the view needs.
+        contacts: the run's contact phases (the columns of contacts.csv), or None.
+        samples: the run's samples (the columns of trajectory.csv), or None.
 
     Returns:
         The path written.
@@ -80,21 +126,48 @@ def animate(
     rows = window_rows(columns, scene, window)
     r = scene.ball.radius
     t = column(columns, "t")
-    t0, t1 = float(t[rows[0]]), float(t[rows[-1]])
+    phases = None if contacts is None else phase_path(columns, rows, scene, contacts, samples)
+    if phases is None:
+        t0, t1 = float(t[rows[0]]), float(t[rows[-1]])
+    else:
+        t0, t1 = phases.t_lo, phases.t_hi
     count = max_frames if t1 > t0 else 1
     frame_times = np.linspace(t0, t1, count)
-    arc_x, arc_y = arcs(columns, rows, scene)
     q1 = column(columns, "q1")[rows]
     q2 = column(columns, "q2")[rows]
-    x_lim, y_lim, show_lid = view(scene, np.concatenate([q1, arc_x]), np.concatenate([q2, arc_y]))
+    if phases is None:
+        arc_x, arc_y = arcs(columns, rows, scene)
+        ball_x, ball_y, starts = _ball_centres(columns, rows, frame_times, scene)
+        texts = [f"impact {int(columns['n'][row])}" for row in starts]
+        colors = ["tab:blue"] * count
+        all_x, all_y = np.concatenate([q1, arc_x]), np.concatenate([q2, arc_y])
+    else:
+        arc_x, arc_y = joined(phases.flights)
+        ball_x, ball_y, texts, modes = _phase_centres(phases, frame_times)
+        colors = [
+            "tab:blue" if mode == "flight" else str(MODE_STYLES[mode]["color"]) for mode in modes
+        ]
+        stretch_x, stretch_y = phases.points()
+        all_x = np.concatenate([q1, arc_x, stretch_x])
+        all_y = np.concatenate([q2, arc_y, stretch_y])
+    x_lim, y_lim, show_lid = view(scene, all_x, all_y)
     grid, height = boundary_positions(scene, x_lim)
     direction = scene.drive.direction
-    ball_x, ball_y, starts = _ball_centres(columns, rows, frame_times, scene)
 
     aspect = (y_lim[1] - y_lim[0]) / (x_lim[1] - x_lim[0])
     fig = new_figure((5.0, float(np.clip(4.2 * aspect + 0.9, 2.5, 6.5))), dpi=dpi)
     ax = fig.add_subplot()
     ax.plot(arc_x * MM, arc_y * MM, color="0.8", linewidth=0.7, zorder=0)
+    if phases is not None:
+        for piece in phases.stretches:
+            ax.plot(
+                piece.x * MM,
+                piece.y * MM,
+                color=MODE_STYLES[piece.kind]["color"],
+                alpha=0.45,
+                linewidth=1.4,
+                zorder=0.5,
+            )
     (boundary,) = ax.plot(grid * MM, height * MM, color="black", linewidth=1.5)
     ceiling = scene.boundary.ceiling
     lid = None
@@ -132,8 +205,9 @@ def animate(
     fig.set_layout_engine("none")  # freeze the layout: the frames only move artists
     background = canvas.copy_from_bbox(fig.bbox)
     frames: list[Image.Image] = []
-    for tf, x, y, row in zip(frame_times, ball_x, ball_y, starts, strict=True):
+    for tf, x, y, text, color in zip(frame_times, ball_x, ball_y, texts, colors, strict=True):
         ball.center = (float(x) * MM, float(y) * MM)
+        ball.set_facecolor(color)
         offset = float(drive_offset(scene, tf))
         if direction == "vertical":
             boundary.set_data(grid * MM, (height + offset) * MM)
@@ -141,7 +215,7 @@ def animate(
                 lid.set_ydata([(ceiling + offset) * MM] * 2)
         else:
             boundary.set_data((grid + offset) * MM, height * MM)
-        clock.set_text(f"t = {tf:8.3f} s\nimpact {int(columns['n'][row])}")
+        clock.set_text(f"t = {tf:8.3f} s\n{text}")
         canvas.restore_region(background)
         for artist in moving:
             ax.draw_artist(artist)

@@ -18,7 +18,7 @@ from ..generated import ball as _ball
 from ..scene import Scene
 from .common import Columns, RunDataError, column
 
-__all__ = ["arcs", "flight_label", "flight_positions"]
+__all__ = ["arc_count", "arcs", "flight_from_state", "flight_label", "flight_positions"]
 
 RTOL = 1e-9
 ATOL = 1e-12  # m and m/s
@@ -68,12 +68,28 @@ def flight_positions(
     Returns:
         ``(q1, q2)`` arrays shaped like ``tau``.
     """
-    tau = np.asarray(tau, dtype=float)
-    q1 = float(columns["q1"][row])
-    q2 = float(columns["q2"][row])
-    v1 = float(columns["v1"][row])
-    v2 = float(columns["v2"][row])
     spin = float(columns["omega"][row]) if "omega" in columns else 0.0
+    state = tuple(float(columns[name][row]) for name in ("q1", "q2", "v1", "v2"))
+    name = f"impact {int(columns['n'][row])}" if "n" in columns else f"row {row}"
+    return flight_from_state((*state, spin), tau, scene, f"the flight after {name}")
+
+
+def flight_from_state(
+    state: tuple[float, float, float, float, float],
+    tau: np.ndarray,
+    scene: Scene,
+    what: str = "the flight",
+) -> tuple[np.ndarray, np.ndarray]:
+    """Centre position (m) at times ``tau`` (s, >= 0, non-decreasing) of a flight that
+    starts from ``state`` = ``(q1, q2, v1, v2, omega)`` (m, m/s, rad/s).
+
+    ``what`` names the flight in the error raised when it cannot be integrated.
+
+    Returns:
+        ``(q1, q2)`` arrays shaped like ``tau``.
+    """
+    tau = np.asarray(tau, dtype=float)
+    q1, q2, v1, v2, spin = (float(v) for v in state)
     rhs = _rhs(scene, spin)
     if rhs is None:
         g = scene.run.gravity
@@ -94,14 +110,16 @@ def flight_positions(
         dense_output=True,
     )
     if not solution.success:
-        raise RunDataError(
-            f"the flight after impact {int(columns['n'][row])} cannot be integrated: "
-            f"{solution.message}"
-        )
+        raise RunDataError(f"{what} cannot be integrated: {solution.message}")
     x, y = solution.sol(flat)[:2]
     # the dense output matches the steps' ends; use the exact end point there
     x[flat == end], y[flat == end] = solution.y[0, -1], solution.y[1, -1]
     return x.reshape(tau.shape), y.reshape(tau.shape)
+
+
+def arc_count(duration: float) -> int:
+    """Points drawn along a flight (or a contact stretch) of ``duration`` seconds."""
+    return int(min(200, max(8, duration * 2000)))
 
 
 def arcs(columns: Columns, rows: np.ndarray, scene: Scene) -> tuple[np.ndarray, np.ndarray]:
@@ -116,7 +134,7 @@ def arcs(columns: Columns, rows: np.ndarray, scene: Scene) -> tuple[np.ndarray, 
         if nxt != row + 1:
             continue
         duration = max(float(tof[nxt]), 0.0)
-        count = int(min(200, max(8, duration * 2000)))
+        count = arc_count(duration)
         x, y = flight_positions(columns, int(row), np.linspace(0.0, duration, count), scene)
         xs += [x, np.array([np.nan])]
         ys += [y, np.array([np.nan])]

@@ -30,7 +30,7 @@ from .phase import PHASE_CAPTION, phase_plot
 from .titles import scene_title
 from .trajectory import trajectory, window_rows
 
-__all__ = ["FIGURE_NAMES", "load_run", "plot_run", "read_scene"]
+__all__ = ["FIGURE_NAMES", "load_run", "load_sides", "plot_run", "read_scene"]
 
 
 def read_scene(path: str | os.PathLike[str]) -> Scene:
@@ -73,6 +73,31 @@ def load_run(run_dir: str | os.PathLike[str]) -> tuple[dict[str, np.ndarray], Sc
     return columns, read_scene(run_dir / "scene.toml")
 
 
+def load_sides(
+    run_dir: str | os.PathLike[str],
+) -> tuple[dict[str, np.ndarray] | None, dict[str, np.ndarray] | None]:
+    """The columns of ``run_dir/contacts.csv`` and ``run_dir/trajectory.csv`` (a run of
+    ``contact.model = "phases"``, and one with ``--sample``), each None when absent.
+
+    Raises:
+        RunDataError: a file is present but cannot be read (one line, naming it).
+    """
+    from ..sidecsv import CONTACTS_NAME, TRAJECTORY_NAME, read_side_csv
+
+    out: list[dict[str, np.ndarray] | None] = []
+    for name in (CONTACTS_NAME, TRAJECTORY_NAME):
+        path = Path(run_dir) / name
+        if not path.is_file():
+            out.append(None)
+            continue
+        try:
+            out.append(read_side_csv(path))
+        except (OSError, UnicodeDecodeError, ValueError, IndexError) as exc:
+            reason = " ".join(str(exc).split()) or type(exc).__name__
+            raise RunDataError(f"{path}: cannot read: {reason}") from None
+    return out[0], out[1]
+
+
 def _legend_outside(fig: Figure, ax: Axes, caption: str | None = None) -> None:
     """Move the axes' legend below the axes, so that it hides no data; ``caption`` is
     written above the legend's entries."""
@@ -106,16 +131,20 @@ def _single(
     """One-panel figure, 600 px wide, with the title on top and the legend below.
 
     With ``fit_height``, the height follows the shape of the (equal-aspect) view;
-    ``caption`` is small text under the axes, above the legend.
+    ``caption`` is small text under the axes, above the legend. A trajectory's contact
+    stretches add legend entries, and the figure grows by their height.
     """
     fig = new_figure()
     ax = fig.add_subplot()
-    draw(ax)
+    drawn = draw(ax)
     if fit_height:
         x0, x1 = ax.get_xlim()
         y0, y1 = ax.get_ylim()
         aspect = abs(y1 - y0) / max(abs(x1 - x0), 1e-300)
-        fig.set_size_inches(SINGLE_SIZE[0], float(np.clip(4.6 * aspect + 2.0, 3.6, 8.0)))
+        height = 4.6 * aspect + 2.0
+        if isinstance(drawn, dict) and "stretches" in drawn:
+            height += 0.2 * (len(drawn["stretches"]) + 1)
+        fig.set_size_inches(SINGLE_SIZE[0], float(np.clip(height, 3.6, 8.0)))
     fig.suptitle(title, fontsize=9)
     _legend_outside(fig, ax, caption)
     return save(fig, path)
@@ -127,6 +156,7 @@ def _figures(
     out: Path,
     interval: float | None,
     window: tuple[int, int],
+    sides: tuple[Columns | None, Columns | None] = (None, None),
 ) -> list[Path]:
     title = scene_title(scene, int(columns["t"].size))
     return [
@@ -145,7 +175,15 @@ def _figures(
             caption=PHASE_CAPTION,
         ),
         _single(
-            lambda ax: trajectory(columns, scene, ax, window, frame_interval=interval),
+            lambda ax: trajectory(
+                columns,
+                scene,
+                ax,
+                window,
+                frame_interval=interval,
+                contacts=sides[0],
+                samples=sides[1],
+            ),
             title,
             out / "trajectory.png",
             fit_height=True,
@@ -167,7 +205,9 @@ def plot_run(
     ``out_dir`` (default ``run_dir``, created if missing): ``return_map.png``,
     ``time_map.png``, ``phase.png``, ``trajectory.png`` and, unless ``gif`` is False,
     ``animation.gif``. Each PNG is 600 px wide, titled with the scene's name and key
-    parameters.
+    parameters. A run of ``contact.model = "phases"`` (``contacts.csv`` present) gets its
+    contact phases drawn in the trajectory and the animation as stretches along the wall,
+    from ``trajectory.csv``'s samples when present (see :mod:`billiard.plot.contacts`).
 
     With ``frame_interval`` (s), the maps also show, as hollow rings in a second colour,
     the data a camera with that frame interval would have recorded (the experiment missed
@@ -197,8 +237,18 @@ def plot_run(
     columns, scene = load_run(run_dir)
     rows = window_rows(columns, scene, window)  # check the window before drawing
     chosen = (int(columns["n"][rows[0]]), int(columns["n"][rows[-1]]) + 1)
+    contacts, samples = load_sides(run_dir)
     out = output_directory(out_dir if out_dir is not None else run_dir)
-    written = _figures(columns, scene, out, interval, chosen)
+    written = _figures(columns, scene, out, interval, chosen, (contacts, samples))
     if gif:
-        written.append(animate(columns, scene, out / "animation.gif", window=chosen))
+        written.append(
+            animate(
+                columns,
+                scene,
+                out / "animation.gif",
+                window=chosen,
+                contacts=contacts,
+                samples=samples,
+            )
+        )
     return written

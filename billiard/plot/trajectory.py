@@ -21,6 +21,7 @@ from .common import (
     camera_filter,
     column,
 )
+from .contacts import MODE_LABELS, MODE_STYLES, MODES, Side, joined, phase_path
 from .flights import arcs, flight_label
 from .inputs import checked_interval
 from .outline import boundary_function, boundary_outline
@@ -115,6 +116,8 @@ def trajectory(
     window: Window | None = None,
     *,
     frame_interval: float | None = None,
+    contacts: Side | None = None,
+    samples: Side | None = None,
 ) -> dict[str, Any]:
     """The ball's path over a window of impacts, in the lab frame, in mm (equal aspect).
 
@@ -127,6 +130,12 @@ def trajectory(
     :mod:`billiard.plot.flights`), so that each arc ends at the next impact. Impact points
     are ball centres, so they lie one radius inside the boundary.
 
+    With ``contacts`` (a run of ``contact.model = "phases"``) the flights are drawn only
+    where the ball flew (from an impact or a phase's lift-off, wall end or release, to the
+    next impact or phase), and the contact phases as stretches along the wall, one line
+    style per mode (rolling, sliding, held), from ``samples`` when given, else rebuilt
+    (see :mod:`billiard.plot.contacts`).
+
     Args:
         columns: a run's columns.
         scene: the run's scene.
@@ -134,17 +143,32 @@ def trajectory(
         window: ``(n0, n1)``: impact numbers (the ``n`` column) n0 <= n < n1; either may
             be None for an open end. Default: :func:`default_window`.
         frame_interval: if given (s), ring the impacts the camera would have recorded.
+        contacts: the run's contact phases (the columns of contacts.csv,
+            ``Result.contacts``), or None.
+        samples: the run's samples (the columns of trajectory.csv,
+            ``Result.trajectory``), used with ``contacts``; or None.
 
     Returns:
         A dict with the row indices drawn (``rows``) and the artists (``impacts``,
-        ``arcs``, ``boundary``, and ``camera`` with ``frame_interval``).
+        ``arcs``, ``boundary``, and ``camera`` with ``frame_interval``); with
+        ``contacts`` also the :class:`~billiard.plot.contacts.PhasePath` drawn (``path``) and
+        the contact stretches' lines by mode (``stretches``).
     """
     interval = checked_interval(frame_interval)
     rows = window_rows(columns, scene, window)
-    arc_x, arc_y = arcs(columns, rows, scene)
+    path = None
+    extra_x, extra_y = np.array([]), np.array([])
+    if contacts is None:
+        arc_x, arc_y = arcs(columns, rows, scene)
+    else:
+        path = phase_path(columns, rows, scene, contacts, samples)
+        arc_x, arc_y = joined(path.flights)
+        extra_x, extra_y = joined(path.stretches)
     q1 = column(columns, "q1")[rows]
     q2 = column(columns, "q2")[rows]
-    x_lim, y_lim, show_lid = view(scene, np.concatenate([q1, arc_x]), np.concatenate([q2, arc_y]))
+    x_lim, y_lim, show_lid = view(
+        scene, np.concatenate([q1, arc_x, extra_x]), np.concatenate([q2, arc_y, extra_y])
+    )
     amplitude, direction = scene.drive.amplitude, scene.drive.direction
 
     grid, height = boundary_positions(scene, x_lim)
@@ -173,6 +197,7 @@ def trajectory(
     (arc_line,) = ax.plot(
         arc_x * MM, arc_y * MM, color=MODEL_COLOR, linewidth=0.8, label=flight_label(scene)
     )
+    stretches = {} if path is None else _draw_stretches(ax, path)
     regime = np.asarray(columns["regime"])[rows] if "regime" in columns else None
     impacts = []
     if regime is None:
@@ -201,6 +226,9 @@ def trajectory(
         "arcs": arc_line,
         "boundary": boundary,
     }
+    if path is not None:
+        drawn["path"] = path
+        drawn["stretches"] = stretches
     if interval is not None:
         seen = camera_filter(columns, interval)
         mask = np.isin(column(columns, "n")[rows], column(seen, "n"))
@@ -222,11 +250,43 @@ def trajectory(
     ax.set_ylabel("height of the centre $q_2$ (mm)")
     t = column(columns, "t")
     n_all = column(columns, "n")
+    t_lo, t_hi = (t[rows[0]], t[rows[-1]]) if path is None else (path.t_lo, path.t_hi)
+    phases = "" if path is None else f", {len(path.stretches)} contact phases"
     ax.set_title(
-        f"impacts {int(n_all[rows[0]])} to {int(n_all[rows[-1]])}, "
-        f"t = {t[rows[0]]:.3f} to {t[rows[-1]]:.3f} s",
+        f"impacts {int(n_all[rows[0]])} to {int(n_all[rows[-1]])}{phases}, "
+        f"t = {t_lo:.3f} to {t_hi:.3f} s",
         fontsize=9,
     )
     ax.grid(True, linewidth=0.3, alpha=0.5)
     ax.legend(loc="upper right", fontsize=7, framealpha=0.85)
     return drawn
+
+
+def _draw_stretches(ax: Axes, path: Any) -> dict[str, Any]:
+    """One line per contact mode through its stretches, in the mode's style, labelled
+    with the mode and the number of phases and the time spent in it."""
+    lines: dict[str, Any] = {}
+    for mode in MODES:
+        pieces = [p for p in path.stretches if p.kind == mode]
+        if not pieces:
+            continue
+        x, y = joined(pieces)
+        style = dict(MODE_STYLES[mode])
+        if "marker" in style:
+            # mark where each stretch starts: a held ball on a still boundary is one point
+            starts = np.concatenate([[0], np.flatnonzero(np.isnan(x[:-1])) + 1])
+            style["markevery"] = starts.tolist()
+        spent = sum(float(p.t[-1] - p.t[0]) for p in pieces)
+        (lines[mode],) = ax.plot(
+            x * MM,
+            y * MM,
+            label=f"{MODE_LABELS[mode]} ({_count(len(pieces))}, {spent:.3g} s)",
+            zorder=2.2,
+            solid_capstyle="round",
+            **style,
+        )
+    return lines
+
+
+def _count(phases: int) -> str:
+    return f"{phases} phase" if phases == 1 else f"{phases} phases"
