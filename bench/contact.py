@@ -228,7 +228,7 @@ def summary(sim: Simulation, duration: float, reason: str | None, impacts: int, 
         if rest:  # the rest of the duration, at rest in the final contact mode
             times[sim.mode if in_contact else "flight"] += max(0.0, duration - (end - t0))
     else:
-        times = {"flight": reached, "roll": 0.0, "slide": 0.0}
+        times = {"flight": reached, "roll": 0.0, "slide": 0.0, "held": 0.0}
     resting = sim.counts.get("resting", 0)
     ended = "time" if status == Status.TIME_LIMIT and not reason else status.name.lower()
     if rest:

@@ -582,13 +582,14 @@ def contact_target(c: dict) -> list[str]:
 
 
 def _in_contact(m: dict) -> float:
-    """Share of the simulated time spent rolling or sliding."""
-    return (m["times"]["roll"] + m["times"]["slide"]) / m["simulated"]
+    """Share of the simulated time spent in contact (rolling, sliding or held)."""
+    t = m["times"]
+    return (t["roll"] + t["slide"] + t.get("held", 0.0)) / m["simulated"]
 
 
 def _times(m: dict) -> str:
     t = m["times"]
-    return f"{t['flight']:.3g} / {t['roll']:.3g} / {t['slide']:.3g}"
+    return f"{t['flight']:.3g} / {t['roll']:.3g} / {t['slide']:.3g} / {t.get('held', 0.0):.3g}"
 
 
 def _ended(m: dict) -> str:
@@ -641,7 +642,7 @@ def section_contact(c: dict, command: str) -> str:
                 "impacts per simulated s",
                 "resting relaunches",
                 "contact phases",
-                "flying / rolling / sliding (s)",
+                "flying / rolling / sliding / held (s)",
                 "ended",
                 "CPU ratio impacts / phases (of the medians)",
                 "ratio of each repeat's pair",

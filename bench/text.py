@@ -257,13 +257,15 @@ table shaken vertically with Gamma = A w^2 / g = 0.9.
 
 "Chatter dominates" where most of the impact model's impacts relaunch a resting ball
 (`Result.counts["resting"]`, the "resting relaunches" column). "Contact phases" counts
-the finished phases plus the one still open at the end. Times spent flying, rolling and
-sliding are the engine's (`Result.mode_times`); the impact model only flies.
-A run under "phases" that ends early because the ball rests on the boundary for good
-(`Status.TIME_LIMIT` with a stop reason, or `Status.AT_REST`) has simulated its whole
-duration: its CPU per simulated second uses the requested duration and the rest of it
-counts as time in contact (the "ended" column says "at rest"; with a finite
-`run.duration` the present engine integrates the rest to the end instead). A run that
+the finished phases plus the one still open at the end. Times spent flying, rolling,
+sliding and held by two walls (the wedge's vertex) are the engine's
+(`Result.mode_times`); the impact model only flies. A ball at rest relative to a shaken
+boundary for a whole drive period skips the periods that repeat it, so resting costs
+one integrated period whatever the duration. A run under "phases" that ends early
+because the ball rests on the boundary for good (`Status.AT_REST`, only without a time
+limit) has simulated its whole duration: its CPU per simulated second uses the
+requested duration and the rest of it counts as time in contact (the "ended" column
+says "at rest"). A run that
 stops for another reason (an inelastic collapse, the impact cap) is measured over the
 time it reached and not compared.
 """

@@ -61,7 +61,8 @@ class ContactPhases:
         return dict(self._phase_time)
 
     def mode_times(self) -> dict[str, float]:
-        """Simulated time (s) spent flying, rolling and sliding from the scene's start to
+        """Simulated time (s) spent flying, rolling, sliding and held by two walls from the
+        scene's start to
         ``final_time`` (an unfinished contact phase counted up to it)."""
         times = dict(self._phase_time)
         if self._mode != "flight" and self._contact:
@@ -70,7 +71,7 @@ class ContactPhases:
         total = (self.final_time if math.isfinite(self.final_time) else self._ball.t) - (
             self.initial.t
         )
-        return {"flight": total - times["roll"] - times["slide"], **times}
+        return {"flight": total - sum(times.values()), **times}
 
     def _land(self, index: int, s: float, theta: float, res: Any, t: float) -> None:
         """After an impact: enter contact when the rebound speed e |wn| is below the

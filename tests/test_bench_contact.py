@@ -49,7 +49,7 @@ def test_a_resting_ball_hops_under_impacts_and_lies_under_phases(bowl):
     assert hops["impacts"] > 50
     assert hops["resting"] == hops["impacts"] and hops["resting_share"] == 1.0
     assert hops["phases"] == 0 and hops["ended"] == "time"
-    assert hops["times"] == {"flight": DURATION, "roll": 0.0, "slide": 0.0}
+    assert hops["times"] == {"flight": DURATION, "roll": 0.0, "slide": 0.0, "held": 0.0}
     # phases: no impact at all, one rolling phase open for the whole run
     assert lying["impacts"] == 0 and lying["resting"] == 0
     assert lying["phases"] == 1 and lying["finished_phases"] == 0
