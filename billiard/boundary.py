@@ -346,7 +346,8 @@ class Boundary:
                 if not _finite(s):
                     continue
                 fs = wall.f(s, wall.p)
-                d = math.hypot(px - s, py - fs)
+                dx, dy = px - s, py - fs
+                d = math.sqrt(dx * dx + dy * dy)
                 if best is None or d < best.distance:
                     best = NearestPoint(s, d, math.atan(wall.df(s, wall.p)), i, False)
         assert best is not None

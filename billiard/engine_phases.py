@@ -426,7 +426,7 @@ class ContactPhases:
         if self._mode == "flight":
             # leave both walls along the sum of their normals (see LIFT_OFF_SPEED)
             nx, ny = -math.sin(za) - math.sin(zb), math.cos(za) + math.cos(zb)
-            norm = math.hypot(nx, ny)
+            norm = math.sqrt(nx * nx + ny * ny)
             self._ball = BallState(
                 t, theta, q1, q2, u1 + LIFT_OFF_SPEED * nx / norm,
                 u2 + LIFT_OFF_SPEED * ny / norm, u3, q3,

@@ -232,7 +232,7 @@ class EventLocator:
             gaps_b = [surf.gap_rate(*rel_b, warm[j]) for j, surf in enumerate(surfaces)]
             span = tb - ta
             px, _, vx, vy = rel_a
-            speed = math.hypot(vx, vy)
+            speed = math.sqrt(vx * vx + vy * vy)
             self.h_bracket = self.h_first
             if speed * self.h_bracket > self.turn_length:
                 self.h_bracket = self.turn_length / speed
@@ -273,7 +273,7 @@ class EventLocator:
         """Bounds over a window on the ball's acceleration relative to the boundary:
         (sup |a_x|, sup -a_y, sup a_y), from gravity, the drive, and the air forces at
         the largest speed the ball can reach in the window."""
-        speed = math.hypot(y[2], y[3]) + 2.0 * self.g * window
+        speed = math.sqrt(y[2] * y[2] + y[3] * y[3]) + 2.0 * self.g * window
         aero = self.flight.aero_bound(speed)
         if self.horizontal:
             return self.drive_accel + aero, self.g + aero, aero - self.g

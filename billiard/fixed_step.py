@@ -136,14 +136,16 @@ class FixedStepLocator:
             if s is None:
                 continue
             s = min(max(s, lo), hi)
-            dist = math.hypot(px - s, py - f(s, p))
+            dx, dy = px - s, py - f(s, p)
+            dist = math.sqrt(dx * dx + dy * dy)
             if dist < best_d:
                 best_s, best_d = s, dist
         if best_d == math.inf:  # Newton failed from both starts: global search
             near_pt = self.boundary.nearest_point(px, py)
             wall_pt = near_pt if near_pt.wall == i else None
             best_s = wall_pt.s if wall_pt else min(max(px, lo), hi)
-            best_d = math.hypot(px - best_s, py - f(best_s, p))
+            dx, dy = px - best_s, py - f(best_s, p)
+            best_d = math.sqrt(dx * dx + dy * dy)
         self._feet[i] = best_s
         return best_s, best_d
 

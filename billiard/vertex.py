@@ -78,7 +78,7 @@ class VertexHold:
         dr = self.drive
         a, v = dr.acceleration(theta), dr.velocity(theta)
         ab1, ab2, vb1, vb2 = (a, 0.0, v, 0.0) if dr.horizontal else (0.0, a, 0.0, v)
-        drag = self.c_lin + self.c_quad * math.hypot(vb1, vb2)
+        drag = self.c_lin + self.c_quad * math.sqrt(vb1 * vb1 + vb2 * vb2)
         # the centre moves with the boundary: m a_b = m g + D + contact forces
         rx = self.m * ab1 + drag * vb1
         ry = self.m * (ab2 + self.g) + drag * vb2
