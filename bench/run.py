@@ -16,18 +16,11 @@ from pathlib import Path
 from bench import charts, contact, failures, ladder, report, throughput, workprecision
 from bench import sweep as sweep_bench
 from bench.common import Config, start_scene
+from billiard.bench import SECTIONS as BENCH_SECTIONS
 
-#: The sections of the page; ``sweep`` keeps its own results (docs/figures/sweeps/bench.json)
-#: and its own part of the page, between markers.
-SECTIONS = (
-    "workprecision",
-    "failures",
-    "ladder",
-    "throughput",
-    "profile",
-    "contact",
-    "sweep",
-)
+#: The sections of the page (``sweep`` keeps its own results, docs/figures/sweeps/bench.json,
+#: and its own part of the page, between markers).
+SECTIONS = BENCH_SECTIONS
 
 
 class Starts(dict):

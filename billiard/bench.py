@@ -17,8 +17,9 @@ from types import ModuleType
 
 from billiard.cli import UserError
 
-# the sections of bench/run.py (checked before the checkout's bench package is imported)
-_SECTIONS = (
+#: The sections of the performance page, in order (bench/run.py measures them; they are
+#: checked here, before the checkout's bench package is imported).
+SECTIONS = (
     "workprecision",
     "failures",
     "ladder",
@@ -83,10 +84,10 @@ def _bench_package(root: Path | None = None) -> ModuleType:
 
 def _sections(text: str) -> tuple[str, ...]:
     chosen = tuple(s.strip() for s in text.split(",") if s.strip())
-    unknown = [s for s in chosen if s not in _SECTIONS]
+    unknown = [s for s in chosen if s not in SECTIONS]
     if unknown or not chosen:
         raise argparse.ArgumentTypeError(
-            f"unknown section {', '.join(unknown) or text!r}: choose from {', '.join(_SECTIONS)}"
+            f"unknown section {', '.join(unknown) or text!r}: choose from {', '.join(SECTIONS)}"
         )
     return chosen
 
@@ -101,7 +102,7 @@ def add_bench_arguments(parser: argparse.ArgumentParser) -> None:
         "--only",
         type=_sections,
         metavar="SECTIONS",
-        help=f"comma-separated sections to measure again ({', '.join(_SECTIONS)});"
+        help=f"comma-separated sections to measure again ({', '.join(SECTIONS)});"
         " the others are taken from the saved results",
     )
     parser.add_argument(
@@ -123,7 +124,7 @@ def run_bench(args: argparse.Namespace) -> int:
 
     cfg = Config.quick_mode() if args.quick else Config.full()
     out = Path(args.out) if args.out else Path("runs/bench-quick" if args.quick else "docs")
-    only = () if args.render else (args.only or _SECTIONS)
+    only = () if args.render else (args.only or SECTIONS)
     path = run.main(cfg, out, only)
     print(f"wrote {path} and {out / 'figures' / 'performance'}")
     return 0

@@ -119,7 +119,7 @@ class Simulation(ContactPhases):
         self.phases = getattr(scene.contact, "model", "impacts") == "phases"
         self.contact_model = ContactModel(scene, self.drive) if self.phases else None
         #: the ball held by two walls at once (the wedge's vertex)
-        self.vertex_hold = VertexHold(scene, self.drive) if self.phases else None
+        self.vertex_hold = VertexHold(self.contact_model) if self.phases else None
         #: called with each finished contact phase's record (contacts.csv)
         self.on_contact: Callable[[ContactRecord], None] | None = None
         #: sampling: every ``sample_dt`` seconds of simulated time from the start,

@@ -175,6 +175,28 @@ class ContactPhases:
 
         self._emit_samples(state.t, t_to, at)
 
+    def _sample_times(self, t0: float, until: float) -> Iterator[float]:
+        """The sample times k dt (from the run's start) in [t0, until], as offsets from
+        t0 (s), from the next sample not yet reported."""
+        k = self._samples
+        while True:
+            ts = self.initial.t + k * self.sample_dt
+            if ts > until:
+                return
+            if ts >= t0:
+                yield ts - t0
+            k += 1
+
+    def _report_sample(
+        self, t: float, q1: float, q2: float, u1: float, u2: float, u3: float, mode: str
+    ) -> None:
+        """Report one sample (trajectory.csv) of a ball in contact, with its energy."""
+        ball = self.scene.ball
+        energy = _ball.energy(q2, u1, u2, u3, ball.mass, ball.radius, ball.inertia_factor,
+                              self.scene.run.gravity)  # fmt: skip
+        self.on_sample(t, q1, q2, u1, u2, u3, energy, mode)
+        self._samples += 1
+
     def _contact_step(self, until: float) -> ImpactRecord | ContactRecord | None:
         """One contact phase, to its end (or to ``until``: None, state unchanged)."""
         if self._mode == HELD:
@@ -188,30 +210,15 @@ class ContactPhases:
         mode = self._mode
         t0, theta0 = ball.t, ball.theta
         omega = self.drive.omega
-        sc = self.scene
-
-        def sample_times() -> Iterator[float]:
-            k = self._samples
-            while True:
-                ts = self.initial.t + k * self.sample_dt
-                if ts > until:
-                    return
-                if ts >= t0:
-                    yield ts - t0
-                k += 1
 
         def on_sample(tau: float, y: tuple) -> None:
             theta = theta0 + omega * tau
-            q1, q2, u1, u2, u3 = model.lab_state(wall, theta, y, mode)
-            energy = _ball.energy(q2, u1, u2, u3, sc.ball.mass, sc.ball.radius,
-                                  sc.ball.inertia_factor, sc.run.gravity)  # fmt: skip
-            self.on_sample(t0 + tau, q1, q2, u1, u2, u3, energy, mode)
-            self._samples += 1
+            self._report_sample(t0 + tau, *model.lab_state(wall, theta, y, mode), mode)
 
         try:
             end = model.run_phase(
                 wall, mode, sgn, theta0, (s, sd, ball.u3), until - t0, self._other_gaps(index),
-                sample_times() if self.on_sample is not None else (),
+                self._sample_times(t0, until) if self.on_sample is not None else (),
                 on_sample if self.on_sample is not None else None,
             )  # fmt: skip
         except BallAtRest as rest:
@@ -364,35 +371,21 @@ class ContactPhases:
         zb = offsets[b].contact(px, list(self.warm[b]))[1]
         t0, theta0 = ball.t, ball.theta
         drive = self.drive
-        sc = self.scene
 
         def lab(theta: float, u3: float) -> tuple[float, float, float, float, float]:
             q1, q2 = drive.to_lab_frame(theta, px, py)
             u1, u2 = drive.boundary_velocity(theta)
             return q1, q2, u1, u2, u3
 
-        def sample_times() -> Iterator[float]:
-            k = self._samples
-            while True:
-                ts = self.initial.t + k * self.sample_dt
-                if ts > until:
-                    return
-                if ts >= t0:
-                    yield ts - t0
-                k += 1
-
         def on_sample(tau: float, u3: float) -> None:
-            q1, q2, u1, u2, _ = lab(theta0 + drive.omega * tau, u3)
-            energy = _ball.energy(q2, u1, u2, u3, sc.ball.mass, sc.ball.radius,
-                                  sc.ball.inertia_factor, sc.run.gravity)  # fmt: skip
-            self.on_sample(t0 + tau, q1, q2, u1, u2, u3, energy, HELD)
-            self._samples += 1
+            self._report_sample(t0 + tau, *lab(theta0 + drive.omega * tau, u3), HELD)
 
         sampling = self.on_sample is not None
         try:
             end = hold.run_hold(
                 za, zb, theta0, ball.u3, until - t0,
-                sample_times() if sampling else (), on_sample if sampling else None,
+                self._sample_times(t0, until) if sampling else (),
+                on_sample if sampling else None,
             )  # fmt: skip
         except BallAtRest as rest:
             self.final_time = t0 + rest.tau

@@ -29,10 +29,8 @@ from __future__ import annotations
 import math
 from collections.abc import Callable, Iterable
 from dataclasses import dataclass
-from typing import Any
 
-from billiard.contact_phase import first_root, skip_periods
-from billiard.drive import Drive
+from billiard.contact_phase import ContactModel, first_root, skip_periods
 from billiard.errors import BallAtRest
 
 __all__ = ["HELD", "HoldEnd", "VertexHold"]
@@ -57,20 +55,16 @@ class VertexHold:
     """The forces and the spin of a ball held by two walls of one scene.
 
     Args:
-        scene: a :class:`billiard.scene.Scene`.
-        drive: the boundary's drive.
+        model: the scene's :class:`~billiard.contact_phase.ContactModel` (ball, gravity,
+            drag, friction and drive: the same constants as rolling and sliding).
     """
 
-    def __init__(self, scene: Any, drive: Drive):
-        ball = scene.ball
-        self.m = float(ball.mass)
-        self.r = float(ball.radius)
-        self.k = float(ball.inertia_factor)
-        self.g = float(scene.run.gravity)
-        self.c_lin, self.c_quad = (float(c) for c in scene.air.coefficients)
-        self.mu_k = float(scene.contact.mu_kinetic)
-        self.drive = drive
-        self.static = drive.amplitude == 0.0 or drive.omega == 0.0
+    def __init__(self, model: ContactModel):
+        self.m, self.r, self.k, self.g = model.m, model.r, model.k, model.g
+        self.c_lin, self.c_quad = model.c_lin, model.c_quad
+        self.mu_k = model.mu_k
+        self.drive = model.drive
+        self.static = model.static
 
     def forces(self, za: float, zb: float, theta: float, sigma: float) -> tuple[float, float]:
         """(N_a, N_b): the normal forces (N) of the two walls, tangent angles za and zb
