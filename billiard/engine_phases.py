@@ -175,6 +175,20 @@ class ContactPhases:
 
         self._emit_samples(state.t, t_to, at)
 
+    def _end_phase(self, mode: str, t_start: float, tau: float, total: float, error: float) -> None:
+        """The clock and the tallies at the end of a contact phase of ``tau`` seconds (the
+        new time is the compensated sum total + error); zero-length phases in a row are
+        counted like zero flights, a collapse."""
+        t = total + error
+        self._clock, self._clock_error = total, error
+        self._phase_time[mode] += t - t_start
+        self.final_time = t
+        self._zero_flights = self._zero_flights + 1 if tau == 0.0 else 0
+        if self._zero_flights >= ZERO_FLIGHT_LIMIT:
+            self._fault = SimulationError(
+                f"contact phases of zero duration piled up at t = {t:.9g} s", Status.COLLAPSE
+            )
+
     def _sample_times(self, t0: float, until: float) -> Iterator[float]:
         """The sample times k dt (from the run's start) in [t0, until], as offsets from
         t0 (s), from the next sample not yet reported."""
@@ -243,14 +257,7 @@ class ContactPhases:
             *model.lab_state(wall, theta0, (s, sd, ball.u3), mode), q1, q2, u1, u2, u3,
         )  # fmt: skip
         self._ball = BallState(t, theta, q1, q2, u1, u2, u3, q3)
-        self._clock, self._clock_error = total, error
-        self._phase_time[mode] += t - t_start
-        self.final_time = t
-        self._zero_flights = self._zero_flights + 1 if tau == 0.0 else 0
-        if self._zero_flights >= ZERO_FLIGHT_LIMIT:
-            self._fault = SimulationError(
-                f"contact phases of zero duration piled up at t = {t:.9g} s", Status.COLLAPSE
-            )
+        self._end_phase(mode, t_start, tau, total, error)
         s1, sd1 = end.y[0], end.y[1]
         reason = end.reason
         if reason in ("lift-off", "wall-end"):
@@ -404,14 +411,7 @@ class ContactPhases:
             *lab(theta0, ball.u3), q1, q2, u1, u2, u3,
         )  # fmt: skip
         self._ball = BallState(t, theta, q1, q2, u1, u2, u3, q3)
-        self._clock, self._clock_error = total, error
-        self._phase_time[HELD] += t - t_start
-        self.final_time = t
-        self._zero_flights = self._zero_flights + 1 if tau == 0.0 else 0
-        if self._zero_flights >= ZERO_FLIGHT_LIMIT:
-            self._fault = SimulationError(
-                f"contact phases of zero duration piled up at t = {t:.9g} s", Status.COLLAPSE
-            )
+        self._end_phase(HELD, t_start, tau, total, error)
         self._mode, self._contact = "flight", ()
         keeps = (a, b)[end.keeps] if end.keeps >= 0 else -1
         if keeps >= 0:
