@@ -44,14 +44,14 @@ class _Printer(PythonCodePrinter):
         super().__init__({"fully_qualified_modules": True, "standard": "python3"})
 
     def _print_Pow(self, expr, rational=False):
-        # A square prints as a product: CPython's x**2 calls libm's pow, which differs
-        # from the correctly rounded x*x in about 1 case in 1,000, while compiled code
-        # turns x**2 into x*x; the product makes both agree by construction (and is
-        # faster). Parenthesized, since the product must stay one factor wherever it
-        # stands (a/(x*x), not a/x*x).
-        if expr.exp == 2:
+        # Squares and cubes print as products: CPython's x**2 calls libm's pow, which
+        # differs from the correctly rounded x*x in about 1 case in 1,000, while compiled
+        # code turns small integer powers into products; printing the product makes both
+        # agree by construction (and is faster). Parenthesized, since the product must
+        # stay one factor wherever it stands (a/(x*x), not a/x*x).
+        if expr.exp in (2, 3):
             base = self.parenthesize(expr.base, precedence(expr))
-            return f"({base}*{base})"
+            return "(" + "*".join([base] * int(expr.exp)) + ")"
         return super()._print_Pow(expr, rational=rational)
 
     def _print_Rational(self, expr):

@@ -4,7 +4,7 @@
 # Curve 'hyperbola': f(x) = sqrt(alpha*(1 + beta*x**2)) - delta
 # Parameters: alpha = 0.00403, beta = 800, delta = 0.0445
 # Walls: 1; nearest-point polynomial degree: 4
-# content sha256: 99044ade4bc1c723b8f88b3778eb749797197d17afce81a515a5aa013de91776
+# content sha256: d72a53e3a4eb727877b88e399f8f7c347fe4ed468389dca069e5dbea25de6a80
 """Boundary curve 'hyperbola': f(x) = sqrt(alpha*(1 + beta*x**2)) - delta (x and f in metres).
 
 Every function takes the curve's parameters as its last argument, an array in the
@@ -58,7 +58,7 @@ def d3f_0(x, _p):
     beta = _p[1]
     _c0 = beta*(x*x) + 1
     _c1 = 3*math.sqrt(_c0*alpha)
-    return -_c1*(beta*beta)*x/(_c0*_c0) + _c1*beta**3*x**3/_c0**3
+    return -_c1*(beta*beta)*x/(_c0*_c0) + _c1*(beta*beta*beta)*(x*x*x)/(_c0*_c0*_c0)
 
 
 def near_0(s, px, py, _p):
