@@ -18,10 +18,9 @@ from billiard.reproduce import (
     PHASES_IMPACT_CAP,
     _above,
     _hop_time,
-    _maps_text,
-    _models_section,
     compare_models,
 )
+from billiard.reproduce_text import _maps_text, _models_section
 from billiard.sidecsv import read_side_csv
 
 IMPACTS = 300
