@@ -132,6 +132,7 @@ _LARGEST_RADIUS = 4e-3  # m; random balls are at most this large
 _STOP_KINDS = {
     Status.COMPLETE: "complete",
     Status.TIME_LIMIT: "complete",
+    Status.AT_REST: "complete",
     Status.ESCAPED: "escape",
     Status.COLLAPSE: "collapse",
     Status.NON_FINITE: "non-finite",

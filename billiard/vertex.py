@@ -115,7 +115,7 @@ class VertexHold:
         omega = self.drive.omega
         sigma = _sign(u3)
 
-        def normal(tau: float, sigma: float = 0.0) -> tuple[float, float]:
+        def normal(tau: float, sigma: float) -> tuple[float, float]:
             return self.forces(za, zb, theta0 + omega * tau, sigma)
 
         def rate(tau: float, sigma: float) -> float:
