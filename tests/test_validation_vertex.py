@@ -22,6 +22,7 @@ from test_validation_contact import G, K, R, scene
 
 from billiard.engine import Simulation
 from billiard.record import ContactRecord
+from billiard.scene import with_values
 from billiard.simulate import simulate
 from billiard.status import Status
 from billiard.vertex import VertexHold
@@ -122,3 +123,32 @@ def test_a_held_state_round_trips_through_a_checkpoint():
     again.restore(saved)
     assert [again.step() for _ in range(20)] == first
     assert any(isinstance(r, ContactRecord) and r.mode == "held" for r in first)
+
+
+def test_drag_on_a_held_ball_shifts_the_release_as_the_force_balance_says():
+    # frictionless wedge shaken horizontally, Fowles drag on the centre moving at the
+    # boundary's velocity v = A w cos(w t): the left wall stops pressing where
+    # m a(t) + (c_lin + c_quad |v|) v + m g tan(beta) = 0, a = -A w^2 sin(w t)
+    from scipy.optimize import brentq
+
+    f, gamma = 5.0, 1.5
+    w = 2 * math.pi * f
+    amplitude = gamma * G * B / w**2
+    c_lin, c_quad = 5e-5, 1e-4  # about a tenth of m g: it moves the release measurably
+    drive = {"amplitude": amplitude, "frequency": f, "direction": "horizontal"}
+    sc = scene(
+        "wedge", {"b": B, "c": 0.0}, {"mu_static": 0.0, "mu_kinetic": 0.0},
+        {"v1": amplitude * w}, drive,
+    )  # fmt: skip
+    sc = with_values(sc, {"air.drag": "fowles", "air.c_lin": c_lin, "air.c_quad": c_quad})
+    record = Simulation(sc).step()
+    assert isinstance(record, ContactRecord) and record.end == "release"
+
+    def left_wall(t):
+        v = amplitude * w * math.cos(w * t)
+        return -M * amplitude * w * w * math.sin(w * t) + (c_lin + c_quad * abs(v)) * v + M * G * B
+
+    expected = brentq(left_wall, 0.0, math.pi / (2 * w), xtol=1e-15)
+    no_drag = math.asin(1 / gamma) / w
+    assert abs(expected - no_drag) > 1e-4  # the drag term matters here
+    assert record.t_end == pytest.approx(expected, abs=1e-11)
