@@ -73,6 +73,16 @@ class ContactPhases:
         )
         return {"flight": total - sum(times.values()), **times}
 
+    def _settles(self, res: Any) -> bool:
+        """Does the chattering after this impact settle: an inelastic contact (e < 1)
+        whose rebound speed e |wn| is at most the landing speed ``contact.elastic_below``
+        (or the low-velocity rule applied)? The one criterion for landing on a wall and
+        for being held by two."""
+        e = self.contact_model.e
+        if e >= 1.0:
+            return False
+        return e * abs(res.wn) <= self.scene.contact.elastic_below or res.regime == "elastic"
+
     def _land(self, index: int, s: float, theta: float, res: Any, t: float) -> None:
         """After an impact: enter contact when the rebound speed e |wn| is below the
         landing speed (``contact.elastic_below``) while the wall presses the ball (the
@@ -81,12 +91,10 @@ class ContactPhases:
         rebound speed and a = N / m, recorded as the phase's ``t_settle``."""
         surface = self.boundary.surfaces[index]
         model = self.contact_model
+        if surface.kind != "wall" or not self._settles(res):
+            return
         e = model.e
-        if surface.kind != "wall" or e >= 1.0:
-            return
         rebound = e * abs(res.wn)
-        if not (rebound <= self.scene.contact.elastic_below or res.regime == "elastic"):
-            return
         wall = surface.wall
         sd = model.s_dot(wall, theta, s, res.u1, res.u2)
         mode, sgn = model.mode_for(wall, theta, s, sd, res.u3)
@@ -341,12 +349,8 @@ class ContactPhases:
         on one wall) and both walls press it. The chattering between the two walls that
         this skips would carry the ball's velocity relative to the boundary, at most the
         rebound speed, to zero: it is dropped (never energy created), the spin is kept."""
-        if self.boundary.surfaces[j].kind != "wall":
+        if self.boundary.surfaces[j].kind != "wall" or not self._settles(res):
             return False  # the lid holds nothing
-        e = self.contact_model.e
-        rebound = e * abs(res.wn)
-        if not (rebound <= self.scene.contact.elastic_below or res.regime == "elastic"):
-            return False
         ball = self._ball
         px, _, _, _ = self.drive.to_boundary_frame(theta, ball.q1, ball.q2, ball.u1, ball.u2)
         offsets = self.boundary.offsets
