@@ -1,0 +1,18 @@
+"""The engine's hot path as plain functions over floats and one state vector, compiled
+by numba when it is available (:mod:`billiard.jit`) and interpreted otherwise.
+
+One concept per module:
+
+* :mod:`~billiard.kernels.layout`: where each quantity lives in the state vector ``ctx``
+  (a float64 array; a list of Python floats when interpreted), the codes;
+* :mod:`~billiard.kernels.ball`: the generated ball equations, under the same decorator;
+* :mod:`~billiard.kernels.flight`: the exact flight and the Dormand-Prince flight;
+* :mod:`~billiard.kernels.surfaces`: gaps, rates and bounds of the offset walls, lid
+  and escape level; the wall functions arrive as first-class function values;
+* :mod:`~billiard.kernels.locate`: the event locator (bound, root refinement);
+* :mod:`~billiard.kernels.impact`: Kane and Levinson's law with the low-velocity rule;
+* :mod:`~billiard.kernels.loop`: one impact, and ``run_chunk`` (up to N impacts into a
+  preallocated array).
+
+:mod:`billiard.compiled` builds the state vector from a scene and streams the chunks.
+"""

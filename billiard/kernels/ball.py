@@ -1,0 +1,16 @@
+"""The generated ball equations (:mod:`billiard.generated.ball`) under :func:`billiard.jit.jit`:
+the same functions, compiled when numba is there."""
+
+from __future__ import annotations
+
+from billiard.generated import ball as _ball
+from billiard.jit import jit
+
+flight_exact = jit(_ball.flight_exact)
+flight_rhs_drag = jit(_ball.flight_rhs_drag)
+flight_rhs_magnus = jit(_ball.flight_rhs_magnus)
+contact_velocity = jit(_ball.contact_velocity)
+frame_velocity = jit(_ball.frame_velocity)
+impact_stick = jit(_ball.impact_stick)
+impact_slip = jit(_ball.impact_slip)
+energy = jit(_ball.energy)

@@ -1,0 +1,135 @@
+"""The state vector ``ctx`` of the kernels: one flat float64 array holding the scene's
+constants, the flight's and the locator's working state, the engine state and one block
+per surface. One array, so that a kernel call passes one reference (numba counts
+references on every array argument of a call it does not inline).
+
+Also the codes the kernels use for surfaces, regimes, statuses and errors.
+"""
+
+from __future__ import annotations
+
+# --- drive and locator ------------------------------------------------------------
+AMP = 0  # drive amplitude (m)
+OMEGA = 1  # drive angular frequency (rad/s)
+HORIZ = 2  # 1.0: horizontal drive, 0.0: vertical
+DRIVE_ACCEL = 3  # A w^2 (m/s^2)
+G = 4  # gravity (m/s^2)
+H_FIRST = 5  # first substep of a flight (s)
+H_LONGEST = 6  # longest proven-clear substep (s)
+TURN = 7  # rho / 2 of the offset curves (m)
+H_BRACKET = 8  # longest root bracket of the current substep (s)
+SPLIT = 9  # 1.0 when a substep had to be split
+THETA0 = 10  # drive angle at the start of the flight (rad)
+NSURF = 11  # number of surfaces
+
+# --- flight -------------------------------------------------------------------------
+FL_KIND = 16  # FLIGHT_EXACT or FLIGHT_ADAPTIVE
+FL_M = 17  # mass (kg)
+FL_CLIN = 18  # Fowles linear drag (N s/m)
+FL_CQUAD = 19  # Fowles quadratic drag (N s^2/m^2)
+FL_CMAG = 20  # Magnus coefficient (kg)
+FL_RTOL = 21  # Dormand-Prince tolerance
+FL_H = 22  # step proposal, carried from flight to flight (s)
+FL_U3 = 23  # spin of the current flight (rad/s)
+FL_TA = 24  # start of the current step (s)
+FL_TB = 25  # end of the current step (s)
+FL_YA = 26  # (q1, q2, u1, u2) at FL_TA: 26..29
+FL_YB = 30  # (q1, q2, u1, u2) at FL_TB: 30..33
+FL_KA = 34  # acceleration at FL_TA: 34, 35
+FL_KB = 36  # acceleration at FL_TB: 36, 37
+
+FLIGHT_EXACT = 0.0
+FLIGHT_ADAPTIVE = 1.0
+
+# --- impact law and ball ------------------------------------------------------------
+IM_M = 40  # mass (kg)
+IM_R = 41  # radius (m)
+IM_K = 42  # inertia factor
+IM_E = 43  # restitution
+IM_MUS = 44  # static friction
+IM_MUK = 45  # kinetic friction
+IM_EB = 46  # low-velocity threshold (m/s)
+
+# --- engine state -------------------------------------------------------------------
+EN_T = 50  # ball: t, theta, q1, q2, u1, u2, u3, q3 at 50..57
+EN_THETA = 51
+EN_Q1 = 52
+EN_Q2 = 53
+EN_U1 = 54
+EN_U2 = 55
+EN_U3 = 56
+EN_Q3 = 57
+EN_CLOCK = 58  # compensated clock: sum ...
+EN_CLOCK_ERR = 59  # ... and its running error
+EN_ZERO = 60  # consecutive zero flights
+EN_IMPACTS = 61  # impacts so far
+EN_UNTIL = 62  # simulated time at which the run ends (inf: none)
+EN_RCOUNT = 63  # impacts in the collapse window (ring at RECENT)
+EN_RHEAD = 64  # ring index of the oldest of them
+EN_TARGET = 65  # impact number to stop at
+EN_FAULT = 66  # 1.0: a collapse was detected after the last impact
+COUNTS = 70  # stick, slip, elastic, resting: 70..73
+
+# --- surfaces -----------------------------------------------------------------------
+SURF = 100
+SURF_STRIDE = 16
+MAX_SURFACES = 16
+# offsets in a surface's block
+S_KIND = 0
+S_WALL = 1  # wall index (curved and straight walls)
+S_A = 2  # curved: r;          line: b;         lid, escape: level
+S_B = 3  # curved: bend_bound; line: intercept
+S_C = 4  # curved: bend_abs;   line: shift
+S_D = 5  # line: z
+S_E = 6  # line: cos z
+S_WS = 8  # warm start: s
+S_WSLOPE = 9  # warm start: slope
+S_GA = 10  # G, dG/dtau at the substep's start
+S_DGA = 11
+S_GB = 12  # G, dG/dtau at its end
+S_DGB = 13
+S_LEAVING = 14  # 1.0: the ball is separating from it
+
+CURVED = 0.0
+LINE = 1.0
+LID = 2.0
+ESCAPE = 3.0
+
+# --- collapse window ----------------------------------------------------------------
+RECENT = 400  # ring of the latest impact times (COLLAPSE_COUNT + 1 slots)
+
+# --- the locator's pending substeps (the right halves still to scan) ---------------
+STACK = 640
+STACK_ENTRY = 7  # ta, G(ta), dG(ta), tb, G(tb), dG(tb), splits
+STACK_DEPTH = 24
+
+SIZE = STACK + STACK_ENTRY * STACK_DEPTH
+
+# --- rows ---------------------------------------------------------------------------
+# one row per impact, the columns of collisions.csv in order; regime and wall as codes
+NCOL = 18
+STICK = 0.0
+SLIP = 1.0
+ELASTIC = 2.0
+REGIMES = ("stick", "slip", "elastic")
+LID_LABEL = -1.0  # wall column of an impact on the lid
+
+# --- run_chunk statuses -------------------------------------------------------------
+DONE = 0  # the target impact number was reached
+FULL = 1  # the chunk's rows are full
+TIME_LIMIT = 2  # the next impact comes after EN_UNTIL
+COLLAPSE = 3  # an inelastic collapse after the last row
+
+# --- KernelError codes --------------------------------------------------------------
+E_ESCAPED = 1
+E_NO_IMPACT = 2
+E_ROOT = 3
+E_EXTREMUM = 4
+E_STEP_CONTROL = 5
+E_INVERSION = 6
+E_NON_FINITE = 7
+E_COLLAPSE = 8
+
+
+class KernelError(Exception):
+    """A documented stop inside a kernel; ``args[0]`` is one of the ``E_*`` codes."""

@@ -1,0 +1,198 @@
+"""One impact of the impact-only engine (``contact.model = "impacts"``, method
+``event``) and ``run_chunk``, a loop over it that writes one row per impact into a
+preallocated array: :meth:`billiard.engine.Simulation.step` and the body of
+:meth:`billiard.engine.Simulation.run`, with the same operations in the same order.
+"""
+
+from __future__ import annotations
+
+import math
+
+from billiard.engine_phases import (
+    COLLAPSE_COUNT,
+    COLLAPSE_SPAN,
+    ZERO_FLIGHT_LIMIT,
+)
+from billiard.engine_phases import (
+    compensated_add as _compensated_add,
+)
+from billiard.jit import jit
+from billiard.kernels import flight
+from billiard.kernels.ball import energy, frame_velocity
+from billiard.kernels.impact import kane_levinson
+from billiard.kernels.layout import (
+    AMP,
+    COLLAPSE,
+    COUNTS,
+    DONE,
+    E_COLLAPSE,
+    E_ESCAPED,
+    E_NON_FINITE,
+    EN_CLOCK,
+    EN_CLOCK_ERR,
+    EN_FAULT,
+    EN_IMPACTS,
+    EN_Q1,
+    EN_Q2,
+    EN_Q3,
+    EN_RCOUNT,
+    EN_RHEAD,
+    EN_T,
+    EN_TARGET,
+    EN_THETA,
+    EN_U1,
+    EN_U2,
+    EN_U3,
+    EN_UNTIL,
+    EN_ZERO,
+    ESCAPE,
+    FULL,
+    HORIZ,
+    IM_K,
+    IM_M,
+    IM_R,
+    LID,
+    LID_LABEL,
+    NCOL,
+    OMEGA,
+    RECENT,
+    S_KIND,
+    S_WALL,
+    SURF,
+    SURF_STRIDE,
+    TIME_LIMIT,
+    G,
+    KernelError,
+)
+from billiard.kernels.locate import locate
+from billiard.kernels.surfaces import gap_accel
+
+compensated_add = jit(_compensated_add)
+
+#: slots of the collapse window's ring
+RING = COLLAPSE_COUNT + 1
+
+
+@jit
+def pressing(ctx, p, walls, j, theta, q1, q2, u1, u2):
+    """Does the ball's acceleration relative to the boundary push it into surface j?"""
+    a = ctx[AMP]
+    d = a * math.sin(theta)
+    v = a * ctx[OMEGA] * math.cos(theta)
+    horizontal = ctx[HORIZ] != 0.0
+    if horizontal:
+        px, py, vx, vy = q1 - d, q2, u1 - v, u2
+    else:
+        px, py, vx, vy = q1, q2 - d, u1, u2 - v
+    a1, a2 = flight.acceleration(ctx, u1, u2)
+    ab = -ctx[AMP] * ctx[OMEGA] * ctx[OMEGA] * math.sin(theta)
+    if horizontal:
+        ax, ay = a1 - ab, a2
+    else:
+        ax, ay = a1, a2 - ab
+    return gap_accel(ctx, p, walls, j, px, py, vx, vy, ax, ay) < 0.0
+
+
+@jit
+def step(ctx, p, walls, out, row):
+    """Advance to the next impact and write its row ``out[row]``; returns False (and
+    changes nothing) when the impact comes after ``ctx[EN_UNTIL]``."""
+    if ctx[EN_FAULT] != 0.0:
+        raise KernelError(E_COLLAPSE)
+    u3 = ctx[EN_U3]
+    tau, j, q1, q2, u1, u2, theta, s, z = locate(
+        ctx, p, walls, ctx[EN_THETA], ctx[EN_Q1], ctx[EN_Q2], ctx[EN_U1], ctx[EN_U2], u3
+    )
+    total, error = compensated_add(ctx[EN_CLOCK], ctx[EN_CLOCK_ERR], tau)
+    t = total + error
+    if t > ctx[EN_UNTIL]:
+        return False
+    base = SURF + j * SURF_STRIDE
+    kind = ctx[base + S_KIND]
+    if kind == ESCAPE:
+        raise KernelError(E_ESCAPED)
+    q3 = ctx[EN_Q3] + u3 * tau
+    v = ctx[AMP] * ctx[OMEGA] * math.cos(theta)
+    if ctx[HORIZ] != 0.0:
+        vb1, vb2 = v, 0.0
+    else:
+        vb1, vb2 = 0.0, v
+    press = pressing(ctx, p, walls, j, theta, q1, q2, u1, u2)
+    n1, n2, n3, rt, rn, regime, resting = kane_levinson(ctx, u1, u2, u3, z, vb1, vb2, press)
+    u4, un = frame_velocity(n1, n2, z)
+    m, r, k = ctx[IM_M], ctx[IM_R], ctx[IM_K]
+    e = energy(q2, n1, n2, n3, m, r, k, ctx[G])
+    if not math.isfinite(
+        t + q1 + q2 + n1 + n2 + n3 + u4 + un + tau + z + e + rt + rn + s + q3
+    ):  # fmt: skip
+        raise KernelError(E_NON_FINITE)
+    n = ctx[EN_IMPACTS] + 1.0
+    o = row * NCOL
+    out[o] = n
+    out[o + 1] = t
+    out[o + 2] = q1
+    out[o + 3] = q2
+    out[o + 4] = n1
+    out[o + 5] = n2
+    out[o + 6] = n3
+    out[o + 7] = u4
+    out[o + 8] = un
+    out[o + 9] = tau
+    out[o + 10] = regime
+    out[o + 11] = z
+    out[o + 12] = e
+    out[o + 13] = LID_LABEL if kind == LID else ctx[base + S_WALL]
+    out[o + 14] = rt
+    out[o + 15] = rn
+    out[o + 16] = s
+    out[o + 17] = q3
+    # commit
+    ctx[EN_IMPACTS] = n
+    ctx[EN_T] = t
+    ctx[EN_THETA] = theta
+    ctx[EN_Q1] = q1
+    ctx[EN_Q2] = q2
+    ctx[EN_U1] = n1
+    ctx[EN_U2] = n2
+    ctx[EN_U3] = n3
+    ctx[EN_Q3] = q3
+    ctx[EN_CLOCK] = total
+    ctx[EN_CLOCK_ERR] = error
+    ctx[COUNTS + int(regime)] += 1.0
+    if resting:
+        ctx[COUNTS + 3] += 1.0
+    ctx[EN_ZERO] = ctx[EN_ZERO] + 1.0 if tau == 0.0 else 0.0
+    # the collapse window: impact times within COLLAPSE_SPAN of this one
+    count = int(ctx[EN_RCOUNT])
+    head = int(ctx[EN_RHEAD])
+    if count == RING:
+        head = (head + 1) % RING
+        count -= 1
+    ctx[RECENT + (head + count) % RING] = t
+    count += 1
+    while t - ctx[RECENT + head] >= COLLAPSE_SPAN:
+        head = (head + 1) % RING
+        count -= 1
+    ctx[EN_RCOUNT] = count
+    ctx[EN_RHEAD] = head
+    if count > COLLAPSE_COUNT or ctx[EN_ZERO] >= ZERO_FLIGHT_LIMIT:
+        ctx[EN_FAULT] = 1.0
+    return True
+
+
+@jit
+def run_chunk(ctx, p, walls, out, rows):
+    """Up to ``rows`` impacts, one row each in ``out`` (``rows * NCOL`` floats), until
+    impact number ``ctx[EN_TARGET]``. Returns (status, rows written): DONE, FULL,
+    TIME_LIMIT or COLLAPSE (after the row that detected it); a documented stop inside
+    raises KernelError, with ``ctx`` as after the last row written."""
+    row = 0
+    while ctx[EN_IMPACTS] < ctx[EN_TARGET]:
+        if row == rows:
+            return FULL, row
+        if not step(ctx, p, walls, out, row):
+            return TIME_LIMIT, row
+        row += 1
+        if ctx[EN_FAULT] != 0.0:
+            return COLLAPSE, row
+    return DONE, row

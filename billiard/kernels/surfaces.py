@@ -1,0 +1,121 @@
+"""The surfaces of :mod:`billiard.surfaces` over the state vector: the offset curve of a
+curved wall (:class:`~billiard.surfaces.OffsetWall`), of a straight one
+(:class:`~billiard.surfaces.OffsetLine`), the lid and the escape level. Same operations
+in the same order, the same warm starts (kept in the surface's block of ``ctx``).
+
+A curved wall's functions come in ``walls = (f, df, d2f)``, each a tuple with one
+function per wall of the curve, called as ``walls[1][w](x, p)``; compiled, they are
+first-class function values of type ``float64(float64, float64[::1])`` (see
+:mod:`billiard.compiled`), so the kernels are compiled once for every curve.
+"""
+
+from __future__ import annotations
+
+import math
+
+from billiard.jit import jit
+from billiard.kernels.layout import (
+    CURVED,
+    E_INVERSION,
+    LINE,
+    S_A,
+    S_B,
+    S_C,
+    S_D,
+    S_KIND,
+    S_WALL,
+    S_WS,
+    S_WSLOPE,
+    SURF,
+    SURF_STRIDE,
+    KernelError,
+)
+from billiard.surfaces import _FOOT_STEP_TOL
+
+
+@jit
+def foot(ctx, p, walls, base, x, s):
+    """Abscissa s of the wall point whose offset point has abscissa x (Newton)."""
+    w = int(ctx[base + S_WALL])
+    df = walls[1][w]
+    d2f = walls[2][w]
+    r = ctx[base + S_A]
+    for _ in range(60):
+        fp = df(s, p)
+        q = 1.0 + fp * fp
+        wr = r / math.sqrt(q)
+        ds = (s - fp * wr - x) / (1.0 - d2f(s, p) * wr / q)
+        s -= ds
+        if abs(ds) < _FOOT_STEP_TOL:
+            return s
+    raise KernelError(E_INVERSION)
+
+
+@jit
+def gap_rate(ctx, p, walls, j, px, py, vx, vy):
+    """(G, dG/dt) of surface j for a centre at p moving at v relative to the boundary."""
+    base = SURF + j * SURF_STRIDE
+    kind = ctx[base + S_KIND]
+    if kind == CURVED:
+        s = foot(ctx, p, walls, base, px, ctx[base + S_WS])
+        w = int(ctx[base + S_WALL])
+        fp = walls[1][w](s, p)
+        ctx[base + S_WS] = s
+        ctx[base + S_WSLOPE] = fp
+        return py - walls[0][w](s, p) - ctx[base + S_A] / math.sqrt(1.0 + fp * fp), vy - fp * vx
+    if kind == LINE:
+        b = ctx[base + S_A]
+        return py - b * px - ctx[base + S_B], vy - b * vx
+    return ctx[base + S_A] - py, -vy
+
+
+@jit
+def gap_accel(ctx, p, walls, j, px, py, vx, vy, ax, ay):
+    """d2G/dt2 of surface j for a relative acceleration a."""
+    base = SURF + j * SURF_STRIDE
+    kind = ctx[base + S_KIND]
+    if kind == CURVED:
+        s = foot(ctx, p, walls, base, px, ctx[base + S_WS])
+        ctx[base + S_WS] = s
+        w = int(ctx[base + S_WALL])
+        fp = walls[1][w](s, p)
+        f2 = walls[2][w](s, p)
+        # billiard.surfaces.offset_curvature
+        q = 1.0 + fp * fp
+        curvature = f2 / (1.0 - ctx[base + S_A] * f2 / (q * math.sqrt(q)))
+        return ay - walls[1][w](s, p) * ax - curvature * vx * vx
+    if kind == LINE:
+        return ay - ctx[base + S_A] * ax
+    return -ay
+
+
+@jit
+def contact(ctx, p, walls, j, px):
+    """(s, z) of the contact point of a centre at abscissa px on surface j's offset."""
+    base = SURF + j * SURF_STRIDE
+    kind = ctx[base + S_KIND]
+    if kind == CURVED:
+        s = foot(ctx, p, walls, base, px, ctx[base + S_WS])
+        ctx[base + S_WS] = s
+        return s, math.atan(walls[1][int(ctx[base + S_WALL])](s, p))
+    if kind == LINE:
+        return px + ctx[base + S_C], ctx[base + S_D]
+    return px, math.pi
+
+
+@jit
+def max_gap_deceleration(ctx, j, px, vx, tau, ax, ay_down, ay_up):
+    """Bound on -d2G/dtau2 of surface j over a window of length tau."""
+    base = SURF + j * SURF_STRIDE
+    kind = ctx[base + S_KIND]
+    if kind == CURVED:
+        dx = abs(vx) * tau + 0.5 * ax * tau * tau
+        vmax = abs(vx) + ax * tau
+        return (
+            ay_down
+            + (abs(ctx[base + S_WSLOPE]) + 2.0 * ctx[base + S_C] * dx) * ax
+            + ctx[base + S_B] * vmax * vmax
+        )
+    if kind == LINE:
+        return ay_down + abs(ctx[base + S_A]) * ax
+    return max(0.0, ay_up)
