@@ -31,7 +31,7 @@ from billiard.record import COLUMNS, ImpactRecord, MemoryRecorder
 from billiard.status import Status
 from billiard.surfaces import EscapeLevel, FlatLid, OffsetLine, OffsetWall
 
-__all__ = ["CompiledRun", "WallFunction", "simulate_compiled", "supports"]
+__all__ = ["CompiledRun", "Prepared", "WallFunction", "prepare", "simulate_compiled", "supports"]
 
 #: impacts per call of run_chunk
 CHUNK = 4096
@@ -267,23 +267,25 @@ def _records(buffer: Any, rows: int) -> list[ImpactRecord]:
     return records
 
 
-def simulate_compiled(
-    scene: Any,
-    collisions: int | None = None,
-    *,
-    out_dir: str | os.PathLike[str] | None = None,
-    chunk: int = CHUNK,
-) -> CompiledRun:
-    """Run an impact-only scene on the kernels: the same records as
-    :func:`billiard.simulate.simulate`; with ``out_dir``, ``DIR/collisions.csv`` with
-    the same bytes (no checkpoints or resume yet).
+@dataclass
+class Prepared:
+    """The arguments of :func:`billiard.kernels.loop.run_chunk` for a scene."""
+
+    sim: Simulation
+    ctx: Any
+    params: Any
+    walls: tuple[tuple[Any, ...], ...]
+    buffer: Any
+    chunk: int
+
+
+def prepare(scene: Any, collisions: int | None = None, chunk: int = CHUNK) -> Prepared:
+    """Build the engine for ``scene`` and the kernels' arguments, at its start state.
 
     Raises:
         ValueError: a scene the compiled engine does not cover (:func:`supports`).
     """
     _jit.notice()
-    from billiard.kernels.loop import run_chunk
-
     sim = Simulation(scene)
     why = supports(sim)
     if why is not None:
@@ -301,6 +303,27 @@ def simulate_compiled(
         buffer: Any = np.empty(chunk * L.NCOL, dtype=np.float64)
     else:
         ctx, params, buffer = values, p, [0.0] * (chunk * L.NCOL)
+    return Prepared(sim, ctx, params, walls, buffer, chunk)
+
+
+def simulate_compiled(
+    scene: Any,
+    collisions: int | None = None,
+    *,
+    out_dir: str | os.PathLike[str] | None = None,
+    chunk: int = CHUNK,
+) -> CompiledRun:
+    """Run an impact-only scene on the kernels: the same records as
+    :func:`billiard.simulate.simulate`; with ``out_dir``, ``DIR/collisions.csv`` with
+    the same bytes (no checkpoints or resume yet).
+
+    Raises:
+        ValueError: a scene the compiled engine does not cover (:func:`supports`).
+    """
+    from billiard.kernels.loop import run_chunk
+
+    run = prepare(scene, collisions, chunk)
+    ctx, params, walls, buffer = run.ctx, run.params, run.walls, run.buffer
     if out_dir is not None:
         from billiard.stream import CsvRecorder
 

@@ -19,6 +19,7 @@ from billiard.engine_phases import (
 from billiard.jit import jit
 from billiard.kernels import flight
 from billiard.kernels.ball import energy, frame_velocity
+from billiard.kernels.borrow import borrow
 from billiard.kernels.impact import kane_levinson
 from billiard.kernels.layout import (
     AMP,
@@ -186,6 +187,10 @@ def run_chunk(ctx, p, walls, out, rows):
     impact number ``ctx[EN_TARGET]``. Returns (status, rows written): DONE, FULL,
     TIME_LIMIT or COLLAPSE (after the row that detected it); a documented stop inside
     raises KernelError, with ``ctx`` as after the last row written."""
+    # the caller owns the arrays throughout: no reference counting inside
+    ctx = borrow(ctx)
+    p = borrow(p)
+    out = borrow(out)
     row = 0
     while ctx[EN_IMPACTS] < ctx[EN_TARGET]:
         if row == rows:
