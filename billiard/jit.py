@@ -8,17 +8,59 @@ run interpreted: the same source, no second copy. Without numba a one-line notic
 so, once (on first use).
 
 ``ENABLED`` tells which of the two is in force.
+
+Caching: numba reuses a cached function when the source file it is defined in is
+unchanged, but machine code compiled into it from other modules (a kernel calls
+kernels of other modules, the generated ball equations, constants of the engine) is not
+checked. The functions of :mod:`billiard.kernels` are therefore stamped with one hash of
+every source they compile in (:data:`KERNEL_SOURCES`): an edit or a regenerated
+``ball.py`` recompiles all of them. The cache lives beside the sources (``__pycache__``)
+when that is writable, else in the user's cache directory (numba's own fallback), or in
+``NUMBA_CACHE_DIR`` when set. The wall functions of a curve are not compiled into the
+kernels (they are passed by address), so each is stamped by its own module.
 """
 
 from __future__ import annotations
 
+import hashlib
+import importlib.util
 import os
 import sys
 import warnings
 from collections.abc import Callable
+from pathlib import Path
 from typing import Any, TypeVar
 
-__all__ = ["ENABLED", "jit", "numba_problem"]
+__all__ = ["ENABLED", "KERNEL_SOURCES", "jit", "kernel_source_hash", "numba_problem"]
+
+_PACKAGE = Path(__file__).resolve().parent
+_KERNELS = _PACKAGE / "kernels"
+#: The modules compiled into the kernels besides billiard.kernels.*
+KERNEL_SOURCES = (
+    "billiard.jit",
+    "billiard.flight",
+    "billiard.events",
+    "billiard.surfaces",
+    "billiard.impact",
+    "billiard.engine_phases",
+    "billiard.generated.ball",
+)
+_source_hash: bytes | None = None
+
+
+def kernel_source_hash() -> bytes:
+    """sha256 over the kernels' sources and every source compiled into them."""
+    global _source_hash
+    if _source_hash is None:
+        digest = hashlib.sha256()
+        files = sorted(_KERNELS.glob("*.py")) + [
+            Path(importlib.util.find_spec(name).origin) for name in KERNEL_SOURCES
+        ]
+        for path in files:
+            digest.update(path.name.encode() + b"\0" + path.read_bytes())
+        _source_hash = digest.digest()
+    return _source_hash
+
 
 F = TypeVar("F", bound=Callable[..., Any])
 
@@ -41,6 +83,30 @@ except ImportError as exc:  # no numba on this platform, or the JIT disabled
 else:
     # the wall functions are first-class function values (numba.core.types.FunctionType)
     warnings.filterwarnings("ignore", category=NumbaExperimentalFeatureWarning)
+    from numba.core import caching as _caching
+
+    class _KernelStamp:
+        """A cache locator for the functions defined in billiard/kernels/: stamped with
+        :func:`kernel_source_hash` instead of their own file's hash."""
+
+        @classmethod
+        def from_function(cls, py_func, py_file):
+            if Path(py_file).resolve().parent != _KERNELS:
+                return None
+            return super().from_function(py_func, py_file)
+
+        def get_source_stamp(self):
+            return kernel_source_hash()
+
+    _locators = [
+        type(f"Kernel{base.__name__}", (_KernelStamp, base), {})
+        for base in (
+            _caching.UserProvidedCacheLocator,
+            _caching.InTreeCacheLocator,
+            _caching.UserWideCacheLocator,
+        )
+    ]
+    _caching.CacheImpl._locator_classes[:0] = _locators
 
 #: True when the kernels are compiled by numba, False when they run interpreted.
 ENABLED = numba is not None
