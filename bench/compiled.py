@@ -139,17 +139,6 @@ def refcount_cost(calls: int = 2_000_000, repeats: int = 5) -> tuple[float, floa
     return a, s, (a - s) / a
 
 
-def refcount_calls() -> dict[str, int]:
-    """Reference-count operations left in the optimised machine code of run_chunk."""
-    from billiard.kernels.loop import run_chunk
-
-    counts = {"incref": 0, "decref": 0}
-    for asm in run_chunk.inspect_asm().values():
-        counts["incref"] += asm.count("NRT_incref")
-        counts["decref"] += asm.count("NRT_decref")
-    return counts
-
-
 def main(argv: list[str] | None = None) -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--impacts", type=int, default=20_000)
@@ -177,7 +166,6 @@ def main(argv: list[str] | None = None) -> None:
         f"non-inlined call reading an array argument {a:.2f} ns, taking scalars {s:.2f} ns: "
         f"reference counting {share:.0%} of the call"
     )
-    print(f"reference-count operations in run_chunk's machine code: {refcount_calls()}")
 
 
 if __name__ == "__main__":
