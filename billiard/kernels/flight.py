@@ -144,7 +144,8 @@ def stages(ctx, q1, q2, u1, u2, k1x, k1y, h, with_error):
     s2 = rtol * (1.0 + max(abs(q2), abs(n2)))
     s3 = rtol * (1.0 + max(abs(u1), abs(w1)))
     s4 = rtol * (1.0 + max(abs(u2), abs(w2)))
-    err = math.sqrt(((e1 / s1) ** 2 + (e2 / s2) ** 2 + (e3 / s3) ** 2 + (e4 / s4) ** 2) / 4)
+    r1, r2, r3, r4 = e1 / s1, e2 / s2, e3 / s3, e4 / s4
+    err = math.sqrt((r1 * r1 + r2 * r2 + r3 * r3 + r4 * r4) / 4)
     return n1, n2, w1, w2, k7x, k7y, err
 
 

@@ -138,7 +138,7 @@ def quadratic_start(lo, glo, dglo, hi, dghi):
 def accel_bounds(ctx, u1, u2, window):
     """(sup |a_x|, sup -a_y, sup a_y) of the relative acceleration over a window."""
     g = ctx[G]
-    speed = math.hypot(u1, u2) + 2.0 * g * window
+    speed = math.sqrt(u1 * u1 + u2 * u2) + 2.0 * g * window
     aero = flight.aero_bound(ctx, speed)
     if ctx[HORIZ] != 0.0:
         return ctx[DRIVE_ACCEL] + aero, g + aero, aero - g
@@ -334,7 +334,7 @@ def locate(ctx, p, walls, theta0, q1, q2, u1, u2, u3):
             ctx[base + S_GB] = g1
             ctx[base + S_DGB] = dg1
         span = tb - ta
-        speed = math.hypot(vxa, vya)
+        speed = math.sqrt(vxa * vxa + vya * vya)
         ctx[H_BRACKET] = ctx[H_FIRST]
         if speed * ctx[H_BRACKET] > ctx[TURN]:
             ctx[H_BRACKET] = ctx[TURN] / speed
