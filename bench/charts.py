@@ -200,20 +200,39 @@ def ladder(rows: list[dict], path: Path, command: str) -> Path:
     return _save(fig, path, command)
 
 
-def throughput(rates: list[dict], memory: list[dict], path: Path, command: str) -> Path:
-    """Impacts per second of wall time per scene; peak memory against run length."""
+def throughput(
+    rates: list[dict], memory: list[dict], path: Path, command: str, long: list[dict] = ()
+) -> Path:
+    """CPU per impact, compiled and interpreted, per scene; peak memory against run length."""
     fig, axes = plt.subplots(1, 2, figsize=(11, 4.5))
-    scenes = list(dict.fromkeys(r["scene"] for r in rates))
-    for k, (drag, label) in enumerate((("fowles", "drag on (full model)"), ("none", "drag off"))):
-        pts = [
-            next((r for r in rates if r["scene"] == s and r["drag"] == drag), None) for s in scenes
-        ]
-        x = [i + (k - 0.5) * 0.38 for i in range(len(scenes))]
-        axes[0].bar(x, [p["rate"] if p else 0 for p in pts], 0.38, label=label)
-    axes[0].axhline(TARGET_RATE, color="k", ls="--", lw=1, label="target: 25,000 in 2 s")
-    axes[0].set_xticks(range(len(scenes)), scenes, fontsize=8)
-    axes[0].set_ylabel("impacts per second of wall time")
-    axes[0].set_title("default method, median of the repeats")
+    labels = [f"{r['scene']}\ndrag {'on' if r['drag'] == 'fowles' else 'off'}" for r in rates]
+    x = list(range(len(rates)))
+    if all("compiled" in r for r in rates):
+        for k, (engine, color) in enumerate((("interpreted", "C0"), ("compiled", "C1"))):
+            axes[0].bar(
+                [i + (k - 0.5) * 0.4 for i in x],
+                [r[engine]["cpu_per_impact"] * 1e6 for r in rates],
+                0.4,
+                color=color,
+                label=f"{engine} engine",
+            )
+        for i, r in enumerate(rates):
+            axes[0].text(
+                i,
+                r["interpreted"]["cpu_per_impact"] * 1.3e6,
+                f"{r['ratio']:.0f}x",
+                ha="center",
+                fontsize=7,
+            )
+        axes[0].set_yscale("log")
+        axes[0].set_ylabel("CPU per impact (us), run loop, median")
+        axes[0].set_title("compiled against interpreted (ratio above the bars)")
+    else:  # an earlier bench: wall-time rate of the one engine
+        axes[0].bar(x, [r["rate"] for r in rates], 0.6)
+        axes[0].axhline(TARGET_RATE, color="k", ls="--", lw=1, label="target: 25,000 in 2 s")
+        axes[0].set_ylabel("impacts per second of wall time")
+        axes[0].set_title("default method, median of the repeats")
+    axes[0].set_xticks(x, labels, fontsize=6)
     axes[0].legend(fontsize=8)
     runs = [m for m in memory if m["impacts"] > 0]
     base = next((m["peak_mb"] for m in memory if m["impacts"] == 0), None)
@@ -223,11 +242,13 @@ def throughput(rates: list[dict], memory: list[dict], path: Path, command: str) 
         "-o",
         label="run streamed to collisions.csv",
     )
+    for m, marker in zip(long, "s^", strict=False):
+        axes[1].plot([m["impacts"]], [m["peak_mb"]], marker, label=f"wedge, {m['how']}")
     if base is not None:
         axes[1].axhline(base, color="0.5", ls=":", label="modules imported, no run")
     axes[1].axhline(200, color="k", ls="--", lw=1, label="target: 200 MB")
     axes[1].set_xscale("log")
-    axes[1].set_ylim(0, 220)
+    axes[1].set_ylim(0, max([220.0, *(m["peak_mb"] * 1.1 for m in long)]))
     axes[1].set_xlabel("impacts")
     axes[1].set_ylabel("peak resident memory, VmHWM (MB)")
     axes[1].set_title("peak memory of a fresh process")

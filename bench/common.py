@@ -53,6 +53,7 @@ class Config:
     throughput_repeats: int
     startup_repeats: int
     memory_sizes: tuple[int, ...]
+    million_impacts: int  # the long wedge run of the throughput section
     profile_impacts: int
     contact_paper_duration: float  # simulated s per run of a paper scene (contact section)
     contact_duration: float  # simulated s per run of a closed-form case (contact section)
@@ -78,7 +79,8 @@ class Config:
             throughput_impacts=25000,
             throughput_repeats=3,
             startup_repeats=5,
-            memory_sizes=(10_000, 100_000, 1_000_000),
+            memory_sizes=(10_000, 100_000),
+            million_impacts=1_000_000,
             profile_impacts=25000,
             contact_paper_duration=600.0,
             contact_duration=30.0,
@@ -106,6 +108,7 @@ class Config:
             throughput_repeats=3,
             startup_repeats=3,
             memory_sizes=(5_000, 20_000),
+            million_impacts=50_000,
             profile_impacts=3000,
             contact_paper_duration=60.0,
             contact_duration=5.0,

@@ -54,7 +54,12 @@ def measure(section: str, cfg: Config, starts: Starts) -> dict:
             for n in cfg.scenes
         ]
         return {
+            "engine": throughput.engine_info(),
             "rates": rates,
+            "runs": throughput.whole_runs(cfg.scenes, 25000, cfg.startup_repeats),
+            "million": throughput.million("wedge-6.6hz", cfg.million_impacts),
+            "compiled_startup": throughput.compiled_startup("wedge-6.6hz", cfg.startup_repeats),
+            "refcount": throughput.refcount(cfg.throughput_repeats),
             "startup": throughput.startup(cfg.startup_repeats),
             "memory": throughput.memory("wedge-6.6hz", cfg.memory_sizes),
         }
@@ -87,7 +92,11 @@ def draw(results: dict, figures: Path, command: str) -> None:
     if "throughput" in sections:
         t = sections["throughput"]
         charts.throughput(
-            t["rates"], t["memory"], figures / "throughput.png", f"{command} --only throughput"
+            t["rates"],
+            t["memory"],
+            figures / "throughput.png",
+            f"{command} --only throughput",
+            t.get("million", ()),
         )
     if "contact" in sections:
         charts.contact(

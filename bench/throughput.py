@@ -3,6 +3,8 @@
 from __future__ import annotations
 
 import cProfile
+import json
+import os
 import pstats
 import re
 import shutil
@@ -13,9 +15,8 @@ import tempfile
 import time
 from pathlib import Path
 
-from billiard.record import MemoryRecorder
-from billiard.scene import load_scene, with_values
-from billiard.simulate import Simulation, simulate
+from billiard.scene import load_scene
+from billiard.simulate import simulate
 
 _MEMORY_SCRIPT = """
 import resource, sys, time
@@ -32,30 +33,252 @@ print(hwm, rss, time.perf_counter() - start)
 """
 
 
-def impact_rate(name: str, impacts: int, repeats: int, drag: str = "fowles") -> dict:
-    """Median wall and CPU time of ``repeats`` in-memory runs of the built-in scene (the
-    run loop only: building the simulation is excluded, as in ``Result.wall_time``)."""
-    scene = with_values(load_scene(name), {"air.drag": drag})
-    times, cpus = [], []
-    for _ in range(repeats):
-        sim = Simulation(scene)
-        recorder = MemoryRecorder()
-        wall0, cpu0 = time.perf_counter(), time.process_time()
-        stop = sim.run(impacts, recorder)
-        times.append(time.perf_counter() - wall0)
-        cpus.append(time.process_time() - cpu0)
-        assert not stop and len(recorder) == impacts, stop
-    median = statistics.median(times)
+#: The issue's targets for the compiled engine (CPU per impact in s, walls in s, MB).
+TARGETS = {
+    "ratio": 30.0,
+    "cpu_wedge": 1e-6,
+    "cpu_parabola_drag": 3e-6,
+    "wall_25000": 0.6,
+    "wall_million": 2.0,
+    "peak_million_mb": 200.0,
+    "warm_start": 0.6,
+    "cold_compile": 20.0,
+}
+
+# One engine measured in a fresh process: NUMBA_DISABLE_JIT=1 in its environment makes it
+# the interpreted reference, the same kernels run by CPython. The run loop only is timed
+# (building the simulation excluded, as in Result.wall_time); the first short run loads
+# the compiled kernels from numba's cache (or compiles them) before any timing.
+_RATE_SCRIPT = """
+import json, statistics, sys, time
+from billiard import jit
+from billiard.engine import Simulation
+from billiard.record import MemoryRecorder
+from billiard.scene import load_scene, with_values
+name, drag, n, repeats = sys.argv[1], sys.argv[2], int(sys.argv[3]), int(sys.argv[4])
+scene = with_values(load_scene(name), {"air.drag": drag})
+Simulation(scene).run(min(n, 100), MemoryRecorder())
+walls, cpus = [], []
+for _ in range(repeats):
+    sim = Simulation(scene)
+    recorder = MemoryRecorder()
+    wall0, cpu0 = time.perf_counter(), time.process_time()
+    stop = sim.run(n, recorder)
+    cpus.append(time.process_time() - cpu0)
+    walls.append(time.perf_counter() - wall0)
+    assert not stop and len(recorder) == n, stop
+print(json.dumps({"compiled": jit.ENABLED, "walls": walls, "cpus": cpus}))
+"""
+
+
+def _engine_env(interpreted: bool) -> dict[str, str]:
+    env = dict(os.environ)
+    env.pop("NUMBA_DISABLE_JIT", None)
+    if interpreted:
+        env["NUMBA_DISABLE_JIT"] = "1"
+    return env
+
+
+def engine_rate(name: str, drag: str, impacts: int, repeats: int, interpreted: bool) -> dict:
+    """CPU seconds per impact (median of ``repeats`` in-memory runs in one fresh process)
+    of the compiled engine, or of the same kernels interpreted."""
+    done = subprocess.run(
+        [sys.executable, "-c", _RATE_SCRIPT, name, drag, str(impacts), str(repeats)],
+        env=_engine_env(interpreted),
+        capture_output=True,
+        text=True,
+        check=True,
+    )
+    out = json.loads(done.stdout.splitlines()[-1])
+    cpu = statistics.median(out["cpus"])
+    return {
+        "compiled": out["compiled"],
+        "impacts": impacts,
+        "cpus": out["cpus"],
+        "walls": out["walls"],
+        "cpu": cpu,
+        "cpu_per_impact": cpu / impacts,
+        "wall": statistics.median(out["walls"]),
+    }
+
+
+def impact_rate(
+    name: str, impacts: int, repeats: int, drag: str = "fowles", interpreted_impacts: int = 0
+) -> dict:
+    """The compiled engine against the interpreted one on a built-in scene: CPU per
+    impact of the run loop, medians, both measured in this bench run."""
+    fast = engine_rate(name, drag, impacts, repeats, interpreted=False)
+    slow = engine_rate(name, drag, interpreted_impacts or impacts, repeats, interpreted=True)
+    print(
+        f"  {name} drag={drag}: compiled {fast['cpu_per_impact'] * 1e6:.2f} us/impact, "
+        f"interpreted {slow['cpu_per_impact'] * 1e6:.1f} us/impact",
+        flush=True,
+    )
     return {
         "scene": name,
         "drag": drag,
         "impacts": impacts,
-        "times": times,
-        "median": median,
-        "cpu": statistics.median(cpus),
-        "rate": impacts / median,
-        "per_25000": 25000 * median / impacts,
+        "compiled": fast,
+        "interpreted": slow,
+        "ratio": slow["cpu_per_impact"] / fast["cpu_per_impact"],
+        # the fields of the earlier, engine-agnostic table
+        "times": fast["walls"],
+        "median": fast["wall"],
+        "cpu": fast["cpu"],
+        "rate": impacts / fast["wall"],
+        "per_25000": 25000 * fast["wall"] / impacts,
     }
+
+
+_FIRST_IMPACT = """
+import time
+start = time.perf_counter()
+from billiard.engine import Simulation
+from billiard.record import MemoryRecorder
+from billiard.scene import load_scene
+Simulation(load_scene({name!r})).run(1, MemoryRecorder())
+print(time.perf_counter() - start)
+"""
+
+
+def first_impact(name: str, repeats: int, cache_dir: str | None = None) -> list[float]:
+    """Wall seconds from a fresh interpreter's first line to the first impact (the
+    kernels loaded from the cache; with ``cache_dir`` an empty cache: compiled)."""
+    env = _engine_env(False)
+    if cache_dir is not None:
+        env["NUMBA_CACHE_DIR"] = cache_dir
+    times = []
+    for _ in range(repeats):
+        done = subprocess.run(
+            [sys.executable, "-c", _FIRST_IMPACT.format(name=name)],
+            env=env,
+            capture_output=True,
+            text=True,
+            check=True,
+        )
+        times.append(float(done.stdout.split()[-1]))
+    return times
+
+
+def whole_runs(scenes: tuple[str, ...], impacts: int, repeats: int) -> list[dict]:
+    """Wall seconds of a fresh process, start-up included: ``billiard run SCENE
+    --collisions N --no-plot`` (the CSV written) and the in-memory ``simulate`` call."""
+    rows = []
+    with tempfile.TemporaryDirectory() as tmp:
+        for name in scenes:
+            commands = {
+                "billiard run": billiard_command()
+                + [
+                    "run",
+                    name,
+                    "--collisions",
+                    str(impacts),
+                    "--no-plot",
+                    "--out",
+                    "run",
+                    "--overwrite",
+                ],
+                "simulate() in memory": [
+                    sys.executable,
+                    "-c",
+                    "import sys; from billiard import load_scene, simulate; "
+                    "r = simulate(load_scene(sys.argv[1]), collisions=int(sys.argv[2])); "
+                    "assert len(r) == int(sys.argv[2]), r.stop_reason",
+                    name,
+                    str(impacts),
+                ],
+            }
+            for label, command in commands.items():
+                times = [wall(command, tmp) for _ in range(repeats)]
+                rows.append(
+                    {
+                        "scene": name,
+                        "how": label,
+                        "impacts": impacts,
+                        "times": times,
+                        "median": statistics.median(times),
+                    }
+                )
+                print(f"  {label} {name} {impacts}: {rows[-1]['median']:.2f} s", flush=True)
+    return rows
+
+
+_MILLION_SCRIPT = """
+import sys, time
+from billiard.scene import load_scene
+from billiard.simulate import simulate
+n, out, name = int(sys.argv[1]), sys.argv[2], sys.argv[3]
+start = time.perf_counter()
+result = simulate(load_scene(name), collisions=n, out_dir=out or None)
+assert len(result) == n, result.stop_reason
+seconds = time.perf_counter() - start
+hwm = next(line.split()[1] for line in open("/proc/self/status") if line.startswith("VmHWM"))
+print(hwm, seconds)
+"""
+
+
+def million(name: str, impacts: int) -> list[dict]:
+    """Wall time (the run call, start-up excluded) and peak memory (VmHWM) of a fresh
+    process running ``impacts`` impacts in memory and streamed to collisions.csv."""
+    rows = []
+    for how in ("in memory", "streamed to collisions.csv"):
+        tmp = tempfile.mkdtemp()
+        try:
+            out = tmp if how.startswith("streamed") else ""
+            done = subprocess.run(
+                [sys.executable, "-c", _MILLION_SCRIPT, str(impacts), out, name],
+                env=_engine_env(False),
+                capture_output=True,
+                text=True,
+                check=True,
+            )
+        finally:
+            shutil.rmtree(tmp, ignore_errors=True)
+        hwm, seconds = done.stdout.split()[-2:]
+        rows.append(
+            {
+                "scene": name,
+                "how": how,
+                "impacts": impacts,
+                "wall": float(seconds),
+                "peak_mb": int(hwm) / 1024.0,
+            }
+        )
+        print(f"  {how} {name} {impacts}: {float(seconds):.2f} s, {int(hwm) / 1024:.0f} MB")
+    return rows
+
+
+def refcount(repeats: int) -> dict:
+    """What numba's reference counting of an array argument costs a call that is not
+    inlined (``bench.compiled.refcount_cost``)."""
+    from bench.compiled import refcount_cost
+
+    array_ns, scalar_ns, share = refcount_cost(repeats=repeats)
+    return {"array_ns": array_ns, "scalar_ns": scalar_ns, "share": share}
+
+
+def compiled_startup(name: str, repeats: int) -> dict:
+    """Warm start-up to the first impact (median of ``repeats``) and one cold compile."""
+    warm = first_impact(name, repeats)
+    with tempfile.TemporaryDirectory() as cold_dir:
+        cold = first_impact(name, 1, cold_dir)
+    return {
+        "scene": name,
+        "warm": warm,
+        "warm_median": statistics.median(warm),
+        "cold": cold[0],
+    }
+
+
+def engine_info() -> dict:
+    from billiard import jit
+
+    info: dict = {"compiled": jit.ENABLED, "problem": jit.numba_problem()}
+    if jit.ENABLED:
+        import numba
+
+        info["numba"] = numba.__version__
+    return info
 
 
 def billiard_command() -> list[str]:
