@@ -31,7 +31,14 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import Any, TypeVar
 
-__all__ = ["ENABLED", "KERNEL_SOURCES", "jit", "kernel_source_hash", "numba_problem"]
+__all__ = [
+    "COMPILE_NOTICE",
+    "ENABLED",
+    "KERNEL_SOURCES",
+    "jit",
+    "kernel_source_hash",
+    "numba_problem",
+]
 
 _PACKAGE = Path(__file__).resolve().parent
 _KERNELS = _PACKAGE / "kernels"
@@ -66,6 +73,12 @@ F = TypeVar("F", bound=Callable[..., Any])
 
 _problem: str | None = None
 _noticed = False
+_compile_noticed = False
+#: printed once when the kernels are compiled (an empty or outdated cache)
+COMPILE_NOTICE = (
+    "billiard: compiling the engine's kernels with numba (once per install or update, "
+    "about 15 s; cached afterwards)"
+)
 
 
 def _disabled() -> bool:
@@ -107,6 +120,27 @@ else:
         )
     ]
     _caching.CacheImpl._locator_classes[:0] = _locators
+
+    from numba.core import event as _event
+
+    class _CompileNotice(_event.Listener):
+        """Says, once per process, that the kernels are being compiled: numba signals
+        "numba:compile" only when a function is compiled, not when it is loaded from the
+        cache, so a warm start prints nothing."""
+
+        def on_start(self, event):
+            global _compile_noticed
+            dispatcher = (event.data or {}).get("dispatcher")
+            module = getattr(getattr(dispatcher, "py_func", None), "__module__", "") or ""
+            if _compile_noticed or not module.startswith("billiard.kernels"):
+                return
+            _compile_noticed = True
+            print(COMPILE_NOTICE, file=sys.stderr, flush=True)
+
+        def on_end(self, event):
+            pass
+
+    _event.register("numba:compile", _CompileNotice())
 
 #: True when the kernels are compiled by numba, False when they run interpreted.
 ENABLED = numba is not None
