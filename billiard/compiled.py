@@ -27,9 +27,9 @@ from billiard import jit as _jit
 from billiard.engine import Simulation
 from billiard.errors import SimulationError
 from billiard.kernels import layout as L
+from billiard.kernels.state import state_vector
 from billiard.record import COLUMNS, ImpactRecord, MemoryRecorder
 from billiard.status import Status
-from billiard.surfaces import EscapeLevel, FlatLid, OffsetLine, OffsetWall
 
 __all__ = ["CompiledRun", "Prepared", "WallFunction", "prepare", "simulate_compiled", "supports"]
 
@@ -130,97 +130,6 @@ def supports(sim: Simulation) -> str | None:
     if type(sim.impact).__name__ != "KaneLevinsonImpact":
         return "an impact law other than Kane-Levinson"
     return None
-
-
-def state_vector(sim: Simulation) -> list[float]:
-    """The kernels' ``ctx`` for ``sim`` in its current engine state."""
-    ctx = [0.0] * L.SIZE
-    drive = sim.drive
-    loc = sim.locator
-    ctx[L.AMP] = loc.amplitude
-    ctx[L.OMEGA] = loc.omega
-    ctx[L.HORIZ] = 1.0 if loc.horizontal else 0.0
-    ctx[L.DRIVE_ACCEL] = loc.drive_accel
-    ctx[L.G] = loc.g
-    ctx[L.H_FIRST] = loc.h_first
-    ctx[L.H_LONGEST] = loc.h_longest
-    ctx[L.TURN] = loc.turn_length
-    ctx[L.H_BRACKET] = loc.h_bracket
-    assert drive.amplitude == loc.amplitude
-    surfaces = sim.boundary.surfaces
-    ctx[L.NSURF] = float(len(surfaces))
-    fl = sim.flight
-    name = type(fl).__name__
-    if name == "ExactFlight":
-        ctx[L.FL_KIND] = L.FLIGHT_EXACT
-    elif name == "AdaptiveFlight":
-        ctx[L.FL_KIND] = L.FLIGHT_ADAPTIVE
-        ctx[L.FL_M] = fl.m
-        ctx[L.FL_CLIN] = fl.c_lin
-        ctx[L.FL_CQUAD] = fl.c_quad
-        ctx[L.FL_CMAG] = fl.c_magnus
-        ctx[L.FL_RTOL] = fl.rtol
-        ctx[L.FL_H] = fl._h
-        assert fl.g == loc.g
-    else:
-        raise ValueError(f"the compiled engine has no flight model {name}")
-    law = sim.impact
-    ctx[L.IM_M] = law.m
-    ctx[L.IM_R] = law.r
-    ctx[L.IM_K] = law.k
-    ctx[L.IM_E] = law.e
-    ctx[L.IM_MUS] = law.mu_s
-    ctx[L.IM_MUK] = law.mu_k
-    ctx[L.IM_EB] = law.low_velocity.threshold
-    for j, surface in enumerate(surfaces):
-        base = L.SURF + j * L.SURF_STRIDE
-        if isinstance(surface, OffsetLine):
-            ctx[base + L.S_KIND] = L.LINE
-            ctx[base + L.S_WALL] = float(surface.index)
-            ctx[base + L.S_A] = surface.b
-            ctx[base + L.S_B] = surface.intercept
-            ctx[base + L.S_C] = surface.shift
-            ctx[base + L.S_D] = surface.z
-        elif isinstance(surface, OffsetWall):
-            ctx[base + L.S_KIND] = L.CURVED
-            ctx[base + L.S_WALL] = float(surface.index)
-            ctx[base + L.S_A] = surface.r
-            ctx[base + L.S_B] = surface.bend_bound
-            ctx[base + L.S_C] = surface.bend_abs_bound
-        elif isinstance(surface, EscapeLevel):
-            ctx[base + L.S_KIND] = L.ESCAPE
-            ctx[base + L.S_A] = surface.level
-        elif isinstance(surface, FlatLid):
-            ctx[base + L.S_KIND] = L.LID
-            ctx[base + L.S_A] = surface.level
-        else:
-            raise ValueError(f"the compiled engine has no surface {type(surface).__name__}")
-        warm = sim.warm[j]
-        ctx[base + L.S_WS] = float(warm[0])
-        ctx[base + L.S_WSLOPE] = float(warm[1])
-    state = sim.state
-    ball = state.ball
-    ctx[L.EN_T] = ball.t
-    ctx[L.EN_THETA] = ball.theta
-    ctx[L.EN_Q1] = ball.q1
-    ctx[L.EN_Q2] = ball.q2
-    ctx[L.EN_U1] = ball.u1
-    ctx[L.EN_U2] = ball.u2
-    ctx[L.EN_U3] = ball.u3
-    ctx[L.EN_Q3] = ball.q3
-    ctx[L.EN_CLOCK] = state.clock
-    ctx[L.EN_CLOCK_ERR] = state.clock_error
-    ctx[L.EN_ZERO] = float(state.zero_flights)
-    ctx[L.EN_IMPACTS] = float(state.impacts)
-    ctx[L.EN_UNTIL] = sim.end_time
-    recent = list(state.recent)
-    for i, t in enumerate(recent):
-        ctx[L.RECENT + i] = t
-    ctx[L.EN_RCOUNT] = float(len(recent))
-    ctx[L.EN_RHEAD] = 0.0
-    for i, key in enumerate(("stick", "slip", "elastic", "resting")):
-        ctx[L.COUNTS + i] = float(state.counts.get(key, 0))
-    return ctx
 
 
 # ---------------------------------------------------------------------- the run
