@@ -1,20 +1,12 @@
-"""The compiled engine for impact-only scenes (``contact.model = "impacts"``, method
-``event``): :func:`simulate_compiled` builds the kernels' state vector from a scene and
-streams chunks of impacts from :func:`billiard.kernels.loop.run_chunk` into the same
-records, and the same ``collisions.csv`` bytes, as :class:`billiard.engine.Simulation`.
-
-The kernels are compiled by numba when it is there (:mod:`billiard.jit`) and run
-interpreted otherwise (or with ``NUMBA_DISABLE_JIT=1``): one source either way.
-
-A curve's wall functions are handed to the kernels as first-class function values of
-one type, ``float64(float64, float64[::1])`` (numba's ``FunctionType``): each generated
-function is compiled once under the same decorator and passed by address
-(:class:`WallFunction`), so the kernels are compiled once for every curve, and cached.
+"""The compiled engine under its former names: :func:`simulate_compiled` and
+:func:`prepare` are thin aliases over :class:`billiard.engine.Simulation`, which runs
+impact-only scenes (``contact.model = "impacts"``, method ``event``, Kane and Levinson's
+law: :func:`supports`) on the kernels of :mod:`billiard.kernels` itself
+(:mod:`billiard.engine_kernels`).
 """
 
 from __future__ import annotations
 
-import math
 import os
 import time
 from dataclasses import dataclass, field
@@ -25,205 +17,25 @@ import numpy as np
 
 from billiard import jit as _jit
 from billiard.engine import Simulation
-from billiard.errors import SimulationError
+from billiard.engine_kernels import LAST_CHUNK, supports
+from billiard.kernel_walls import WallFunction, wall_functions
 from billiard.kernels import layout as L
-from billiard.record import COLUMNS, ImpactRecord, MemoryRecorder
+from billiard.kernels.state import state_vector
+from billiard.record import COLUMNS, MemoryRecorder
 from billiard.status import Status
-from billiard.surfaces import EscapeLevel, FlatLid, OffsetLine, OffsetWall
 
-__all__ = ["CompiledRun", "Prepared", "WallFunction", "prepare", "simulate_compiled", "supports"]
+__all__ = [
+    "CompiledRun",
+    "Prepared",
+    "WallFunction",
+    "prepare",
+    "simulate_compiled",
+    "state_vector",
+    "supports",
+]
 
-#: impacts per call of run_chunk
-CHUNK = 4096
-
-_MESSAGES = {
-    L.E_ESCAPED: (Status.ESCAPED, "ball escaped above escape_height"),
-    L.E_NO_IMPACT: (Status.SOLVER_FAILED, "no impact found within 1000 s of flight"),
-    L.E_ROOT: (Status.SOLVER_FAILED, "the impact time did not converge"),
-    L.E_EXTREMUM: (Status.SOLVER_FAILED, "the gap's extremum did not converge"),
-    L.E_STEP_CONTROL: (Status.SOLVER_FAILED, "the flight's step-size control failed"),
-    L.E_INVERSION: (Status.SOLVER_FAILED, "offset-curve inversion did not converge"),
-    L.E_NON_FINITE: (Status.NON_FINITE, "non-finite state"),
-    L.E_COLLAPSE: (Status.COLLAPSE, "inelastic collapse"),
-}
-
-
-# ---------------------------------------------------------------------- wall functions
-
-_SIGNATURE = None
-_compiled_walls: dict[Any, Any] = {}
-
-
-def _wall_signature() -> Any:
-    global _SIGNATURE
-    if _SIGNATURE is None:
-        from numba import types
-
-        _SIGNATURE = types.float64(types.float64, types.float64[::1])
-    return _SIGNATURE
-
-
-def _wall_function_class() -> type:
-    import numba.experimental.function_type  # noqa: F401  (typeof of the protocol)
-    from numba.core.types import WrapperAddressProtocol
-
-    class _WallFunction(WrapperAddressProtocol):
-        """A generated wall function, compiled for ``float64(float64, float64[::1])``,
-        as a first-class function value: numba types it by its signature alone, so a
-        kernel taking it is compiled (and cached) once for every curve."""
-
-        def __init__(self, fn: Any):
-            sig = _wall_signature()
-            self.dispatcher = _jit.jit(fn)
-            self.dispatcher.compile(sig.args)
-            result = self.dispatcher.get_compile_result(sig)
-            self.address = result.library.get_pointer_to_function(
-                result.fndesc.llvm_cfunc_wrapper_name
-            )
-
-        def __wrapper_address__(self) -> int:
-            return self.address
-
-        def signature(self) -> Any:
-            return _wall_signature()
-
-    return _WallFunction
-
-
-_WallFunctionClass: type | None = None
-
-
-def WallFunction(fn: Any) -> Any:  # noqa: N802  (a factory standing for a class)
-    """``fn`` as the kernels take it: a compiled first-class function value, or ``fn``
-    itself when the kernels run interpreted."""
-    global _WallFunctionClass
-    if not _jit.ENABLED:
-        return fn
-    if fn not in _compiled_walls:
-        if _WallFunctionClass is None:
-            _WallFunctionClass = _wall_function_class()
-        _compiled_walls[fn] = _WallFunctionClass(fn)
-    return _compiled_walls[fn]
-
-
-def wall_functions(sim: Simulation) -> tuple[tuple[Any, ...], ...]:
-    """(f, df, d2f): one tuple per function, one entry per wall of the curve."""
-    walls = sim.boundary.walls
-    return (
-        tuple(WallFunction(w.f) for w in walls),
-        tuple(WallFunction(w.df) for w in walls),
-        tuple(WallFunction(w.d2f) for w in walls),
-    )
-
-
-# ---------------------------------------------------------------------- state vector
-
-
-def supports(sim: Simulation) -> str | None:
-    """None when the compiled engine runs this simulation, else why not."""
-    if sim.method != "event":
-        return f"method {sim.method!r} (the compiled engine has the event locator only)"
-    if sim.phases:
-        return "contact.model = 'phases' (the compiled engine has impacts only)"
-    if len(sim.boundary.surfaces) > L.MAX_SURFACES:
-        return f"more than {L.MAX_SURFACES} surfaces"
-    if type(sim.impact).__name__ != "KaneLevinsonImpact":
-        return "an impact law other than Kane-Levinson"
-    return None
-
-
-def state_vector(sim: Simulation) -> list[float]:
-    """The kernels' ``ctx`` for ``sim`` in its current engine state."""
-    ctx = [0.0] * L.SIZE
-    drive = sim.drive
-    loc = sim.locator
-    ctx[L.AMP] = loc.amplitude
-    ctx[L.OMEGA] = loc.omega
-    ctx[L.HORIZ] = 1.0 if loc.horizontal else 0.0
-    ctx[L.DRIVE_ACCEL] = loc.drive_accel
-    ctx[L.G] = loc.g
-    ctx[L.H_FIRST] = loc.h_first
-    ctx[L.H_LONGEST] = loc.h_longest
-    ctx[L.TURN] = loc.turn_length
-    ctx[L.H_BRACKET] = loc.h_bracket
-    assert drive.amplitude == loc.amplitude
-    surfaces = sim.boundary.surfaces
-    ctx[L.NSURF] = float(len(surfaces))
-    fl = sim.flight
-    name = type(fl).__name__
-    if name == "ExactFlight":
-        ctx[L.FL_KIND] = L.FLIGHT_EXACT
-    elif name == "AdaptiveFlight":
-        ctx[L.FL_KIND] = L.FLIGHT_ADAPTIVE
-        ctx[L.FL_M] = fl.m
-        ctx[L.FL_CLIN] = fl.c_lin
-        ctx[L.FL_CQUAD] = fl.c_quad
-        ctx[L.FL_CMAG] = fl.c_magnus
-        ctx[L.FL_RTOL] = fl.rtol
-        ctx[L.FL_H] = fl._h
-        assert fl.g == loc.g
-    else:
-        raise ValueError(f"the compiled engine has no flight model {name}")
-    law = sim.impact
-    ctx[L.IM_M] = law.m
-    ctx[L.IM_R] = law.r
-    ctx[L.IM_K] = law.k
-    ctx[L.IM_E] = law.e
-    ctx[L.IM_MUS] = law.mu_s
-    ctx[L.IM_MUK] = law.mu_k
-    ctx[L.IM_EB] = law.low_velocity.threshold
-    for j, surface in enumerate(surfaces):
-        base = L.SURF + j * L.SURF_STRIDE
-        if isinstance(surface, OffsetLine):
-            ctx[base + L.S_KIND] = L.LINE
-            ctx[base + L.S_WALL] = float(surface.index)
-            ctx[base + L.S_A] = surface.b
-            ctx[base + L.S_B] = surface.intercept
-            ctx[base + L.S_C] = surface.shift
-            ctx[base + L.S_D] = surface.z
-        elif isinstance(surface, OffsetWall):
-            ctx[base + L.S_KIND] = L.CURVED
-            ctx[base + L.S_WALL] = float(surface.index)
-            ctx[base + L.S_A] = surface.r
-            ctx[base + L.S_B] = surface.bend_bound
-            ctx[base + L.S_C] = surface.bend_abs_bound
-        elif isinstance(surface, EscapeLevel):
-            ctx[base + L.S_KIND] = L.ESCAPE
-            ctx[base + L.S_A] = surface.level
-        elif isinstance(surface, FlatLid):
-            ctx[base + L.S_KIND] = L.LID
-            ctx[base + L.S_A] = surface.level
-        else:
-            raise ValueError(f"the compiled engine has no surface {type(surface).__name__}")
-        warm = sim.warm[j]
-        ctx[base + L.S_WS] = float(warm[0])
-        ctx[base + L.S_WSLOPE] = float(warm[1])
-    state = sim.state
-    ball = state.ball
-    ctx[L.EN_T] = ball.t
-    ctx[L.EN_THETA] = ball.theta
-    ctx[L.EN_Q1] = ball.q1
-    ctx[L.EN_Q2] = ball.q2
-    ctx[L.EN_U1] = ball.u1
-    ctx[L.EN_U2] = ball.u2
-    ctx[L.EN_U3] = ball.u3
-    ctx[L.EN_Q3] = ball.q3
-    ctx[L.EN_CLOCK] = state.clock
-    ctx[L.EN_CLOCK_ERR] = state.clock_error
-    ctx[L.EN_ZERO] = float(state.zero_flights)
-    ctx[L.EN_IMPACTS] = float(state.impacts)
-    ctx[L.EN_UNTIL] = sim.end_time
-    recent = list(state.recent)
-    for i, t in enumerate(recent):
-        ctx[L.RECENT + i] = t
-    ctx[L.EN_RCOUNT] = float(len(recent))
-    ctx[L.EN_RHEAD] = 0.0
-    for i, key in enumerate(("stick", "slip", "elastic", "resting")):
-        ctx[L.COUNTS + i] = float(state.counts.get(key, 0))
-    return ctx
-
-
-# ---------------------------------------------------------------------- the run
+#: impacts per call of run_chunk in :func:`prepare`
+CHUNK = LAST_CHUNK
 
 
 @dataclass
@@ -234,7 +46,7 @@ class CompiledRun:
     status: Status
     reason: str | None
     counts: dict[str, int]
-    #: CPU time (s) of the impact loop, rows to records included
+    #: CPU time (s) of the run, rows to the recorder included
     cpu_time: float
     #: impacts simulated
     impacts: int
@@ -243,28 +55,6 @@ class CompiledRun:
     @property
     def columns(self) -> dict[str, np.ndarray]:
         return self.recorder.columns()
-
-
-def _records(buffer: Any, rows: int) -> list[ImpactRecord]:
-    if isinstance(buffer, np.ndarray):
-        table = buffer[: rows * L.NCOL].reshape(rows, L.NCOL).tolist()
-    else:
-        table = [buffer[i * L.NCOL : (i + 1) * L.NCOL] for i in range(rows)]
-    records = []
-    for row in table:
-        wall = row[13]
-        records.append(
-            ImpactRecord(
-                int(row[0]),
-                *row[1:10],
-                L.REGIMES[int(row[10])],
-                row[11],
-                row[12],
-                "lid" if wall == L.LID_LABEL else str(int(wall)),
-                *row[14:18],
-            )
-        )
-    return records
 
 
 @dataclass
@@ -279,12 +69,7 @@ class Prepared:
     chunk: int
 
 
-def prepare(scene: Any, collisions: int | None = None, chunk: int = CHUNK) -> Prepared:
-    """Build the engine for ``scene`` and the kernels' arguments, at its start state.
-
-    Raises:
-        ValueError: a scene the compiled engine does not cover (:func:`supports`).
-    """
+def _simulation(scene: Any, collisions: int | None) -> tuple[Simulation, int]:
     _jit.notice()
     sim = Simulation(scene)
     why = supports(sim)
@@ -292,18 +77,26 @@ def prepare(scene: Any, collisions: int | None = None, chunk: int = CHUNK) -> Pr
         raise ValueError(f"the compiled engine does not run this scene: {why}")
     total = scene.run.collisions if collisions is None else int(collisions)
     sim.resolved_scene(total)  # validates the impact count
-    sim.reset()
-    values = state_vector(sim)
-    values[L.EN_TARGET] = float(total)
-    walls = wall_functions(sim)
-    p = sim.boundary.walls[0].p
+    return sim, total
+
+
+def prepare(scene: Any, collisions: int | None = None, chunk: int = CHUNK) -> Prepared:
+    """The engine for ``scene`` at its start, and the kernels' arguments (its own state
+    vector, aimed at ``collisions``), for calling ``run_chunk`` directly.
+
+    Raises:
+        ValueError: a scene the kernels do not cover (:func:`supports`).
+    """
+    sim, total = _simulation(scene, collisions)
+    kernel = sim._kernel
+    assert kernel is not None
+    ctx, params = kernel.ctx, kernel.params
+    ctx[L.EN_TARGET] = float(total)
     if _jit.ENABLED:
-        ctx: Any = np.array(values, dtype=np.float64)
-        params: Any = np.array(p, dtype=np.float64)
         buffer: Any = np.empty(chunk * L.NCOL, dtype=np.float64)
     else:
-        ctx, params, buffer = values, p, [0.0] * (chunk * L.NCOL)
-    return Prepared(sim, ctx, params, walls, buffer, chunk)
+        buffer = [0.0] * (chunk * L.NCOL)
+    return Prepared(sim, ctx, params, wall_functions(sim), buffer, chunk)
 
 
 def simulate_compiled(
@@ -313,17 +106,16 @@ def simulate_compiled(
     out_dir: str | os.PathLike[str] | None = None,
     chunk: int = CHUNK,
 ) -> CompiledRun:
-    """Run an impact-only scene on the kernels: the same records as
-    :func:`billiard.simulate.simulate`; with ``out_dir``, ``DIR/collisions.csv`` with
-    the same bytes (no checkpoints or resume yet).
+    """Run an impact-only scene: ``Simulation.run`` with the records in memory or, with
+    ``out_dir``, in ``DIR/collisions.csv`` (no checkpoints: see
+    :func:`billiard.simulate.simulate` for streamed runs). ``chunk`` is not used (the
+    run sizes its chunks itself); it stays for callers of the former signature.
 
     Raises:
-        ValueError: a scene the compiled engine does not cover (:func:`supports`).
+        ValueError: a scene the kernels do not cover (:func:`supports`).
     """
-    from billiard.kernels.loop import run_chunk
-
-    run = prepare(scene, collisions, chunk)
-    ctx, params, walls, buffer = run.ctx, run.params, run.walls, run.buffer
+    del chunk
+    sim, total = _simulation(scene, collisions)
     if out_dir is not None:
         from billiard.stream import CsvRecorder
 
@@ -332,48 +124,13 @@ def simulate_compiled(
         recorder: Any = CsvRecorder(out / "collisions.csv", COLUMNS)
     else:
         recorder = MemoryRecorder()
-    status, reason = Status.COMPLETE, None
     started = time.process_time()
     try:
-        while True:
-            before = int(ctx[L.EN_IMPACTS])
-            try:
-                code, rows = run_chunk(ctx, params, walls, buffer, chunk)
-            except SimulationError:
-                raise
-            except L.KernelError as exc:
-                rows = int(ctx[L.EN_IMPACTS]) - before
-                for record in _records(buffer, rows):
-                    recorder.append(record)
-                status, text = _MESSAGES[exc.args[0]]
-                n = int(ctx[L.EN_IMPACTS])
-                reason = f"{text} after impact {n} (t = {ctx[L.EN_T]:.9g} s)"
-                break
-            except (ArithmeticError, ValueError) as exc:
-                rows = int(ctx[L.EN_IMPACTS]) - before
-                for record in _records(buffer, rows):
-                    recorder.append(record)
-                status = Status.NUMERICAL_FAULT
-                reason = f"numerical failure after impact {int(ctx[L.EN_IMPACTS])}: {exc}"
-                break
-            for record in _records(buffer, rows):
-                recorder.append(record)
-            if code == L.FULL:
-                continue
-            if code == L.TIME_LIMIT:
-                status = Status.TIME_LIMIT
-            elif code == L.COLLAPSE:
-                status = Status.COLLAPSE
-                reason = f"inelastic collapse at impact {int(ctx[L.EN_IMPACTS])}"
-            break
+        reason = sim.run(total, recorder)
     finally:
         cpu = time.process_time() - started
         recorder.close()
-    counts = {
-        key: int(ctx[L.COUNTS + i]) for i, key in enumerate(("stick", "slip", "elastic", "resting"))
-    }
-    if math.isnan(cpu):  # pragma: no cover
-        cpu = 0.0
+    status = sim.status if sim.status is not None else Status.COMPLETE
     return CompiledRun(
-        recorder, status, reason, counts, cpu, int(ctx[L.EN_IMPACTS]), compiled=_jit.ENABLED
+        recorder, status, reason, sim.counts, cpu, sim.state.impacts, compiled=_jit.ENABLED
     )

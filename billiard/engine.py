@@ -16,6 +16,7 @@ A run is deterministic: the same scene gives the same records bit for bit.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import time
 from collections import deque
@@ -26,6 +27,7 @@ from billiard.boundary import Boundary, Drive
 from billiard.checkpoint import CheckpointError
 from billiard.contact_phase import ContactModel
 from billiard.curves import load_curve
+from billiard.engine_kernels import KernelEngine, supports
 from billiard.engine_phases import (
     COLLAPSE_COUNT,
     COLLAPSE_SPAN,
@@ -109,8 +111,10 @@ class Simulation(ContactPhases):
         self.end_time = (
             math.inf if scene.run.duration is None else self.initial.t + scene.run.duration
         )
-        self.counts: dict[str, int] = dict.fromkeys(self.impact.regimes, 0)
-        self.counts["resting"] = 0
+        #: the state vector when the engine runs on the kernels (see supports), else None
+        self._kernel: KernelEngine | None = None
+        self._counts: dict[str, int] = dict.fromkeys(self.impact.regimes, 0)
+        self._counts["resting"] = 0
         self.final_time = self.initial.t
         #: how the latest :meth:`run` ended, and why (None while it goes on)
         self.status: Status | None = None
@@ -128,6 +132,8 @@ class Simulation(ContactPhases):
         self.on_sample: Callable[..., None] | None = None
         self._sample_flight = flight_model(scene, self.method)
         self.reset()
+        if supports(self) is None:
+            self._kernel = KernelEngine(self)
 
     # ------------------------------------------------------------------ set-up
 
@@ -193,23 +199,57 @@ class Simulation(ContactPhases):
         self._contact: tuple[float, ...] = ()
         self._samples = 0
         self._phase_time = {"roll": 0.0, "slide": 0.0, "held": 0.0}
+        if self._kernel is not None:
+            self._kernel.reset(ball)
         if self.phases:
             self._start_in_contact()
 
     @property
+    def counts(self) -> dict[str, int]:
+        """Impacts per regime of the impact law, and resting relaunches."""
+        if self._kernel is not None:
+            return self._kernel.counts()
+        return self._counts
+
+    @counts.setter
+    def counts(self, value: dict[str, int]) -> None:
+        self._counts = dict(value)
+        if self._kernel is not None:
+            self._kernel.set_counts(self._counts)
+
+    @property
     def ball(self) -> BallState:
         """The ball after the last event (a copy)."""
+        if self._kernel is not None:
+            return self._kernel.state().ball
         return self._ball.copy()
 
     @property
     def pending_stop(self) -> SimulationError | None:
         """The stop detected after the last impact (an inelastic collapse), which the
         next :meth:`step` raises; None when the run can go on."""
+        if self._kernel is not None:
+            return self._kernel.pending_stop()
         return self._fault
 
     @property
     def state(self) -> EngineState:
         """The complete engine state after the last event (a snapshot)."""
+        if self._kernel is not None:
+            # the warm starts and the step proposal belong to sim.warm and sim.flight
+            return dataclasses.replace(
+                self._kernel.state(),
+                walls=tuple((w[0], w[1]) for w in self.warm[: len(self.boundary.offsets)]),
+                flight=self.flight.memory(),
+                locator=self.locator.memory(),
+                mode=self._mode,
+                contact=self._contact,
+                samples=self._samples,
+                phase_time=dict(self._phase_time),
+            )
+        return self._python_state()
+
+    def _python_state(self) -> EngineState:
         return EngineState(
             ball=self._ball.copy(),
             impacts=self._impacts,
@@ -217,7 +257,7 @@ class Simulation(ContactPhases):
             clock_error=self._clock_error,
             zero_flights=self._zero_flights,
             recent=tuple(self._recent),
-            counts=dict(self.counts),
+            counts=dict(self._counts),
             walls=tuple((w[0], w[1]) for w in self.warm[: len(self.boundary.offsets)]),
             flight=self.flight.memory(),
             locator=self.locator.memory(),
@@ -252,7 +292,7 @@ class Simulation(ContactPhases):
             raise CheckpointError(f"its engine state does not fit this engine: {exc}") from None
         for warm, (s, slope) in zip(self.warm, state.walls, strict=False):
             warm[0], warm[1] = s, slope
-        self.counts = dict(state.counts)
+        self._counts = dict(state.counts)
         self._ball = state.ball.copy()
         self._impacts = state.impacts
         self._clock, self._clock_error = state.clock, state.clock_error
@@ -264,6 +304,8 @@ class Simulation(ContactPhases):
         self._contact = tuple(state.contact)
         self._samples = state.samples
         self._phase_time = {"roll": 0.0, "slide": 0.0, "held": 0.0, **state.phase_time}
+        if self._kernel is not None:
+            self._kernel.restore(state)
 
     # ------------------------------------------------------------------ one event
 
@@ -289,6 +331,9 @@ class Simulation(ContactPhases):
                 equations, or an inelastic collapse detected after the previous impact.
                 The state is left as it was after the previous impact.
         """
+        kernel = self._engine()
+        if kernel is not None:
+            return kernel.step(until)
         if self._fault is not None:
             raise self._fault
         try:
@@ -304,6 +349,18 @@ class Simulation(ContactPhases):
                 f"(t = {self._ball.t:.9g} s): {type(exc).__name__}: {exc}",
                 Status.NUMERICAL_FAULT,
             ) from None
+
+    def _engine(self) -> KernelEngine | None:
+        """The kernels, while they can run this simulation: an impact law replaced after
+        construction (an audit wrapping it) or trajectory sampling, which the kernels do
+        not do, hand the state over to the classes for good."""
+        kernel = self._kernel
+        if kernel is not None and (self.impact is not kernel.law or self.on_sample is not None):
+            state, fault, final_time = self.state, kernel.pending_stop(), self.final_time
+            self._kernel = None
+            self.restore(state)
+            self._fault, self.final_time = fault, final_time
+        return self._kernel
 
     def _step(self, until: float) -> ImpactRecord | ContactRecord | None:
         if self._mode != "flight":
@@ -369,7 +426,7 @@ class Simulation(ContactPhases):
         self._impacts = n + 1
         self._ball = BallState(t, ev.theta, ev.q1, ev.q2, res.u1, res.u2, res.u3, q3)
         self._clock, self._clock_error = total, error
-        counts = self.counts
+        counts = self._counts
         counts[res.regime] = counts.get(res.regime, 0) + 1
         if res.resting:
             counts["resting"] += 1
@@ -458,6 +515,13 @@ class Simulation(ContactPhases):
             self.restore(start)
         until = self.end_time if until is None else until
         request = stop if stop is not None else StopRequest()
+        kernel = self._engine()
+        if kernel is not None:
+            self.status = None
+            self.status, reason = kernel.run(
+                collisions, recorder, progress, checkpoint, request, until, on_record
+            )
+            return reason
         monotonic = time.monotonic
         next_save = monotonic() + CHECKPOINT_INTERVAL if checkpoint is not None else math.inf
         self.status = None

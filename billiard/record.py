@@ -38,6 +38,8 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
+from billiard.rows import column_arrays, format_rows, row_of
+
 __all__ = [
     "COLUMNS",
     "CONTACT_COLUMNS",
@@ -145,27 +147,56 @@ def _format(value: Any) -> str:
 
 
 class MemoryRecorder:
-    """Rows kept in memory, column by column."""
+    """Rows kept in memory, column by column; impact rows from the kernels
+    (:meth:`append_rows`) are kept as the float64 blocks they come in, so a long run
+    holds no Python object per impact."""
 
     def __init__(self, columns: Sequence[str] = COLUMNS):
         self.names = tuple(columns)
         self._data: list[list[Any]] = [[] for _ in self.names]
+        self._blocks: list[np.ndarray] = []
+        self._block_rows = 0
 
     def append(self, row: Sequence[Any]) -> None:
+        if self._blocks:
+            self.append_rows(np.array([row_of(row)], dtype=np.float64))
+            return
         for column, value in zip(self._data, row, strict=True):
             column.append(value)
 
+    def append_rows(self, block: np.ndarray) -> None:
+        """Append impact rows (``(rows, NCOL)`` float64, :mod:`billiard.rows`); only
+        for the columns of ``collisions.csv``."""
+        if self.names != COLUMNS:
+            raise ValueError("rows of impacts go to a recorder of the collisions.csv columns")
+        if self._data[0]:
+            # records appended before: kept as a block too, in order
+            first = [row_of(row) for row in zip(*self._data, strict=True)]
+            self._blocks.append(np.array(first, dtype=np.float64))
+            self._block_rows += len(first)
+            self._data = [[] for _ in self.names]
+        self._blocks.append(block)
+        self._block_rows += len(block)
+
     def __len__(self) -> int:
-        return len(self._data[0])
+        return self._block_rows + len(self._data[0])
 
     def close(self) -> None:
         pass
 
     def columns(self) -> dict[str, np.ndarray]:
+        if self._blocks:
+            return column_arrays(self.names, self._blocks)
         return _as_arrays(dict(zip(self.names, self._data, strict=True)))
 
     def write_csv(self, path: str | os.PathLike[str]) -> None:
-        write_collisions(path, dict(zip(self.names, self._data, strict=True)))
+        if not self._blocks:
+            write_collisions(path, dict(zip(self.names, self._data, strict=True)))
+            return
+        with open(path, "w", newline="", encoding="utf-8") as handle:
+            handle.write(_header_line(self.names))
+            for block in self._blocks:
+                handle.write(format_rows(block, LINE_END))
 
 
 def _header_line(columns: Sequence[str], line_end: str = LINE_END) -> str:

@@ -32,6 +32,7 @@ from billiard.record import (
     _header_line,
     read_collisions,
 )
+from billiard.rows import format_rows, record_of
 
 try:  # advisory file locks (POSIX); elsewhere two processes are not kept apart
     import fcntl
@@ -343,6 +344,19 @@ class CsvRecorder:
             now = time.monotonic()
             if now - self._last_flush >= FLUSH_INTERVAL:
                 self.flush()
+
+    def append_rows(self, block: np.ndarray) -> None:
+        """Append impact rows (``(rows, NCOL)`` float64, :mod:`billiard.rows`), the
+        same bytes as appending their records one by one."""
+        if self._check is not None:
+            # rows already on disk are compared one by one
+            for row in block.tolist():
+                self.append(record_of(row))
+            return
+        self._pending.write(format_rows(block, self.line_end))
+        self._pending_rows += len(block)
+        if self.autoflush and time.monotonic() - self._last_flush >= FLUSH_INTERVAL:
+            self.flush()
 
     def _check_row(self) -> None:
         """Compare the one pending row with the next row in the file."""

@@ -17,6 +17,7 @@ from pathlib import Path
 
 import pytest
 
+from billiard import jit
 from billiard.checkpoint import CheckpointError, read_checkpoint
 from billiard.cli import main
 from billiard.interrupt import signal_after
@@ -246,7 +247,9 @@ def test_engine_state_round_trips_exactly():
 # ---------------------------------------------------------------------------------
 # real signals, through the command line
 
-LONG = 25000  # impacts of the parabola scene: a few seconds of running
+# impacts of the parabola scene: a few seconds of running, compiled (where writing the
+# rows costs most of the time) or interpreted
+LONG = 200_000 if jit.ENABLED else 25_000
 
 
 @pytest.fixture(scope="module")

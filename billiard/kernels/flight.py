@@ -39,6 +39,7 @@ from billiard.jit import jit
 from billiard.kernels.ball import flight_exact, flight_rhs_drag, flight_rhs_magnus
 from billiard.kernels.layout import (
     E_STEP_CONTROL,
+    EN_ERR_VALUE,
     FL_CLIN,
     FL_CMAG,
     FL_CQUAD,
@@ -181,6 +182,7 @@ def advance(ctx, tau_a, tau_target):
             return ctx[FL_TB]
         h *= max(0.2, 0.9 * err**-0.2)
         ctx[FL_H] = h
+    ctx[EN_ERR_VALUE] = tau_a
     raise KernelError(E_STEP_CONTROL)
 
 

@@ -68,6 +68,11 @@ EN_RCOUNT = 63  # impacts in the collapse window (ring at RECENT)
 EN_RHEAD = 64  # ring index of the oldest of them
 EN_TARGET = 65  # impact number to stop at
 EN_FAULT = 66  # 1.0: a collapse was detected after the last impact
+# for the message of a stop: the value it names (tau_a of a failed step-size control, x
+# of a failed offset inversion) and the time of the impact being made (nan while the
+# next impact is searched for)
+EN_ERR_VALUE = 67
+EN_EVENT_T = 68
 COUNTS = 70  # stick, slip, elastic, resting: 70..73
 
 # --- surfaces -----------------------------------------------------------------------

@@ -31,6 +31,7 @@ from billiard.kernels.layout import (
     E_NON_FINITE,
     EN_CLOCK,
     EN_CLOCK_ERR,
+    EN_EVENT_T,
     EN_FAULT,
     EN_IMPACTS,
     EN_Q1,
@@ -100,12 +101,14 @@ def step(ctx, p, walls, out, row):
     changes nothing) when the impact comes after ``ctx[EN_UNTIL]``."""
     if ctx[EN_FAULT] != 0.0:
         raise KernelError(E_COLLAPSE)
+    ctx[EN_EVENT_T] = math.nan  # searching: a stop here is "after" the last impact
     u3 = ctx[EN_U3]
     tau, j, q1, q2, u1, u2, theta, s, z = locate(
         ctx, p, walls, ctx[EN_THETA], ctx[EN_Q1], ctx[EN_Q2], ctx[EN_U1], ctx[EN_U2], u3
     )
     total, error = compensated_add(ctx[EN_CLOCK], ctx[EN_CLOCK_ERR], tau)
     t = total + error
+    ctx[EN_EVENT_T] = t
     if t > ctx[EN_UNTIL]:
         return False
     base = SURF + j * SURF_STRIDE
@@ -123,10 +126,6 @@ def step(ctx, p, walls, out, row):
     u4, un = frame_velocity(n1, n2, z)
     m, r, k = ctx[IM_M], ctx[IM_R], ctx[IM_K]
     e = energy(q2, n1, n2, n3, m, r, k, ctx[G])
-    if not math.isfinite(
-        t + q1 + q2 + n1 + n2 + n3 + u4 + un + tau + z + e + rt + rn + s + q3
-    ):  # fmt: skip
-        raise KernelError(E_NON_FINITE)
     n = ctx[EN_IMPACTS] + 1.0
     o = row * NCOL
     out[o] = n
@@ -147,6 +146,11 @@ def step(ctx, p, walls, out, row):
     out[o + 15] = rn
     out[o + 16] = s
     out[o + 17] = q3
+    # the row is written before the check, so that the caller can name the culprit
+    if not math.isfinite(
+        t + q1 + q2 + n1 + n2 + n3 + u4 + un + tau + z + e + rt + rn + s + q3
+    ):  # fmt: skip
+        raise KernelError(E_NON_FINITE)
     # commit
     ctx[EN_IMPACTS] = n
     ctx[EN_T] = t

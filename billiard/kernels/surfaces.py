@@ -17,6 +17,7 @@ from billiard.jit import jit
 from billiard.kernels.layout import (
     CURVED,
     E_INVERSION,
+    EN_ERR_VALUE,
     LINE,
     S_A,
     S_B,
@@ -48,6 +49,7 @@ def foot(ctx, p, walls, base, x, s):
         s -= ds
         if abs(ds) < _FOOT_STEP_TOL:
             return s
+    ctx[EN_ERR_VALUE] = x
     raise KernelError(E_INVERSION)
 
 

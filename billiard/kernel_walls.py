@@ -1,0 +1,79 @@
+"""A curve's wall functions as the kernels take them: ``walls = (fs, dfs, d2fs)``, one
+entry per wall, each a first-class function value of one numba type,
+``float64(float64, float64[::1])`` (:class:`WallFunction`), so that the kernels are
+compiled once for every curve, and cached. Interpreted, the generated functions
+themselves.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+from billiard import jit as _jit
+
+__all__ = ["WallFunction", "wall_functions"]
+
+_SIGNATURE = None
+_compiled_walls: dict[Any, Any] = {}
+
+
+def _wall_signature() -> Any:
+    global _SIGNATURE
+    if _SIGNATURE is None:
+        from numba import types
+
+        _SIGNATURE = types.float64(types.float64, types.float64[::1])
+    return _SIGNATURE
+
+
+def _wall_function_class() -> type:
+    import numba.experimental.function_type  # noqa: F401  (typeof of the protocol)
+    from numba.core.types import WrapperAddressProtocol
+
+    class _WallFunction(WrapperAddressProtocol):
+        """A generated wall function, compiled for ``float64(float64, float64[::1])``,
+        as a first-class function value: numba types it by its signature alone, so a
+        kernel taking it is compiled (and cached) once for every curve."""
+
+        def __init__(self, fn: Any):
+            sig = _wall_signature()
+            self.dispatcher = _jit.jit(fn)
+            self.dispatcher.compile(sig.args)
+            result = self.dispatcher.get_compile_result(sig)
+            self.address = result.library.get_pointer_to_function(
+                result.fndesc.llvm_cfunc_wrapper_name
+            )
+
+        def __wrapper_address__(self) -> int:
+            return self.address
+
+        def signature(self) -> Any:
+            return _wall_signature()
+
+    return _WallFunction
+
+
+_WallFunctionClass: type | None = None
+
+
+def WallFunction(fn: Any) -> Any:  # noqa: N802  (a factory standing for a class)
+    """``fn`` as the kernels take it: a compiled first-class function value, or ``fn``
+    itself when the kernels run interpreted."""
+    global _WallFunctionClass
+    if not _jit.ENABLED:
+        return fn
+    if fn not in _compiled_walls:
+        if _WallFunctionClass is None:
+            _WallFunctionClass = _wall_function_class()
+        _compiled_walls[fn] = _WallFunctionClass(fn)
+    return _compiled_walls[fn]
+
+
+def wall_functions(sim: Any) -> tuple[tuple[Any, ...], ...]:
+    """(f, df, d2f): one tuple per function, one entry per wall of the curve."""
+    walls = sim.boundary.walls
+    return (
+        tuple(WallFunction(w.f) for w in walls),
+        tuple(WallFunction(w.df) for w in walls),
+        tuple(WallFunction(w.d2f) for w in walls),
+    )

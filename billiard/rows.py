@@ -1,0 +1,101 @@
+"""Impact rows as the kernels write them: ``NCOL`` floats per impact, the columns of
+``collisions.csv`` in order, regime and wall as codes (:mod:`billiard.kernels.layout`).
+
+A run on the kernels hands its rows to the recorders as 2-D float64 arrays, one row per
+impact; these helpers turn them into :class:`~billiard.record.ImpactRecord` objects,
+into column arrays, and into ``collisions.csv`` lines with exactly the bytes a
+:class:`csv.writer` writes for the records (floats with :func:`repr`).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterable, Sequence
+from typing import Any
+
+import numpy as np
+
+from billiard.kernels.layout import LID_LABEL, NCOL, REGIMES
+
+__all__ = ["NCOL", "as_block", "column_arrays", "format_rows", "record_of", "row_of"]
+
+_N, _REGIME, _WALL = 0, 10, 13
+
+
+def as_block(buffer: Any, start: int, stop: int) -> np.ndarray:
+    """Rows ``start`` to ``stop`` of a kernel buffer (an array or, interpreted, a list)
+    as a new ``(rows, NCOL)`` float64 array."""
+    if isinstance(buffer, np.ndarray):
+        return buffer[start * NCOL : stop * NCOL].reshape(stop - start, NCOL).copy()
+    values = buffer[start * NCOL : stop * NCOL]
+    return np.array(values, dtype=np.float64).reshape(stop - start, NCOL)
+
+
+def _wall_label(code: float) -> str:
+    return "lid" if code == LID_LABEL else str(int(code))
+
+
+def record_of(row: Sequence[float]) -> Any:
+    """The :class:`~billiard.record.ImpactRecord` of one row (Python floats)."""
+    from billiard.record import ImpactRecord
+
+    return ImpactRecord(
+        int(row[0]),
+        *row[1:10],
+        REGIMES[int(row[10])],
+        row[11],
+        row[12],
+        _wall_label(row[13]),
+        *row[14:18],
+    )
+
+
+def row_of(record: Sequence[Any]) -> list[float]:
+    """Inverse of :func:`record_of`."""
+    row = [float(v) if i not in (_REGIME, _WALL) else 0.0 for i, v in enumerate(record)]
+    row[_REGIME] = float(REGIMES.index(record[_REGIME]))
+    wall = record[_WALL]
+    row[_WALL] = LID_LABEL if wall == "lid" else float(int(wall))
+    return row
+
+
+def format_rows(block: np.ndarray, line_end: str) -> str:
+    """``collisions.csv`` lines of the rows of ``block``, each ended by ``line_end``."""
+    lines = []
+    for row in block.tolist():
+        lines.append(
+            f"{int(row[0])},{','.join(map(repr, row[1:10]))},{REGIMES[int(row[10])]},"
+            f"{row[11]!r},{row[12]!r},{_wall_label(row[13])},{','.join(map(repr, row[14:18]))}"
+        )
+    if not lines:
+        return ""
+    return line_end.join(lines) + line_end
+
+
+def _labels(codes: np.ndarray, label: Any) -> np.ndarray:
+    """String array of ``label(code)`` per entry, as narrow as ``np.array(list, str)``."""
+    if codes.size == 0:
+        return np.array([], dtype=str)
+    unique, inverse = np.unique(codes, return_inverse=True)
+    names = np.array([label(code) for code in unique.tolist()], dtype=str)
+    return names[inverse.reshape(codes.shape)]
+
+
+def column_arrays(names: Sequence[str], blocks: Iterable[np.ndarray]) -> dict[str, np.ndarray]:
+    """Column name -> array over the rows of ``blocks``, with the dtypes of
+    :func:`billiard.record.read_collisions` (one column built at a time)."""
+    blocks = list(blocks)
+    out: dict[str, np.ndarray] = {}
+    for index, name in enumerate(names):
+        if blocks:
+            column = np.concatenate([block[:, index] for block in blocks])
+        else:
+            column = np.empty(0, dtype=np.float64)
+        if index == _N:
+            out[name] = column.astype(np.int64)
+        elif index == _REGIME:
+            out[name] = _labels(column, lambda code: REGIMES[int(code)])
+        elif index == _WALL:
+            out[name] = _labels(column, _wall_label)
+        else:
+            out[name] = column
+    return out
