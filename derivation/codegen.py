@@ -39,20 +39,29 @@ def _refuse(what: str):
     return method
 
 
+#: Integer powers up to this one (and their reciprocals) print as products.
+MAX_PRODUCT_POWER = 8
+
+
 class _Printer(PythonCodePrinter):
     def __init__(self):
         super().__init__({"fully_qualified_modules": True, "standard": "python3"})
 
     def _print_Pow(self, expr, rational=False):
-        # Squares and cubes print as products: CPython's x**2 calls libm's pow, which
-        # differs from the correctly rounded x*x in about 1 case in 1,000, while compiled
-        # code turns small integer powers into products; printing the product makes both
-        # agree by construction (and is faster). Parenthesized, since the product must
-        # stay one factor wherever it stands (a/(x*x), not a/x*x).
-        if expr.exp in (2, 3):
+        # No power prints as `**`: CPython computes a float `x**n` with libm's pow, while
+        # compiled code turns a constant integer power into multiplications, and the two
+        # differ in the last bit now and then. Small integer powers print as products
+        # (faster, and the same operations in both); any other power as math.pow, which
+        # is libm's pow in both. Products are parenthesized, since one must stay one
+        # factor wherever it stands (a/(x*x), not a/x*x).
+        exp = expr.exp
+        if exp.is_Integer and 2 <= abs(int(exp)) <= MAX_PRODUCT_POWER:
             base = self.parenthesize(expr.base, precedence(expr))
-            return "(" + "*".join([base] * int(expr.exp)) + ")"
-        return super()._print_Pow(expr, rational=rational)
+            product = "(" + "*".join([base] * abs(int(exp))) + ")"
+            return product if exp > 0 else f"(1.0/{product})"
+        if exp in (sm.S.Half, -sm.S.Half, sm.S.NegativeOne):
+            return super()._print_Pow(expr, rational=rational)  # sqrt, 1/sqrt, 1/x
+        return f"math.pow({self._print(expr.base)}, {self._print(exp)})"
 
     def _print_Rational(self, expr):
         # Exact rational constants print as float literals: Python folds them anyway.

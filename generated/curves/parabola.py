@@ -4,7 +4,7 @@
 # Curve 'parabola': f(x) = a*x**2 + c
 # Parameters: a = 26, c = 0.0063
 # Walls: 1; nearest-point polynomial degree: 3
-# content sha256: 9c1a7d82b3e0220b57e09c35b3bb234266021e3f47eaf2e005bddf8506d802e0
+# content sha256: 91b9dae918f1ac38c270fa737e6692cf16306d81cdc0ce6df0ac1699d12e8fbe
 """Boundary curve 'parabola': f(x) = a*x**2 + c (x and f in metres).
 
 Every function takes the curve's parameters as its last argument, an array in the
@@ -14,7 +14,7 @@ nearest-point condition is not a polynomial."""
 
 import math
 
-FORMAT = 4
+FORMAT = 5
 NAME = 'parabola'
 EXPRESSION = 'a*x**2 + c'
 PARAMETER_NAMES = ('a', 'c')
