@@ -32,7 +32,7 @@ from __future__ import annotations
 import csv
 import io
 import os
-from collections.abc import Mapping, Sequence
+from collections.abc import Iterator, Mapping, Sequence
 from pathlib import Path
 from typing import Any, NamedTuple
 
@@ -230,23 +230,41 @@ def read_collisions(path: str | os.PathLike[str]) -> dict[str, np.ndarray]:
     """
     try:
         with open(path, newline="", encoding="utf-8") as handle:
-            lines = [
-                (number, line)
-                for number, line in enumerate(handle, start=1)
-                if line.strip() and not line.lstrip().startswith("#")
-            ]
+            return _read_blocks(path, handle)
     except FileNotFoundError:
         raise _fail(path, "file not found") from None
     except (OSError, UnicodeDecodeError) as exc:
         raise _fail(path, f"cannot read: {exc}") from None
-    if not lines:
+
+
+#: rows parsed at a time: a long run's file is turned into arrays block by block, so
+#: reading it never holds a Python string per cell of the whole file
+READ_BLOCK = 20_000
+
+
+def _data_lines(handle: Any) -> Iterator[tuple[int, str]]:
+    """(line number, line) of the header and the rows: no blank or ``#`` lines, and no
+    unterminated last row (a header alone is kept without its line end)."""
+    previous = None
+    count = 0
+    for number, line in enumerate(handle, start=1):
+        if not line.strip() or line.lstrip().startswith("#"):
+            continue
+        if previous is not None:
+            yield previous
+            count += 1
+        previous = (number, line)
+    if previous is not None and (count == 0 or previous[1].endswith("\n")):
+        yield previous
+
+
+def _read_blocks(path: str | os.PathLike[str], handle: Any) -> dict[str, np.ndarray]:
+    lines = _data_lines(handle)
+    first = next(lines, None)
+    if first is None:
         raise _fail(path, "empty file (no header line)")
-    if len(lines) > 1 and not lines[-1][1].endswith("\n"):
-        lines.pop()
-    rows = csv.reader(line for _, line in lines)
     try:
-        header = [name.strip() for name in next(rows)]
-        body = list(rows)
+        header = [name.strip() for name in next(csv.reader([first[1]]))]
     except csv.Error as exc:
         raise _fail(path, f"not valid CSV: {exc}") from None
     missing = [name for name in REQUIRED_COLUMNS if name not in header]
@@ -257,27 +275,76 @@ def read_collisions(path: str | os.PathLike[str]) -> dict[str, np.ndarray]:
     duplicated = sorted({name for name in header if header.count(name) > 1})
     if duplicated:
         raise _fail(path, f"duplicated column(s) {', '.join(duplicated)}")
-    width = len(header)
-    if len(body) != len(lines) - 1:
+    parts: dict[str, list[Any]] = {name: [] for name in header}
+    numbers: list[np.ndarray] = []
+    block: list[tuple[int, str]] = []
+    for item in lines:
+        block.append(item)
+        if len(block) == READ_BLOCK:
+            numbers.append(_read_block(path, header, block, parts))
+            block = []
+    if block:
+        numbers.append(_read_block(path, header, block, parts))
+    columns: dict[str, np.ndarray] = {}
+    for name in header:
+        if name in TEXT_COLUMNS:
+            columns[name] = _joined(parts[name], str)
+        elif name in COLUMNS:
+            columns[name] = _joined(parts[name], int if name in _INTEGER else float)
+        else:  # an extra column: numbers if every cell is one, else strings
+            cells = [cell for chunk in parts[name] for cell in chunk]
+            try:
+                columns[name] = np.array([float(cell) for cell in cells], dtype=float)
+            except ValueError:
+                columns[name] = np.array(cells, dtype=str)
+    if columns["n"].dtype != np.int64:
+        columns["n"] = columns["n"].astype(np.int64)
+    t = columns["t"]
+    if t.size > 1 and np.any(np.diff(t) < 0):
+        first_bad = int(np.argmax(np.diff(t) < 0)) + 1
+        line = int(np.concatenate(numbers)[first_bad])
+        raise _fail(path, f"line {line}: impact times decrease (column t must be non-decreasing)")
+    return columns
+
+
+def _joined(chunks: list[np.ndarray], kind: type) -> np.ndarray:
+    if not chunks:
+        return np.array([], dtype=kind)
+    return np.concatenate(chunks) if len(chunks) > 1 else chunks[0]
+
+
+def _read_block(
+    path: str | os.PathLike[str],
+    header: list[str],
+    block: list[tuple[int, str]],
+    parts: dict[str, list[Any]],
+) -> np.ndarray:
+    """Parse the rows of ``block`` into ``parts`` (one array, or for extra columns one
+    list of cells, per column); returns their line numbers."""
+    try:
+        body = list(csv.reader(line for _, line in block))
+    except csv.Error as exc:
+        raise _fail(path, f"not valid CSV: {exc}") from None
+    if len(body) != len(block):
         raise _fail(path, "not valid CSV: a quoted field spans lines")
-    for (number, _), row in zip(lines[1:], body, strict=True):
+    width = len(header)
+    for (number, _), row in zip(block, body, strict=True):
         if len(row) != width:
             raise _fail(path, f"line {number}: expected {width} fields, got {len(row)}")
-    table = list(zip(*body, strict=True)) if body else [()] * width
-    columns: dict[str, np.ndarray] = {}
+    table = list(zip(*body, strict=True))
     for index, name in enumerate(header):
         cells = [cell.strip() for cell in table[index]]
         if name in TEXT_COLUMNS:
-            columns[name] = np.array(cells, dtype=str)
+            parts[name].append(np.array(cells, dtype=str))
+            continue
+        if name not in COLUMNS:
+            parts[name].append(cells)
             continue
         kind = int if name in _INTEGER else float
         try:
-            columns[name] = np.array([kind(cell) for cell in cells], dtype=kind)
+            parts[name].append(np.array([kind(cell) for cell in cells], dtype=kind))
         except ValueError:
-            if name not in COLUMNS:
-                columns[name] = np.array(cells, dtype=str)
-                continue
-            for (number, _), cell in zip(lines[1:], cells, strict=True):
+            for (number, _), cell in zip(block, cells, strict=True):
                 try:
                     kind(cell)
                 except ValueError:
@@ -285,16 +352,7 @@ def read_collisions(path: str | os.PathLike[str]) -> dict[str, np.ndarray]:
                     raise _fail(
                         path, f"line {number}: column {name}: {cell[:40]!r} is not {what}"
                     ) from None
-    if columns["n"].dtype != np.int64:
-        columns["n"] = columns["n"].astype(np.int64)
-    t = columns["t"]
-    if t.size > 1 and np.any(np.diff(t) < 0):
-        first = int(np.argmax(np.diff(t) < 0)) + 1
-        raise _fail(
-            path,
-            f"line {lines[first + 1][0]}: impact times decrease (column t must be non-decreasing)",
-        )
-    return columns
+    return np.array([number for number, _ in block], dtype=np.int64)
 
 
 def write_collisions(path: str | os.PathLike[str], columns: Mapping[str, Sequence[Any]]) -> Path:
