@@ -8,7 +8,12 @@ cross-checked against the careful DOP853 peer at rtol 1e-13.
 
 from __future__ import annotations
 
+import json
 import math
+import os
+import subprocess
+import sys
+from pathlib import Path
 
 from bench.common import (
     Config,
@@ -51,6 +56,45 @@ def run_setting(scene: Scene, how: tuple, impacts: int, repeats: int) -> tuple[d
     return timed(lambda: engine_run(changed, impacts, kind), repeats)
 
 
+# The default method's settings timed again with the kernels interpreted (a fresh process
+# with NUMBA_DISABLE_JIT=1): the other methods run interpreted, so these are the costs a
+# comparison of methods, not of interpreters, takes. The results are the same bits.
+_INTERPRETED = """
+import json, sys
+from bench.common import Config, engine_run, start_scene, timed
+from bench.workprecision import settings
+from billiard.scene import with_values
+name, quick = sys.argv[1], sys.argv[2] == "1"
+cfg = Config.quick_mode() if quick else Config.full()
+start = start_scene(name, cfg.transient)
+out = {}
+for drag in ("fowles", "none"):
+    scene = with_values(start, {"air.drag": drag})
+    for method, label, (kind, arg) in settings(cfg, drag):
+        if method != "event":
+            continue
+        changed = with_values(scene, arg) if arg else scene
+        run, cpu, _ = timed(lambda: engine_run(changed, max(cfg.checkpoints), kind), cfg.repeats)
+        out[drag + "|" + label] = 1000.0 * cpu / max(len(run["t"]), 1)
+print(json.dumps(out))
+"""
+
+
+def interpreted_event_costs(name: str, cfg: Config) -> dict[str, float]:
+    """CPU s per 1,000 impacts of the default method's settings, kernels interpreted."""
+    env = {k: v for k, v in os.environ.items() if k != "NUMBA_DISABLE_JIT"}
+    env["NUMBA_DISABLE_JIT"] = "1"
+    done = subprocess.run(
+        [sys.executable, "-c", _INTERPRETED, name, "1" if cfg.quick else "0"],
+        cwd=Path(__file__).resolve().parent.parent,
+        env=env,
+        capture_output=True,
+        text=True,
+        check=True,
+    )
+    return json.loads(done.stdout.splitlines()[-1])
+
+
 def errors(run: dict, ref: dict, checkpoints: tuple[int, ...]) -> dict:
     return {
         "t": {str(k): first_difference(run["t"], ref["t"], k) for k in checkpoints},
@@ -63,6 +107,7 @@ def measure_scene(name: str, cfg: Config) -> dict:
     start = start_scene(name, cfg.transient)
     impacts = max(cfg.checkpoints)
     out: dict = {"scene": name, "rows": [], "reference": {}, "floor": {}}
+    event_rows: list[dict] = []
     for drag in ("fowles", "none"):
         scene = with_values(start, {"air.drag": drag})
         if drag == "fowles":
@@ -94,23 +139,31 @@ def measure_scene(name: str, cfg: Config) -> dict:
                     "errors": errors(run, ref, cfg.checkpoints),
                 }
             )
+            if method == "event":
+                event_rows.append(out["rows"][-1])
             print(
                 f"  {name} drag={drag} {method} {label}: {done} impacts, "
                 f"{1000 * cpu / max(done, 1):.3g} s/1000, "
                 f"t-err {out['rows'][-1]['errors']['t']}",
                 flush=True,
             )
+    interpreted = interpreted_event_costs(name, cfg)
+    for row in event_rows:
+        row["cpu_per_1000_interpreted"] = interpreted[row["drag"] + "|" + row["setting"]]
     return out
 
 
-def cost_at(rows: list[dict], method: str, drag: str, k: int, target: float) -> dict:
-    """CPU s per 1,000 impacts at which ``method`` reaches an impact-time error of
-    ``target`` after k impacts: log-log interpolation between the two settings that
-    bracket it, or the cheapest setting already below it. ``kind`` says which."""
+def cost_at(
+    rows: list[dict], method: str, drag: str, k: int, target: float, key: str = "cpu_per_1000"
+) -> dict:
+    """CPU s per 1,000 impacts (the rows' ``key``) at which ``method`` reaches an
+    impact-time error of ``target`` after k impacts: log-log interpolation between the
+    two settings that bracket it, or the cheapest setting already below it. ``kind``
+    says which."""
     pts = sorted(
-        (r["cpu_per_1000"], r["errors"]["t"][str(k)])
+        (r[key], r["errors"]["t"][str(k)])
         for r in rows
-        if r["method"] == method and r["drag"] == drag
+        if r["method"] == method and r["drag"] == drag and key in r
     )
     below = [(c, e) for c, e in pts if e <= target]
     if not below:
