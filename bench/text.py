@@ -198,38 +198,36 @@ start-up, a run of 10^6 impacts, start-up and compile time, and peak memory.
 
 PROFILE = """## 5. Where the default method spends its time
 
-`cProfile` of one run of each built-in scene (full model, from rest). The profiler
-about triples the run time; shares are of the profiled total.
+`cProfile` of one run of each built-in scene (full model, from rest), after a short run
+in the same process has loaded the compiled kernels. The impact loop is one call into
+compiled code (`billiard.kernels.loop.run_chunk`, a few calls per run as the chunks
+grow): what the profiler sees apart from it is the Python around the kernels, building
+the simulation and handing out the rows. Shares are of the profiled total.
 """
 
-PROFILE_AFTER = """Where the time goes, and what would make it shorter (in order of payoff):
+PROFILE_AFTER = """Where the time goes now, and what would make it shorter:
 
-1. **The flight integrator with drag** (`flight.py: AdaptiveFlight._stages` and the
-   generated `flight_rhs_drag` it calls 6-7 times per step) is the largest single item
-   with drag on, and drag on costs about twice drag off (section 4). Two concrete gains:
-   (a) `AdaptiveFlight.state(tau)` re-integrates from the step start with a full
-   6-stage step for every probe of the root search (Newton iterations, grazing
-   checks); using the Dormand-Prince dense output for the probes and re-integrating
-   only for the accepted root would remove most of those stage evaluations;
-   (b) the right-hand side is a Python call per stage: inlining the drag acceleration
-   into `_stages` (it is two lines once `1/m`, `c_lin/m`, `c_quad/m` are
-   precomputed) saves a call and a tuple per stage. The tolerance hardly matters for
-   the cost (section 1: rtol 1e-6 and 1e-12 cost within about a third of each other), because the
-   substeps are set by the event locator, not by the error control.
-2. **The offset-curve inversion** (`boundary.py: OffsetWall.foot`, then `gap_rate`) runs a
-   Newton loop with two generated-function calls per iteration for every gap
-   evaluation on a curved wall, ~15 times per impact. A foot solver that returns f',
-   f'' in one generated call, and one fewer iteration from the warm start (accept the
-   step when the predicted correction is below the tolerance), would roughly halve it.
-3. **Per-substep overhead in `EventLocator.locate`** (own time 4-12 %): a list of gaps and
-   rates for every surface at every substep, including the lid, which is almost never
-   near. A cheap apex test (the flight's highest point, from the current state, below
-   the lid level minus a margin) would drop the lid from most substeps.
-4. **Start-up**: `billiard run` spends ~0.5 s importing sympy and scipy.optimize that a
-   run never uses: `cli._user_errors()` imports `billiard.derivation.curve` and
-   `billiard.calibrate` just to collect their exception classes. Looking the modules up
-   in `sys.modules` at the time of the error (a module never imported cannot have
-   raised) brings the start-up to the ~0.15 s of importing the run path.
+1. **Inside the kernels** (measured by timing the kernels alone and from machine-code
+   samples, `python -m bench.compiled --no-startup`): in the wedge about 40 % of the time
+   is libm's `sin` and `cos` of the drive angle, which the same bits require (LLVM does
+   not merge the separate `sin` and `cos` calls of one angle that sit in different
+   blocks); in the parabola the time waits on chains of square roots and divisions: the
+   offset-curve foot's Newton iteration (about 39 per impact, each a square root, three
+   divisions and two wall-function calls) and the Dormand-Prince stages with drag (about
+   66 evaluations of the drag per impact, each with a square root). Carrying the drive's
+   sine and cosine and the last slope from one kernel to the next would save a few per
+   cent; fewer foot iterations (a better warm start) is the larger gain left.
+2. **Start-up** dominates a short run: importing numba and building its typing and
+   target registries (which import `scipy.linalg` for numba's BLAS check) takes about
+   0.8 s of the 1-1.5 s before the first impact, then loading the cached kernels and
+   the curve's wall functions. A run of 25,000 impacts spends more time starting than
+   simulating (section 4).
+3. **Writing rows**: a streamed run formats every float with `repr` (the only
+   formatting that reads back bit for bit), about as long as the compiled wedge takes to
+   compute the impact.
+4. **Building the simulation** (`Boundary`: offset-curve bounds sampled at start-up,
+   radius validation): milliseconds, once per run; it matters only for runs of a few
+   hundred impacts, such as the work-precision settings of section 1.
 """
 
 CONTACT = """## 6. Contact phases against the hops they replace

@@ -383,8 +383,10 @@ def memory(name: str, sizes: tuple[int, ...]) -> list[dict]:
 
 
 def profile(name: str, impacts: int, top: int = 12) -> dict:
-    """cProfile of one run: the functions with the most own time."""
+    """cProfile of one run: the functions with the most own time. A short run first
+    loads the compiled kernels, so that the profile is of a run, not of start-up."""
     scene = load_scene(name)
+    simulate(scene, collisions=10)
     profiler = cProfile.Profile()
     profiler.enable()
     result = simulate(scene, collisions=impacts)
