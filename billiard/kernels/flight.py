@@ -35,8 +35,8 @@ from billiard.flight import (
     _E6,
     _E7,
 )
-from billiard.jit import jit
 from billiard.kernels.ball import flight_exact, flight_rhs_drag, flight_rhs_magnus
+from billiard.kernels.borrow import inline
 from billiard.kernels.layout import (
     E_STEP_CONTROL,
     EN_ERR_VALUE,
@@ -60,7 +60,7 @@ from billiard.kernels.layout import (
 )
 
 
-@jit
+@inline
 def rhs(ctx, u1, u2):
     """Acceleration (du1/dt, du2/dt) in flight with air forces (generated)."""
     if ctx[FL_CMAG] != 0.0:
@@ -70,7 +70,7 @@ def rhs(ctx, u1, u2):
     return flight_rhs_drag(u1, u2, ctx[FL_M], ctx[G], ctx[FL_CLIN], ctx[FL_CQUAD])
 
 
-@jit
+@inline
 def acceleration(ctx, u1, u2):
     """The ball's acceleration (m/s^2) at velocity (u1, u2)."""
     if ctx[FL_KIND] == FLIGHT_EXACT:
@@ -78,7 +78,7 @@ def acceleration(ctx, u1, u2):
     return rhs(ctx, u1, u2)
 
 
-@jit
+@inline
 def aero_bound(ctx, speed):
     """Bound on the non-gravitational acceleration at a speed (m/s^2)."""
     if ctx[FL_KIND] == FLIGHT_EXACT:
@@ -88,7 +88,7 @@ def aero_bound(ctx, speed):
     ) / ctx[FL_M]
 
 
-@jit
+@inline
 def begin(ctx, q1, q2, u1, u2, u3):
     """Start a flight at tau = 0."""
     ctx[FL_YA] = q1
@@ -111,7 +111,7 @@ def begin(ctx, q1, q2, u1, u2, u3):
     ctx[FL_KB + 1] = ky
 
 
-@jit
+@inline
 def stages(ctx, q1, q2, u1, u2, k1x, k1y, h, with_error):
     """One Dormand-Prince step of length h from (q1, q2, u1, u2) whose acceleration is
     (k1x, k1y): (n1, n2, w1, w2, k7x, k7y, scaled error norm)."""
@@ -150,7 +150,7 @@ def stages(ctx, q1, q2, u1, u2, k1x, k1y, h, with_error):
     return n1, n2, w1, w2, k7x, k7y, err
 
 
-@jit
+@inline
 def advance(ctx, tau_a, tau_target):
     """One step from tau_a towards tau_target; returns where it ended."""
     if ctx[FL_KIND] == FLIGHT_EXACT:
@@ -186,7 +186,7 @@ def advance(ctx, tau_a, tau_target):
     raise KernelError(E_STEP_CONTROL)
 
 
-@jit
+@inline
 def state(ctx, tau):
     """(q1, q2, u1, u2) at flight time tau (in the current step for Dormand-Prince)."""
     if ctx[FL_KIND] == FLIGHT_EXACT:

@@ -7,8 +7,8 @@ from __future__ import annotations
 import math
 
 from billiard.impact import REGIME_RTOL
-from billiard.jit import jit
 from billiard.kernels.ball import contact_velocity, impact_slip, impact_stick
+from billiard.kernels.borrow import inline
 from billiard.kernels.layout import (
     ELASTIC,
     IM_E,
@@ -23,7 +23,7 @@ from billiard.kernels.layout import (
 )
 
 
-@jit
+@inline
 def kane_levinson(ctx, u1, u2, u3, z, vb1, vb2, pressing):
     """Post-impact (u1, u2, u3, Rt, Rn, regime code, resting) for a ball with speeds
     (u1, u2, u3) hitting a boundary with tangent angle z moving at (vb1, vb2);

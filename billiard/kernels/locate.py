@@ -16,8 +16,9 @@ from billiard.events import (
     MAX_FLIGHT_TIME,
     _provably_clear,
 )
-from billiard.jit import jit
 from billiard.kernels import flight
+from billiard.kernels.borrow import inline
+from billiard.kernels.borrow import ulp as _ulp
 from billiard.kernels.layout import (
     AMP,
     DRIVE_ACCEL,
@@ -53,22 +54,16 @@ assert _MAX_SPLITS < STACK_DEPTH  # every split keeps at most one pending subste
 #: "no impact in this substep"
 NONE = -1.0
 
-provably_clear = jit(_provably_clear)
+provably_clear = inline(_provably_clear)
 
 
-@jit
+@inline
 def ulp(x):
-    """math.ulp(x) for a finite x (numba has no math.ulp)."""
-    x = abs(x)
-    if x == 0.0:
-        return 5e-324
-    _, e = math.frexp(x)
-    if e - 53 < -1074:
-        return 5e-324
-    return math.ldexp(1.0, e - 53)
+    """math.ulp(x) for a finite x (numba has no math.ulp: compiled, from the bits)."""
+    return _ulp(x)
 
 
-@jit
+@inline
 def relative(ctx, tau, q1, q2, u1, u2):
     """Centre position and velocity relative to the boundary at flight time tau."""
     theta = ctx[THETA0] + ctx[OMEGA] * tau
@@ -80,7 +75,7 @@ def relative(ctx, tau, q1, q2, u1, u2):
     return q1, q2 - d, u1, u2 - v
 
 
-@jit
+@inline
 def relative_acceleration(ctx, tau, u1, u2):
     a1, a2 = flight.acceleration(ctx, u1, u2)
     # the boundary accelerates by -A w^2 sin(theta) along the drive
@@ -90,14 +85,14 @@ def relative_acceleration(ctx, tau, u1, u2):
     return a1, a2 - ab
 
 
-@jit
+@inline
 def gap(ctx, p, walls, j, tau):
     q1, q2, u1, u2 = flight.state(ctx, tau)
     px, py, vx, vy = relative(ctx, tau, q1, q2, u1, u2)
     return gap_rate(ctx, p, walls, j, px, py, vx, vy)
 
 
-@jit
+@inline
 def event(ctx, p, walls, tau, j):
     """(tau, j, q1, q2, u1, u2, theta, s, z): the ball touches surface j at tau."""
     q1, q2, u1, u2 = flight.state(ctx, tau)
@@ -107,7 +102,7 @@ def event(ctx, p, walls, tau, j):
     return tau, j, q1, q2, u1, u2, theta, s, z
 
 
-@jit
+@inline
 def first_positive_root(c0, c1, c2):
     """Smallest positive root of c0 + c1 t + c2 t^2 (inf when there is none)."""
     if c2 == 0.0:
@@ -128,13 +123,13 @@ def first_positive_root(c0, c1, c2):
     return best
 
 
-@jit
+@inline
 def quadratic_start(lo, glo, dglo, hi, dghi):
     tc = first_positive_root(glo, dglo, 0.5 * (dghi - dglo) / (hi - lo))
     return lo + tc if tc < hi - lo else math.nan
 
 
-@jit
+@inline
 def accel_bounds(ctx, u1, u2, window):
     """(sup |a_x|, sup -a_y, sup a_y) of the relative acceleration over a window."""
     g = ctx[G]
@@ -145,7 +140,7 @@ def accel_bounds(ctx, u1, u2, window):
     return aero, g + ctx[DRIVE_ACCEL] + aero, ctx[DRIVE_ACCEL] + aero - g
 
 
-@jit
+@inline
 def root(ctx, p, walls, j, lo, glo, dglo, hi, ghi, dghi):
     """Earliest time with G <= 0 in a bracket with G(lo) > 0 >= G(hi), to rounding."""
     t = quadratic_start(lo, glo, dglo, hi, dghi)
@@ -180,7 +175,7 @@ def root(ctx, p, walls, j, lo, glo, dglo, hi, ghi, dghi):
     raise KernelError(E_ROOT)
 
 
-@jit
+@inline
 def rate_root(ctx, p, walls, j, a, da, b, db):
     """Root of dG/dtau in (a, b), where it changes sign (Illinois)."""
     side = 0
@@ -206,7 +201,7 @@ def rate_root(ctx, p, walls, j, a, da, b, db):
     raise KernelError(E_EXTREMUM)
 
 
-@jit
+@inline
 def scan(ctx, p, walls, j, ta, ga, dga, tb, gb, dgb, m, splits, leaving):
     """First time in (ta, tb] at which the ball reaches surface j, or NONE
     (``EventLocator._scan``, and ``_scan_leaving`` when ``leaving``).
@@ -273,7 +268,7 @@ def scan(ctx, p, walls, j, ta, ga, dga, tb, gb, dgb, m, splits, leaving):
         leaving = False
 
 
-@jit
+@inline
 def push(ctx, top, ta, ga, dga, tb, gb, dgb, splits):
     """Keep a substep to scan later; returns the new stack size."""
     o = STACK + top * STACK_ENTRY
@@ -287,7 +282,7 @@ def push(ctx, top, ta, ga, dga, tb, gb, dgb, splits):
     return top + 1
 
 
-@jit
+@inline
 def locate(ctx, p, walls, theta0, q1, q2, u1, u2, u3):
     """Follow the flight from (q1, q2, u1, u2), drive angle theta0, to the first contact
     with a surface: the event tuple of :func:`event`."""

@@ -19,7 +19,7 @@ from billiard.engine_phases import (
 from billiard.jit import jit
 from billiard.kernels import flight
 from billiard.kernels.ball import energy, frame_velocity
-from billiard.kernels.borrow import borrow
+from billiard.kernels.borrow import borrow, inline
 from billiard.kernels.impact import kane_levinson
 from billiard.kernels.layout import (
     AMP,
@@ -69,13 +69,13 @@ from billiard.kernels.layout import (
 from billiard.kernels.locate import locate
 from billiard.kernels.surfaces import gap_accel
 
-compensated_add = jit(_compensated_add)
+compensated_add = inline(_compensated_add)
 
 #: slots of the collapse window's ring
 RING = COLLAPSE_COUNT + 1
 
 
-@jit
+@inline
 def pressing(ctx, p, walls, j, theta, q1, q2, u1, u2):
     """Does the ball's acceleration relative to the boundary push it into surface j?"""
     a = ctx[AMP]
@@ -95,7 +95,7 @@ def pressing(ctx, p, walls, j, theta, q1, q2, u1, u2):
     return gap_accel(ctx, p, walls, j, px, py, vx, vy, ax, ay) < 0.0
 
 
-@jit
+@inline
 def step(ctx, p, walls, out, row):
     """Advance to the next impact and write its row ``out[row]``; returns False (and
     changes nothing) when the impact comes after ``ctx[EN_UNTIL]``."""

@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import math
 
-from billiard.jit import jit
+from billiard.kernels.borrow import inline
 from billiard.kernels.layout import (
     CURVED,
     E_INVERSION,
@@ -34,7 +34,7 @@ from billiard.kernels.layout import (
 from billiard.surfaces import _FOOT_STEP_TOL
 
 
-@jit
+@inline
 def foot(ctx, p, walls, base, x, s):
     """Abscissa s of the wall point whose offset point has abscissa x (Newton)."""
     w = int(ctx[base + S_WALL])
@@ -53,7 +53,7 @@ def foot(ctx, p, walls, base, x, s):
     raise KernelError(E_INVERSION)
 
 
-@jit
+@inline
 def gap_rate(ctx, p, walls, j, px, py, vx, vy):
     """(G, dG/dt) of surface j for a centre at p moving at v relative to the boundary."""
     base = SURF + j * SURF_STRIDE
@@ -71,7 +71,7 @@ def gap_rate(ctx, p, walls, j, px, py, vx, vy):
     return ctx[base + S_A] - py, -vy
 
 
-@jit
+@inline
 def gap_accel(ctx, p, walls, j, px, py, vx, vy, ax, ay):
     """d2G/dt2 of surface j for a relative acceleration a."""
     base = SURF + j * SURF_STRIDE
@@ -91,7 +91,7 @@ def gap_accel(ctx, p, walls, j, px, py, vx, vy, ax, ay):
     return -ay
 
 
-@jit
+@inline
 def contact(ctx, p, walls, j, px):
     """(s, z) of the contact point of a centre at abscissa px on surface j's offset."""
     base = SURF + j * SURF_STRIDE
@@ -105,7 +105,7 @@ def contact(ctx, p, walls, j, px):
     return px, math.pi
 
 
-@jit
+@inline
 def max_gap_deceleration(ctx, j, px, vx, tau, ax, ay_down, ay_up):
     """Bound on -d2G/dtau2 of surface j over a window of length tau."""
     base = SURF + j * SURF_STRIDE
