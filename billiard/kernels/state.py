@@ -71,14 +71,8 @@ def state_vector(sim: Any) -> list[float]:
     surfaces = sim.boundary.surfaces
     ctx[L.NSURF] = float(len(surfaces))
     _flight_constants(ctx, sim.flight)
-    law = sim.impact
-    ctx[L.IM_M] = law.m
-    ctx[L.IM_R] = law.r
-    ctx[L.IM_K] = law.k
-    ctx[L.IM_E] = law.e
-    ctx[L.IM_MUS] = law.mu_s
-    ctx[L.IM_MUK] = law.mu_k
-    ctx[L.IM_EB] = law.low_velocity.threshold
+    # Kane and Levinson's law (see supports): its coefficients, as its own ctx holds them
+    ctx[L.IM_M : L.IM_EB + 1] = sim.impact.ctx[L.IM_M : L.IM_EB + 1]
     for j, surface in enumerate(surfaces):
         _surface_constants(ctx, j, surface)
         base = L.SURF + j * L.SURF_STRIDE
