@@ -1,11 +1,12 @@
 """The compiled engine against the interpreted one: CPU per impact, start-up, compile
 time, and what numba's reference counting of array arguments costs.
 
-    python -m bench.compiled [--impacts 20000] [--repeats 5]
+    python -m bench.compiled [--impacts 20000] [--repeats 5] [--no-startup]
 
 Times are CPU seconds (``time.process_time``) of the impact loop alone, medians of
 ``--repeats`` runs in this process (ratios measured in the same session); start-up and
-compile time are wall seconds of a fresh interpreter, from start to the first impact.
+compile time are wall seconds of a fresh interpreter, from start to the first impact
+(``--no-startup`` skips them, and the reference-counting probe: the loop alone).
 Not a timed test: the machine's load moves every number here.
 """
 
@@ -143,6 +144,11 @@ def main(argv: list[str] | None = None) -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--impacts", type=int, default=20_000)
     parser.add_argument("--repeats", type=int, default=5)
+    parser.add_argument(
+        "--no-startup",
+        action="store_true",
+        help="measure the impact loop only (no start-up, cold compile or call probe)",
+    )
     args = parser.parse_args(argv)
     from billiard import jit
 
@@ -158,6 +164,8 @@ def main(argv: list[str] | None = None) -> None:
             f"run_chunk {bare * 1e6:.2f} us/impact ({interp / bare:.0f}x), "
             f"with records {whole * 1e6:.2f} us/impact ({interp / whole:.0f}x)"
         )
+    if args.no_startup:
+        return
     print(f"warm start-up to the first impact: {startup('wedge-6.6hz', 3):.2f} s (wall)")
     with tempfile.TemporaryDirectory() as cold:
         print(f"cold start-up (empty cache, compiles): {startup('wedge-6.6hz', 1, cold):.1f} s")
