@@ -1,7 +1,6 @@
-"""Flight between impacts (:mod:`billiard.flight`) over the state vector: the exact
-parabola without air forces, Dormand-Prince 5(4) with them. Same operations in the same
-order as :class:`billiard.flight.ExactFlight` and :class:`billiard.flight.AdaptiveFlight`,
-whose tableau it uses."""
+"""Flight between impacts over the state vector: the exact parabola without air forces,
+Dormand-Prince 5(4) with them. :class:`billiard.flight.ExactFlight` and
+:class:`billiard.flight.AdaptiveFlight` are these functions, run interpreted."""
 
 from __future__ import annotations
 

@@ -1,6 +1,6 @@
-"""Kane and Levinson's impact law with the low-velocity rule
-(:class:`billiard.impact.KaneLevinsonImpact`, :class:`billiard.impact.LowVelocityRule`)
-on the generated maps; same operations in the same order."""
+"""Kane and Levinson's impact law with the low-velocity rule on the generated maps
+(:class:`billiard.impact.KaneLevinsonImpact` is this, run interpreted;
+:class:`billiard.impact.LowVelocityRule` describes the rule)."""
 
 from __future__ import annotations
 

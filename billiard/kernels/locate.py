@@ -1,8 +1,9 @@
-"""The event-driven impact locator (:class:`billiard.events.EventLocator`) over the state
-vector: substeps proven clear by the gap's deceleration bound, grazing candidates,
-halving, and the root refinement. Same operations in the same order; the recursion of
-``_scan`` and ``_scan_leaving`` is one loop over a stack of substeps here. "No time" is
-:data:`NONE` (the times searched are >= 0).
+"""The event-driven impact locator over the state vector (the search
+:mod:`billiard.events` describes; :class:`billiard.events.EventLocator` is this, run
+interpreted): substeps proven clear by the gap's deceleration bound, grazing
+candidates, halving, and the root refinement. A substep split in two is one loop over a
+stack of substeps, not a recursion. "No time" is :data:`NONE` (the times searched are
+>= 0).
 """
 
 from __future__ import annotations
@@ -224,14 +225,14 @@ def rate_root(ctx, p, walls, j, a, da, b, db):
 
 @inline
 def scan(ctx, p, walls, j, ta, ga, dga, tb, gb, dgb, m, splits, leaving):
-    """First time in (ta, tb] at which the ball reaches surface j, or NONE
-    (``EventLocator._scan``, and ``_scan_leaving`` when ``leaving``).
+    """First time in (ta, tb] at which the ball reaches surface j, or NONE. G and
+    dG/dtau are known at both ends, m >= -d2G/dtau2 on the substep; ``leaving``: the
+    ball is separating from j at ta (G ~ 0, dG/dtau >= 0), else it is clear of it.
 
-    The recursion of the interpreted locator is unrolled into a loop: a substep split in
-    two continues with its left half and keeps the right half on a stack, scanned
-    when the left one holds no contact. The gaps are evaluated in the same order (the
-    warm starts of the offset inversion depend on it). numba cannot reload a cached
-    recursive function, hence the loop.
+    A substep split in two continues with its left half and keeps the right half on a
+    stack, scanned when the left one holds no contact: the gaps are evaluated from left
+    to right (the warm starts of the offset inversion depend on the order). A loop, not
+    a recursion: numba cannot reload a cached recursive function.
     """
     top = 0
     while True:

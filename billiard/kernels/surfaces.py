@@ -1,7 +1,6 @@
-"""The surfaces of :mod:`billiard.surfaces` over the state vector: the offset curve of a
-curved wall (:class:`~billiard.surfaces.OffsetWall`), of a straight one
-(:class:`~billiard.surfaces.OffsetLine`), the lid and the escape level. Same operations
-in the same order, the same warm starts (kept in the surface's block of ``ctx``).
+"""The surfaces over the state vector: the offset curve of a curved wall, of a straight
+one, the lid and the escape level, with the warm starts in the surface's block of
+``ctx``. The classes of :mod:`billiard.surfaces` are these functions, run interpreted.
 
 A curved wall's functions come in ``walls = (f, df, d2f)``, each a tuple with one
 function per wall of the curve, called as ``walls[1][w](x, p)``; compiled, they are
