@@ -28,10 +28,10 @@ import numpy as np
 
 from billiard import jit as _jit
 from billiard.errors import SimulationError
-from billiard.events import MAX_FLIGHT_TIME
 from billiard.interrupt import RunInterrupted, StopRequest
 from billiard.kernels import layout as L
 from billiard.kernels.state import COUNT_KEYS, engine_state, state_vector, write_ball, write_state
+from billiard.kernels_python import stop_text
 from billiard.record import MemoryRecorder
 from billiard.rows import as_block, record_of
 from billiard.status import Status
@@ -45,12 +45,6 @@ LAST_CHUNK = 4096
 #: a chunk that took less wall time (s) than this is followed by one twice as long
 _FAST_CHUNK = 0.05
 _PROGRESS_EVERY = 100
-
-_TEXTS = {
-    L.E_NO_IMPACT: f"no impact found within {MAX_FLIGHT_TIME:g} s of flight",
-    L.E_ROOT: "the impact time did not converge",
-    L.E_EXTREMUM: "the gap's extremum did not converge",
-}
 
 
 def supports(sim: Any) -> str | None:
@@ -243,16 +237,7 @@ class KernelEngine:
             )
         if code == L.E_COLLAPSE:
             return self.pending_stop() or SimulationError("inelastic collapse", Status.COLLAPSE)
-        value = float(ctx[L.EN_ERR_VALUE])
-        if code == L.E_STEP_CONTROL:
-            text = (
-                f"the flight's step-size control failed (Dormand-Prince, 200 rejected steps "
-                f"from tau = {value!r} s)"
-            )
-        elif code == L.E_INVERSION:
-            text = f"offset-curve inversion did not converge at x = {value!r} m"
-        else:
-            text = _TEXTS.get(code, f"kernel stop {code}")
+        text = stop_text(code, float(ctx[L.EN_ERR_VALUE]))
         if math.isnan(t):
             return SimulationError(f"{text} after impact {n} (t = {t_last:.9g} s)")
         return SimulationError(f"{text} at impact {n + 1} (t = {t:.9g} s)")

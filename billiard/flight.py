@@ -34,8 +34,10 @@ import math
 from collections.abc import Callable, Mapping
 from typing import Any
 
-from billiard.errors import SimulationError
 from billiard.generated import ball as _ball
+from billiard.kernels_python import flight as _flight
+from billiard.kernels_python import layout as _L
+from billiard.kernels_python import stop as _stop
 
 __all__ = [
     "FLIGHT_MODELS",
@@ -82,43 +84,101 @@ class FlightModel:
             raise ValueError(f"{type(self).__name__} carries no memory between flights")
 
 
-class ExactFlight(FlightModel):
-    """Gravity only: the exact parabola, valid for any tau."""
+class _KernelFlight(FlightModel):
+    """A flight model whose steps are the kernels' (:mod:`billiard.kernels.flight`, run
+    interpreted): its state lives in ``ctx``, a list of floats in the kernels' layout,
+    which the event locator copies in and out around a search."""
 
     def __init__(self, gravity: float):
         self.g = float(gravity)
-        self._y: State = (0.0, 0.0, 0.0, 0.0)
+        self.ctx = [0.0] * _L.SIZE
+        self.ctx[_L.G] = self.g
 
     def begin(self, q1: float, q2: float, u1: float, u2: float, u3: float) -> None:
-        self._y = (q1, q2, u1, u2)
+        _flight.begin(self.ctx, q1, q2, u1, u2, u3)
 
     def advance(self, tau_a: float, tau_target: float) -> float:
-        return tau_target
+        return _flight.advance(self.ctx, tau_a, tau_target)
 
     def state(self, tau: float) -> State:
-        q1, q2, u1, u2 = self._y
-        return _ball.flight_exact(tau, q1, q2, u1, u2, self.g)
+        return _flight.state(self.ctx, tau)
 
     def acceleration(self, u1: float, u2: float) -> tuple[float, float]:
-        return 0.0, -self.g
+        return _flight.acceleration(self.ctx, u1, u2)
+
+    def aero_bound(self, speed: float) -> float:
+        return _flight.aero_bound(self.ctx, speed)
 
 
-# Dormand-Prince 5(4) tableau (Dormand & Prince 1980; as in Hairer, Norsett & Wanner).
-_A21 = 1 / 5
-_A31, _A32 = 3 / 40, 9 / 40
-_A41, _A42, _A43 = 44 / 45, -56 / 15, 32 / 9
-_A51, _A52, _A53, _A54 = 19372 / 6561, -25360 / 2187, 64448 / 6561, -212 / 729
-_A61, _A62, _A63, _A64, _A65 = 9017 / 3168, -355 / 33, 46732 / 5247, 49 / 176, -5103 / 18656
-_B1, _B3, _B4, _B5, _B6 = 35 / 384, 500 / 1113, 125 / 192, -2187 / 6784, 11 / 84
-# error weights: 5th-order minus embedded 4th-order weights (the 7th stage is FSAL)
-_E1, _E3, _E4, _E5, _E6, _E7 = (
-    71 / 57600,
-    -71 / 16695,
-    71 / 1920,
-    -17253 / 339200,
-    22 / 525,
-    -1 / 40,
-)
+class ExactFlight(_KernelFlight):
+    """Gravity only: the exact parabola, valid for any tau."""
+
+    def __init__(self, gravity: float):
+        super().__init__(gravity)
+        self.ctx[_L.FL_KIND] = _L.FLIGHT_EXACT
+
+
+class AdaptiveFlight(_KernelFlight):
+    """Flight with drag (and optionally the Magnus force): Dormand-Prince 5(4).
+
+    The right-hand side depends on the velocity only, so the velocity stages are
+    integrated and the position follows from the same weights applied to the stage
+    velocities. Error control on (q1, q2, u1, u2) with ``atol = rtol * (1 m, 1 m/s)``.
+    The last stage of an accepted step is the first of the next (FSAL), and the first
+    stage of the current step is kept for re-integrations inside it. The step proposal
+    (``_h``) carries over from step to step and from flight to flight.
+    """
+
+    def __init__(
+        self,
+        gravity: float,
+        mass: float,
+        c_lin: float,
+        c_quad: float,
+        c_magnus: float = 0.0,
+        rtol: float = 1e-10,
+    ):
+        super().__init__(gravity)
+        self.m = float(mass)
+        self.c_lin, self.c_quad, self.c_magnus = float(c_lin), float(c_quad), float(c_magnus)
+        self.rtol = float(rtol)
+        ctx = self.ctx
+        ctx[_L.FL_KIND] = _L.FLIGHT_ADAPTIVE
+        ctx[_L.FL_M] = self.m
+        ctx[_L.FL_CLIN] = self.c_lin
+        ctx[_L.FL_CQUAD] = self.c_quad
+        ctx[_L.FL_CMAG] = self.c_magnus
+        ctx[_L.FL_RTOL] = self.rtol
+        ctx[_L.FL_H] = 1e-3
+
+    @property
+    def _h(self) -> float:
+        """The step proposal (s)."""
+        return self.ctx[_L.FL_H]
+
+    @_h.setter
+    def _h(self, value: float) -> None:
+        self.ctx[_L.FL_H] = value
+
+    def memory(self) -> dict[str, float]:
+        # the step proposal outlives a flight: the next flight starts with it
+        return {"step": self._h}
+
+    def restore_memory(self, memory: Mapping[str, float]) -> None:
+        step = memory.get("step") if set(memory) == {"step"} else None
+        if not (isinstance(step, float) and math.isfinite(step) and step > 0.0):
+            raise ValueError(f"AdaptiveFlight memory must be {{'step': h > 0}}, got {memory!r}")
+        self._h = step
+
+    def advance(self, tau_a: float, tau_target: float) -> float:
+        ctx = self.ctx
+        if tau_a != ctx[_L.FL_TB]:
+            raise ValueError("AdaptiveFlight.advance must continue from the last step end")
+        try:
+            return _flight.advance(ctx, tau_a, tau_target)
+        except _L.KernelError as exc:
+            # a right-hand side that turned non-finite makes every error estimate fail
+            raise _stop(exc, ctx) from None
 
 
 class _AirFlight(FlightModel):
@@ -151,125 +211,6 @@ class _AirFlight(FlightModel):
         return (
             (self.c_lin + self.c_quad * speed) * speed + abs(self.c_magnus * self._u3) * speed
         ) / self.m
-
-
-class AdaptiveFlight(_AirFlight):
-    """Flight with drag (and optionally the Magnus force): Dormand-Prince 5(4).
-
-    The right-hand side depends on the velocity only, so the velocity stages are
-    integrated and the position follows from the same weights applied to the stage
-    velocities. Error control on (q1, q2, u1, u2) with ``atol = rtol * (1 m, 1 m/s)``.
-    The last stage of an accepted step is the first of the next (FSAL), and the first
-    stage of the current step is kept for re-integrations inside it.
-    """
-
-    def __init__(
-        self,
-        gravity: float,
-        mass: float,
-        c_lin: float,
-        c_quad: float,
-        c_magnus: float = 0.0,
-        rtol: float = 1e-10,
-    ):
-        super().__init__(gravity, mass, c_lin, c_quad, c_magnus)
-        self.rtol = float(rtol)
-        self._h = 1e-3  # step proposal, carried from step to step
-        self._ta = self._tb = 0.0
-        self._ya: State = (0.0, 0.0, 0.0, 0.0)
-        self._yb: State = self._ya
-        self._ka = self._kb = (0.0, 0.0)  # accelerations at the step's ends
-
-    def begin(self, q1: float, q2: float, u1: float, u2: float, u3: float) -> None:
-        self._bind_spin(u3)
-        self._ta = self._tb = 0.0
-        self._ya = self._yb = (q1, q2, u1, u2)
-        self._ka = self._kb = self._rhs(u1, u2, *self._args)
-
-    def memory(self) -> dict[str, float]:
-        # the step proposal outlives a flight: the next flight starts with it
-        return {"step": self._h}
-
-    def restore_memory(self, memory: Mapping[str, float]) -> None:
-        step = memory.get("step") if set(memory) == {"step"} else None
-        if not (isinstance(step, float) and math.isfinite(step) and step > 0.0):
-            raise ValueError(f"AdaptiveFlight memory must be {{'step': h > 0}}, got {memory!r}")
-        self._h = step
-
-    def _stages(
-        self, y: State, k1: tuple[float, float], h: float, with_error: bool
-    ) -> tuple[State, tuple[float, float], float]:
-        """One Dormand-Prince step of length h from y, whose acceleration is k1:
-        (y_new, acceleration at y_new or (nan, nan), scaled error norm)."""
-        f = self._rhs
-        args = self._args
-        q1, q2, u1, u2 = y
-        k1x, k1y = k1
-        v2x, v2y = u1 + h * _A21 * k1x, u2 + h * _A21 * k1y
-        k2x, k2y = f(v2x, v2y, *args)
-        v3x = u1 + h * (_A31 * k1x + _A32 * k2x)
-        v3y = u2 + h * (_A31 * k1y + _A32 * k2y)
-        k3x, k3y = f(v3x, v3y, *args)
-        v4x = u1 + h * (_A41 * k1x + _A42 * k2x + _A43 * k3x)
-        v4y = u2 + h * (_A41 * k1y + _A42 * k2y + _A43 * k3y)
-        k4x, k4y = f(v4x, v4y, *args)
-        v5x = u1 + h * (_A51 * k1x + _A52 * k2x + _A53 * k3x + _A54 * k4x)
-        v5y = u2 + h * (_A51 * k1y + _A52 * k2y + _A53 * k3y + _A54 * k4y)
-        k5x, k5y = f(v5x, v5y, *args)
-        v6x = u1 + h * (_A61 * k1x + _A62 * k2x + _A63 * k3x + _A64 * k4x + _A65 * k5x)
-        v6y = u2 + h * (_A61 * k1y + _A62 * k2y + _A63 * k3y + _A64 * k4y + _A65 * k5y)
-        k6x, k6y = f(v6x, v6y, *args)
-        # position stages: dq/dt = velocity of each stage
-        n1 = q1 + h * (_B1 * u1 + _B3 * v3x + _B4 * v4x + _B5 * v5x + _B6 * v6x)
-        n2 = q2 + h * (_B1 * u2 + _B3 * v3y + _B4 * v4y + _B5 * v5y + _B6 * v6y)
-        w1 = u1 + h * (_B1 * k1x + _B3 * k3x + _B4 * k4x + _B5 * k5x + _B6 * k6x)
-        w2 = u2 + h * (_B1 * k1y + _B3 * k3y + _B4 * k4y + _B5 * k5y + _B6 * k6y)
-        if not with_error:
-            return (n1, n2, w1, w2), (math.nan, math.nan), 0.0
-        k7x, k7y = f(w1, w2, *args)
-        e1 = h * (_E1 * u1 + _E3 * v3x + _E4 * v4x + _E5 * v5x + _E6 * v6x + _E7 * w1)
-        e2 = h * (_E1 * u2 + _E3 * v3y + _E4 * v4y + _E5 * v5y + _E6 * v6y + _E7 * w2)
-        e3 = h * (_E1 * k1x + _E3 * k3x + _E4 * k4x + _E5 * k5x + _E6 * k6x + _E7 * k7x)
-        e4 = h * (_E1 * k1y + _E3 * k3y + _E4 * k4y + _E5 * k5y + _E6 * k6y + _E7 * k7y)
-        rtol = self.rtol
-        s1 = rtol * (1.0 + max(abs(q1), abs(n1)))
-        s2 = rtol * (1.0 + max(abs(q2), abs(n2)))
-        s3 = rtol * (1.0 + max(abs(u1), abs(w1)))
-        s4 = rtol * (1.0 + max(abs(u2), abs(w2)))
-        r1, r2, r3, r4 = e1 / s1, e2 / s2, e3 / s3, e4 / s4
-        err = math.sqrt((r1 * r1 + r2 * r2 + r3 * r3 + r4 * r4) / 4)
-        return (n1, n2, w1, w2), (k7x, k7y), err
-
-    def advance(self, tau_a: float, tau_target: float) -> float:
-        if tau_a != self._tb:
-            raise ValueError("AdaptiveFlight.advance must continue from the last step end")
-        ya, ka = self._yb, self._kb
-        span = tau_target - tau_a
-        h = min(self._h, span)
-        for _ in range(200):
-            y, k, err = self._stages(ya, ka, h, True)
-            if err <= 1.0:
-                factor = 5.0 if err == 0.0 else min(5.0, max(0.2, 0.9 * err**-0.2))
-                # a step cut short by the target says nothing about the next step size
-                self._h = max(self._h, h * factor) if h == span else h * factor
-                self._ta, self._ya, self._ka = tau_a, ya, ka
-                self._tb = tau_target if h == span else tau_a + h
-                self._yb, self._kb = y, k
-                return self._tb
-            h *= max(0.2, 0.9 * err**-0.2)
-            self._h = h
-        # a right-hand side that turned non-finite makes every error estimate fail
-        raise SimulationError(
-            f"the flight's step-size control failed (Dormand-Prince, 200 rejected steps "
-            f"from tau = {tau_a!r} s)"
-        )
-
-    def state(self, tau: float) -> State:
-        if tau == self._tb:
-            return self._yb
-        if tau == self._ta:
-            return self._ya
-        return self._stages(self._ya, self._ka, tau - self._ta, False)[0]
 
 
 class RK4Flight(_AirFlight):

@@ -8,12 +8,13 @@ needs the same ``apply(state, contact)`` method.
 
 from __future__ import annotations
 
-import math
 from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any, Protocol
 
-from billiard.generated import ball as _ball
+from billiard.kernels_python import ball as _ball
+from billiard.kernels_python import impact as _impact
+from billiard.kernels_python import layout as _L
 
 __all__ = [
     "IMPACT_LAWS",
@@ -30,16 +31,9 @@ STICK = "stick"
 SLIP = "slip"
 ELASTIC = "elastic"
 
-#: Relative tolerance of the friction-cone test |Rt| <= mu_s Rn, in units of the
-#: momenta that enter the impulses: 16 ulps. The no-slip impulse Rt is a sum of a few
-#: products of the ball's and the boundary's velocity components with the mass, so it
-#: carries a rounding error of a few ulps of m (|u1| + |u2| + r |u3| + |vb1| + |vb2|).
-#: A purely normal impact (no tangential relative velocity, no spin) has Rt = 0 exactly
-#: but computes |Rt| ~ 1e-17 m |u|, which with mu_s = 0 used to exceed mu_s Rn = 0 and
-#: label the impact ``slip``. The cone is widened by this much so that rounding alone
-#: never decides the regime; an impulse genuinely outside the cone (by more than 1e-14 of
-#: the momenta) still slips.
-REGIME_RTOL = 16 * 2.0**-52
+#: Relative tolerance of the friction-cone test |Rt| <= mu_s Rn (see
+#: billiard/kernels/impact.py): 16 ulps of the momenta that enter the impulses.
+REGIME_RTOL = _impact.REGIME_RTOL
 
 
 @dataclass(frozen=True, slots=True)
@@ -105,23 +99,23 @@ class LowVelocityRule:
     that speed, and the ensuing micro-bounces, each carrying its friction impulse, stand
     in for the rolling or sliding contact that the impact-only model lacks. The paper's
     fixed time step plays the same role implicitly. ``threshold = 0`` disables the rule.
+    Applied by :func:`billiard.kernels.impact.kane_levinson`.
     """
 
     def __init__(self, threshold: float):
         self.threshold = float(threshold)
 
-    def applies(self, wn: float) -> bool:
-        """Does the rule set e = 1 for this relative normal velocity (m/s)?"""
-        return abs(wn) < self.threshold
 
-    def lifts(self, wn: float, contact: Contact) -> bool:
-        """Is this a lying ball, to be relaunched at the threshold speed?"""
-        return contact.pressing and wn > -self.threshold
+def _slot(index: int, doc: str) -> property:
+    """An attribute of the law kept in its state vector's slot ``index``."""
 
-    def approach_shift(self, wn: float) -> float:
-        """Change of the normal velocity (m/s, along c2) that makes a lying ball
-        approach at the threshold speed."""
-        return -self.threshold - wn
+    def get(self: KaneLevinsonImpact) -> float:
+        return self.ctx[index]
+
+    def set(self: KaneLevinsonImpact, value: float) -> None:
+        self.ctx[index] = float(value)
+
+    return property(get, set, doc=doc)
 
 
 class KaneLevinsonImpact:
@@ -133,6 +127,9 @@ class KaneLevinsonImpact:
     ball slips with Rt = -mu_k Rn sign(wt).
     Slow impacts follow the :class:`LowVelocityRule` (regime ``"elastic"``).
 
+    The law is :func:`billiard.kernels.impact.kane_levinson` (run interpreted), its
+    coefficients the slots of a state vector ``ctx`` in the kernels' layout.
+
     Args:
         mass, radius, inertia_factor: the ball (kg, m, I / (m r^2)).
         restitution, mu_static, mu_kinetic: contact coefficients.
@@ -140,6 +137,14 @@ class KaneLevinsonImpact:
     """
 
     regimes: tuple[str, ...] = (STICK, SLIP, ELASTIC)
+
+    m = _slot(_L.IM_M, "mass (kg)")
+    r = _slot(_L.IM_R, "radius (m)")
+    k = _slot(_L.IM_K, "inertia factor I / (m r^2)")
+    e = _slot(_L.IM_E, "restitution")
+    mu_s = _slot(_L.IM_MUS, "static friction")
+    mu_k = _slot(_L.IM_MUK, "kinetic friction")
+    elastic_below = _slot(_L.IM_EB, "threshold of the low-velocity rule (m/s)")
 
     def __init__(
         self,
@@ -151,13 +156,14 @@ class KaneLevinsonImpact:
         mu_kinetic: float,
         elastic_below: float,
     ):
-        self.m = float(mass)
-        self.r = float(radius)
-        self.k = float(inertia_factor)
-        self.e = float(restitution)
-        self.mu_s = float(mu_static)
-        self.mu_k = float(mu_kinetic)
-        self.elastic_below = float(elastic_below)
+        self.ctx = [0.0] * (_L.IM_EB + 1)
+        self.m = mass
+        self.r = radius
+        self.k = inertia_factor
+        self.e = restitution
+        self.mu_s = mu_static
+        self.mu_k = mu_kinetic
+        self.elastic_below = elastic_below
         self.low_velocity = LowVelocityRule(elastic_below)
 
     @classmethod
@@ -176,56 +182,13 @@ class KaneLevinsonImpact:
         """Post-impact speeds for a ball with speeds ``state.u1, state.u2, state.u3``."""
         u1, u2, u3 = state.u1, state.u2, state.u3
         z, vb1, vb2 = contact.z, contact.vb1, contact.vb2
-        m, r, k = self.m, self.r, self.k
-        wt, wn = _ball.contact_velocity(u1, u2, u3, z, vb1, vb2, r)
-        e = self.e
-        rule = self.low_velocity
-        low = rule.applies(wn)
-        resting = False
-        v1, v2 = u1, u2
-        if low:
-            e = 1.0
-            if rule.lifts(wn, contact):
-                # a lying ball: shift its normal velocity to an approach at the threshold
-                shift = rule.approach_shift(wn)
-                v1 -= math.sin(z) * shift
-                v2 += math.cos(z) * shift
-                resting = True
-        if wn >= 0.0 and not resting:
-            # The contact point is already separating (a locator can report a contact at a
-            # rounding-level gap while a ball slides along a curved wall). A contact can
-            # only push: Newton's law would need Rn < 0 here, and the slip impulse would
-            # then push *with* the slip and create energy. No impulse: the slip law with
-            # Rn = 0.
-            return ImpactResult(u1, u2, u3, 0.0, 0.0, ELASTIC if low else SLIP, wt, wn, False)
-        n1, n2, n3, rt, rn = _ball.impact_stick(v1, v2, u3, z, vb1, vb2, m, r, k, e)
-        regime = STICK
-        rounding = REGIME_RTOL * m * (abs(v1) + abs(v2) + r * abs(u3) + abs(vb1) + abs(vb2))
-        # Friction is bounded by the normal impulse the ball actually receives. For a
-        # relaunched ball that is m (threshold - wn) from its true velocity, not the
-        # 2 m threshold of the shifted approach the maps see; the shift itself is no
-        # impulse of the contact. The normal impulse of a sphere does not depend on the
-        # friction (the normal passes through the centre), so scaling mu by the ratio
-        # sizes the slip impulse against the applied normal impulse exactly.
-        applied = 1.0
-        if resting and rn > 0.0:
-            c, s = math.cos(z), math.sin(z)
-            applied = m * (c * (n2 - u2) - s * (n1 - u1)) / rn
-        if abs(rt) > self.mu_s * applied * rn + rounding:
-            sgn = math.copysign(1.0, wt)
-            n1, n2, n3, rt, rn = _ball.impact_slip(
-                v1, v2, u3, z, vb1, vb2, m, r, k, e, self.mu_k * applied, sgn
-            )
-            regime = SLIP
-        if low:
-            regime = ELASTIC
-        if resting:
-            # report the impulse actually applied to the ball's true pre-impact velocity
-            c, s = math.cos(z), math.sin(z)
-            du1, du2 = n1 - u1, n2 - u2
-            rt = m * (c * du1 + s * du2)
-            rn = m * (c * du2 - s * du1)
-        return ImpactResult(n1, n2, n3, rt, rn, regime, wt, wn, resting)
+        n1, n2, n3, rt, rn, regime, resting = _impact.kane_levinson(
+            self.ctx, u1, u2, u3, z, vb1, vb2, contact.pressing
+        )
+        # the relative velocity before the impact, which the record reports (the law
+        # computes it first from the same generated map)
+        wt, wn = _ball.contact_velocity(u1, u2, u3, z, vb1, vb2, self.ctx[_L.IM_R])
+        return ImpactResult(n1, n2, n3, rt, rn, _L.REGIMES[int(regime)], wt, wn, resting)
 
 
 #: Impact laws by name: each builds the law from a scene.

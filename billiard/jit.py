@@ -45,10 +45,6 @@ _KERNELS = _PACKAGE / "kernels"
 #: The modules compiled into the kernels besides billiard.kernels.*
 KERNEL_SOURCES = (
     "billiard.jit",
-    "billiard.flight",
-    "billiard.events",
-    "billiard.surfaces",
-    "billiard.impact",
     "billiard.engine_phases",
     "billiard.generated.ball",
 )
@@ -132,7 +128,7 @@ else:
             global _compile_noticed
             dispatcher = (event.data or {}).get("dispatcher")
             module = getattr(getattr(dispatcher, "py_func", None), "__module__", "") or ""
-            if _compile_noticed or not module.startswith("billiard.kernels"):
+            if _compile_noticed or not module.startswith("billiard.kernels."):
                 return
             _compile_noticed = True
             print(COMPILE_NOTICE, file=sys.stderr, flush=True)

@@ -23,7 +23,9 @@ from __future__ import annotations
 
 import math
 
-from billiard.errors import SimulationError
+from billiard.kernels_python import layout as _L
+from billiard.kernels_python import stop as _stop
+from billiard.kernels_python import surfaces as _surfaces
 from billiard.walls import Wall
 
 __all__ = [
@@ -40,9 +42,18 @@ __all__ = [
 #: a surface's warm start, ``[s, slope]`` (m, dimensionless)
 WarmStart = list
 
-# Newton on the offset inversion stops once a step is below this (m); the error left after
-# that step is of order curvature * step^2, far below a double's resolution.
-_FOOT_STEP_TOL = 1e-11
+offset_stretch = _surfaces.offset_stretch
+offset_curvature = _surfaces.offset_curvature
+
+# a surface's own block in its ctx (the kernels' surface 0), and the warm start's slots
+_BASE = _L.SURF
+_WS = _BASE + _L.S_WS
+_WSLOPE = _BASE + _L.S_WSLOPE
+_KernelError = _L.KernelError
+_gap_rate = _surfaces.gap_rate
+_gap_accel = _surfaces.gap_accel
+_contact = _surfaces.contact
+_max_gap_deceleration = _surfaces.max_gap_deceleration
 
 
 class Surface:
@@ -53,10 +64,29 @@ class Surface:
     acceleration a. ``max_gap_deceleration`` bounds -d2G/dtau2 over a window of length
     tau, given bounds on the relative acceleration; the event locator uses it to skip
     stretches of flight that provably cannot touch this surface.
+
+    The arithmetic is the kernels' (:mod:`billiard.kernels.surfaces`, run interpreted):
+    a surface keeps its constants as the kernels' block of surface 0 in ``ctx`` (a list
+    of floats; :meth:`block` gives them to the event locator's state vector), and the
+    warm start passed in is copied into that block and back around a call.
     """
 
     label: str = ""
     kind: str = "wall"
+    #: the curve's parameters and wall functions, as the kernels take them
+    _p: tuple = ()
+    _walls: tuple = ((), (), ())
+
+    def _new_ctx(self, kind: float) -> list[float]:
+        ctx = [0.0] * (_L.SURF + _L.SURF_STRIDE)
+        ctx[_BASE + _L.S_KIND] = kind
+        self.ctx = ctx
+        return ctx
+
+    def block(self) -> list[float]:
+        """The constants of this surface's block of the kernels' state vector (the
+        slots before the warm start)."""
+        return self.ctx[_BASE:_WS]
 
     def initial_warm(self) -> WarmStart:
         """A fresh warm start ``[s, slope]`` for this surface."""
@@ -65,12 +95,12 @@ class Surface:
     def gap_rate(
         self, px: float, py: float, vx: float, vy: float, warm: WarmStart
     ) -> tuple[float, float]:
-        raise NotImplementedError
+        return _gap_rate(self.ctx, self._p, self._walls, 0, px, py, vx, vy)
 
     def gap_accel(
         self, px: float, py: float, vx: float, vy: float, ax: float, ay: float, warm: WarmStart
     ) -> float:
-        raise NotImplementedError
+        return _gap_accel(self.ctx, self._p, self._walls, 0, px, py, vx, vy, ax, ay)
 
     def contact(self, px: float, warm: WarmStart) -> tuple[float, float, float]:
         """(s, z, cos z) of the contact point for a ball centre at abscissa px on the
@@ -88,7 +118,9 @@ class Surface:
         ay_up: float,
         warm: WarmStart,
     ) -> float:
-        raise NotImplementedError
+        ctx = self.ctx
+        ctx[_WSLOPE] = warm[1]
+        return _max_gap_deceleration(ctx, 0, px, vx, tau, ax, ay_down, ay_up)
 
 
 class OffsetWall(Surface):
@@ -106,6 +138,12 @@ class OffsetWall(Surface):
         self, wall: Wall, radius: float, index: int, bend_bound: float = 0.0,
         bend_abs_bound: float = 0.0,
     ):  # fmt: skip
+        ctx = self._bind(wall, radius, index, _L.CURVED)
+        ctx[_BASE + _L.S_A] = self.r
+        self.bend_bound = bend_bound
+        self.bend_abs_bound = bend_abs_bound
+
+    def _bind(self, wall: Wall, radius: float, index: int, kind: float) -> list[float]:
         self.wall = wall
         self.p = wall.p
         self.f, self.df, self.d2f = wall.f, wall.df, wall.d2f
@@ -113,22 +151,42 @@ class OffsetWall(Surface):
         self.r = float(radius)
         self.index = index
         self.label = str(index)
-        self.bend_bound = bend_bound
-        self.bend_abs_bound = bend_abs_bound
+        self._p = wall.p
+        self._walls = ((wall.f,), (wall.df,), (wall.d2f,))
+        return self._new_ctx(kind)
+
+    def block(self) -> list[float]:
+        # in the locator's state vector, the wall's place in the curve's wall functions
+        # (in the surface's own ctx, the only one: 0)
+        values = super().block()
+        values[_L.S_WALL] = float(self.index)
+        return values
+
+    @property
+    def bend_bound(self) -> float:
+        """sup of max(F'', 0) over the reachable range (1/m)."""
+        return self.ctx[_BASE + _L.S_B]
+
+    @bend_bound.setter
+    def bend_bound(self, value: float) -> None:
+        self.ctx[_BASE + _L.S_B] = value
+
+    @property
+    def bend_abs_bound(self) -> float:
+        """sup of |F''| over the reachable range (1/m)."""
+        return self.ctx[_BASE + _L.S_C]
+
+    @bend_abs_bound.setter
+    def bend_abs_bound(self, value: float) -> None:
+        self.ctx[_BASE + _L.S_C] = value
 
     def foot(self, x: float, s: float) -> float:
         """Abscissa s of the wall point whose offset point has abscissa x (Newton on
         X(s) = x from the start s, dX/ds = 1 - r f''/(1 + f'^2)^(3/2) > 0)."""
-        df, d2f, r, p = self.df, self.d2f, self.r, self.p
-        for _ in range(60):
-            fp = df(s, p)
-            q = 1.0 + fp * fp
-            w = r / math.sqrt(q)
-            ds = (s - fp * w - x) / (1.0 - d2f(s, p) * w / q)
-            s -= ds
-            if abs(ds) < _FOOT_STEP_TOL:
-                return s
-        raise SimulationError(f"offset-curve inversion did not converge at x = {x!r} m")
+        try:
+            return _surfaces.foot(self.ctx, self._p, self._walls, _BASE, x, s)
+        except _KernelError as exc:
+            raise _stop(exc, self.ctx) from None
 
     def height(self, x: float, warm: WarmStart) -> float:
         """F(x): height of the ball centre touching this wall at abscissa x (m)."""
@@ -140,11 +198,14 @@ class OffsetWall(Surface):
     def gap_rate(
         self, px: float, py: float, vx: float, vy: float, warm: WarmStart
     ) -> tuple[float, float]:
-        p = self.p
-        s = self.foot(px, warm[0])
-        fp = self.df(s, p)
-        warm[0], warm[1] = s, fp
-        return py - self.f(s, p) - self.r / math.sqrt(1.0 + fp * fp), vy - fp * vx
+        ctx = self.ctx
+        ctx[_WS] = warm[0]
+        try:
+            gap = _gap_rate(ctx, self._p, self._walls, 0, px, py, vx, vy)
+        except _KernelError as exc:
+            raise _stop(exc, ctx) from None
+        warm[0], warm[1] = ctx[_WS], ctx[_WSLOPE]
+        return gap
 
     def curvature_term(self, s: float) -> float:
         """F''(X) at foot s: f''(s) / (dX/ds) (1/m)."""
@@ -153,56 +214,35 @@ class OffsetWall(Surface):
     def gap_accel(
         self, px: float, py: float, vx: float, vy: float, ax: float, ay: float, warm: WarmStart
     ) -> float:
-        s = self.foot(px, warm[0])
-        warm[0] = s
-        return ay - self.df(s, self.p) * ax - self.curvature_term(s) * vx * vx
+        ctx = self.ctx
+        ctx[_WS] = warm[0]
+        try:
+            accel = _gap_accel(ctx, self._p, self._walls, 0, px, py, vx, vy, ax, ay)
+        except _KernelError as exc:
+            raise _stop(exc, ctx) from None
+        warm[0] = ctx[_WS]
+        return accel
 
     def contact(self, px: float, warm: WarmStart) -> tuple[float, float, float]:
-        s = self.foot(px, warm[0])
+        ctx = self.ctx
+        ctx[_WS] = warm[0]
+        try:
+            s, z = _contact(ctx, self._p, self._walls, 0, px)
+        except _KernelError as exc:
+            raise _stop(exc, ctx) from None
         warm[0] = s
-        z = math.atan(self.df(s, self.p))
         return s, z, math.cos(z)
-
-    def max_gap_deceleration(
-        self,
-        px: float,
-        vx: float,
-        tau: float,
-        ax: float,
-        ay_down: float,
-        ay_up: float,
-        warm: WarmStart,
-    ) -> float:
-        # -G'' = -a_y + F'(p_x) a_x + F''(p_x) v_x^2. Over the window p_x moves by at most
-        # dx from px, and |v_x| <= |v_x0| + a_x tau. The slope known is that of the last
-        # point evaluated, somewhere in the window: |F'| <= |F'_last| + sup|F''| 2 dx.
-        dx = abs(vx) * tau + 0.5 * ax * tau * tau
-        vmax = abs(vx) + ax * tau
-        return (
-            ay_down
-            + (abs(warm[1]) + 2.0 * self.bend_abs_bound * dx) * ax
-            + self.bend_bound * vmax * vmax
-        )
-
-
-def offset_stretch(fp: float, f2: float, r: float) -> float:
-    """dX/ds = 1 - r f''/(1 + f'^2)^(3/2) of the offset curve at a wall point with slope
-    ``fp`` and second derivative ``f2`` (1/m), ball radius r (m): positive while the ball
-    fits the curvature. The one place this formula is written."""
-    q = 1.0 + fp * fp
-    return 1.0 - r * f2 / (q * math.sqrt(q))
-
-
-def offset_curvature(fp: float, f2: float, r: float) -> float:
-    """Curvature term F''(X) = f'' / (dX/ds) of the offset curve (1/m)."""
-    return f2 / offset_stretch(fp, f2, r)
 
 
 class OffsetLine(OffsetWall):
     """Offset of a straight wall y = b x + c: the parallel line y = b x + c + r sqrt(1+b^2)."""
 
+    # a straight wall does not bend (its block holds the line's constants instead)
+    bend_bound = 0.0
+    bend_abs_bound = 0.0
+
     def __init__(self, wall: Wall, radius: float, index: int):
-        super().__init__(wall, radius, index)
+        ctx = self._bind(wall, radius, index, _L.LINE)
         b = float(self.df(0.0, self.p))
         self.b = b
         root = math.sqrt(1.0 + b * b)
@@ -210,6 +250,10 @@ class OffsetLine(OffsetWall):
         self.shift = self.r * b / root  # foot s = X + shift
         self.z = math.atan(b)
         self.cos_z = math.cos(self.z)
+        ctx[_BASE + _L.S_A] = b
+        ctx[_BASE + _L.S_B] = self.intercept
+        ctx[_BASE + _L.S_C] = self.shift
+        ctx[_BASE + _L.S_D] = self.z
 
     def initial_warm(self) -> WarmStart:
         return [0.0, self.b]
@@ -223,8 +267,7 @@ class OffsetLine(OffsetWall):
     def gap_rate(
         self, px: float, py: float, vx: float, vy: float, warm: WarmStart
     ) -> tuple[float, float]:
-        b = self.b
-        return py - b * px - self.intercept, vy - b * vx
+        return _gap_rate(self.ctx, self._p, self._walls, 0, px, py, vx, vy)
 
     def curvature_term(self, s: float) -> float:
         return 0.0
@@ -232,22 +275,11 @@ class OffsetLine(OffsetWall):
     def gap_accel(
         self, px: float, py: float, vx: float, vy: float, ax: float, ay: float, warm: WarmStart
     ) -> float:
-        return ay - self.b * ax
+        return _gap_accel(self.ctx, self._p, self._walls, 0, px, py, vx, vy, ax, ay)
 
     def contact(self, px: float, warm: WarmStart) -> tuple[float, float, float]:
-        return px + self.shift, self.z, self.cos_z
-
-    def max_gap_deceleration(
-        self,
-        px: float,
-        vx: float,
-        tau: float,
-        ax: float,
-        ay_down: float,
-        ay_up: float,
-        warm: WarmStart,
-    ) -> float:
-        return ay_down + abs(self.b) * ax
+        s, z = _contact(self.ctx, self._p, self._walls, 0, px)
+        return s, z, self.cos_z
 
 
 class FlatLid(Surface):
@@ -259,33 +291,13 @@ class FlatLid(Surface):
         self.ceiling = float(ceiling)
         self.level = float(ceiling) - float(radius)
         self.label = "lid"
-
-    def gap_rate(
-        self, px: float, py: float, vx: float, vy: float, warm: WarmStart
-    ) -> tuple[float, float]:
-        return self.level - py, -vy
-
-    def gap_accel(
-        self, px: float, py: float, vx: float, vy: float, ax: float, ay: float, warm: WarmStart
-    ) -> float:
-        return -ay
+        self._new_ctx(_L.LID)[_BASE + _L.S_A] = self.level
 
     def contact(self, px: float, warm: WarmStart) -> tuple[float, float, float]:
         # c2 = (0, -1) points down into the container; G' = -v_y is already the normal
         # velocity, so the factor reported is 1 (not cos(pi)).
-        return px, math.pi, 1.0
-
-    def max_gap_deceleration(
-        self,
-        px: float,
-        vx: float,
-        tau: float,
-        ax: float,
-        ay_down: float,
-        ay_up: float,
-        warm: WarmStart,
-    ) -> float:
-        return max(0.0, ay_up)
+        s, z = _contact(self.ctx, self._p, self._walls, 0, px)
+        return s, z, 1.0
 
 
 class EscapeLevel(FlatLid):
@@ -297,3 +309,4 @@ class EscapeLevel(FlatLid):
         self.ceiling = float(height)
         self.level = float(height)
         self.label = "escape"
+        self._new_ctx(_L.ESCAPE)[_BASE + _L.S_A] = self.level

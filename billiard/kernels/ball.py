@@ -1,10 +1,12 @@
 """The generated ball equations (:mod:`billiard.generated.ball`) under :func:`billiard.jit.jit`:
-the same functions, compiled when numba is there."""
+the same functions, compiled when numba is there (the functions themselves in the
+interpreted twin, :mod:`billiard.kernels_python`)."""
 
 from __future__ import annotations
 
 from billiard.generated import ball as _ball
-from billiard.jit import jit
+
+from .borrow import jit
 
 flight_exact = jit(_ball.flight_exact)
 flight_rhs_drag = jit(_ball.flight_rhs_drag)

@@ -28,6 +28,15 @@ Interpreted, ``inline`` is the identity.
 ``ulp``: numba has no ``math.ulp``; compiled, it is read from the exponent bits (one
 shift and a select, instead of ``frexp`` and ``ldexp`` calls into numba's helpers);
 interpreted, it is ``math.ulp``. Both give the exact power of two, so the results agree.
+
+``jit``: :func:`billiard.jit.jit`, for the kernels that are not inlined (``run_chunk``,
+the generated ball equations).
+
+The same files also load as the interpreted twin :mod:`billiard.kernels_py`
+(:mod:`billiard.kernels_python`), whose functions the runtime's classes call one gap at a
+time; there every decorator here is the identity (and ``ulp`` is ``math.ulp``) whether
+numba is there or not: the kernels import these from their sibling, so the package a
+file is loaded in decides.
 """
 
 from __future__ import annotations
@@ -36,17 +45,25 @@ import math
 
 from billiard import jit as _jit
 
-__all__ = ["borrow", "inline", "ulp"]
+__all__ = ["COMPILED", "borrow", "inline", "jit", "ulp"]
+
+#: compiled by numba: the package billiard.kernels with numba enabled (never the twin)
+COMPILED = _jit.ENABLED and __package__ == "billiard.kernels"
 
 
 def _identity(array):
     return array
 
 
+def jit(fn):
+    """:func:`billiard.jit.jit` (the identity in the interpreted twin)."""
+    return _jit.jit(fn) if COMPILED else fn
+
+
 def inline(fn):
     """``jit(fn)``, inlined into every compiled caller."""
-    kernel = _jit.jit(fn)
-    if _jit.ENABLED:
+    kernel = jit(fn)
+    if COMPILED:
         # the decorator's options, and LLVM's alwaysinline on the compiled function
         kernel.targetoptions["forceinline"] = True
     return kernel
@@ -57,7 +74,7 @@ def _ulp(x):
     return math.ulp(x)
 
 
-if _jit.ENABLED:
+if COMPILED:
     from llvmlite import ir
     from numba.core import types
     from numba.extending import intrinsic

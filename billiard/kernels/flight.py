@@ -1,43 +1,14 @@
-"""Flight between impacts (:mod:`billiard.flight`) over the state vector: the exact
-parabola without air forces, Dormand-Prince 5(4) with them. Same operations in the same
-order as :class:`billiard.flight.ExactFlight` and :class:`billiard.flight.AdaptiveFlight`,
-whose tableau it uses."""
+"""Flight between impacts over the state vector: the exact parabola without air forces,
+Dormand-Prince 5(4) with them. :class:`billiard.flight.ExactFlight` and
+:class:`billiard.flight.AdaptiveFlight` are these functions, run interpreted."""
 
 from __future__ import annotations
 
 import math
 
-from billiard.flight import (
-    _A21,
-    _A31,
-    _A32,
-    _A41,
-    _A42,
-    _A43,
-    _A51,
-    _A52,
-    _A53,
-    _A54,
-    _A61,
-    _A62,
-    _A63,
-    _A64,
-    _A65,
-    _B1,
-    _B3,
-    _B4,
-    _B5,
-    _B6,
-    _E1,
-    _E3,
-    _E4,
-    _E5,
-    _E6,
-    _E7,
-)
-from billiard.kernels.ball import flight_exact, flight_rhs_drag, flight_rhs_magnus
-from billiard.kernels.borrow import inline
-from billiard.kernels.layout import (
+from .ball import flight_exact, flight_rhs_drag, flight_rhs_magnus
+from .borrow import inline
+from .layout import (
     E_STEP_CONTROL,
     EN_ERR_VALUE,
     FL_CLIN,
@@ -57,6 +28,23 @@ from billiard.kernels.layout import (
     FLIGHT_EXACT,
     G,
     KernelError,
+)
+
+# Dormand-Prince 5(4) tableau (Dormand & Prince 1980; as in Hairer, Norsett & Wanner).
+_A21 = 1 / 5
+_A31, _A32 = 3 / 40, 9 / 40
+_A41, _A42, _A43 = 44 / 45, -56 / 15, 32 / 9
+_A51, _A52, _A53, _A54 = 19372 / 6561, -25360 / 2187, 64448 / 6561, -212 / 729
+_A61, _A62, _A63, _A64, _A65 = 9017 / 3168, -355 / 33, 46732 / 5247, 49 / 176, -5103 / 18656
+_B1, _B3, _B4, _B5, _B6 = 35 / 384, 500 / 1113, 125 / 192, -2187 / 6784, 11 / 84
+# error weights: 5th-order minus embedded 4th-order weights (the 7th stage is FSAL)
+_E1, _E3, _E4, _E5, _E6, _E7 = (
+    71 / 57600,
+    -71 / 16695,
+    71 / 1920,
+    -17253 / 339200,
+    22 / 525,
+    -1 / 40,
 )
 
 

@@ -1,15 +1,14 @@
-"""Kane and Levinson's impact law with the low-velocity rule
-(:class:`billiard.impact.KaneLevinsonImpact`, :class:`billiard.impact.LowVelocityRule`)
-on the generated maps; same operations in the same order."""
+"""Kane and Levinson's impact law with the low-velocity rule on the generated maps
+(:class:`billiard.impact.KaneLevinsonImpact` is this, run interpreted;
+:class:`billiard.impact.LowVelocityRule` describes the rule)."""
 
 from __future__ import annotations
 
 import math
 
-from billiard.impact import REGIME_RTOL
-from billiard.kernels.ball import contact_velocity, impact_slip, impact_stick
-from billiard.kernels.borrow import inline
-from billiard.kernels.layout import (
+from .ball import contact_velocity, impact_slip, impact_stick
+from .borrow import inline
+from .layout import (
     ELASTIC,
     IM_E,
     IM_EB,
@@ -21,6 +20,17 @@ from billiard.kernels.layout import (
     SLIP,
     STICK,
 )
+
+#: Relative tolerance of the friction-cone test |Rt| <= mu_s Rn, in units of the
+#: momenta that enter the impulses: 16 ulps. The no-slip impulse Rt is a sum of a few
+#: products of the ball's and the boundary's velocity components with the mass, so it
+#: carries a rounding error of a few ulps of m (|u1| + |u2| + r |u3| + |vb1| + |vb2|).
+#: A purely normal impact (no tangential relative velocity, no spin) has Rt = 0 exactly
+#: but computes |Rt| ~ 1e-17 m |u|, which with mu_s = 0 used to exceed mu_s Rn = 0 and
+#: label the impact ``slip``. The cone is widened by this much so that rounding alone
+#: never decides the regime; an impulse genuinely outside the cone (by more than 1e-14 of
+#: the momenta) still slips.
+REGIME_RTOL = 16 * 2.0**-52
 
 
 @inline

@@ -1,25 +1,19 @@
-"""The event-driven impact locator (:class:`billiard.events.EventLocator`) over the state
-vector: substeps proven clear by the gap's deceleration bound, grazing candidates,
-halving, and the root refinement. Same operations in the same order; the recursion of
-``_scan`` and ``_scan_leaving`` is one loop over a stack of substeps here. "No time" is
-:data:`NONE` (the times searched are >= 0).
+"""The event-driven impact locator over the state vector (the search
+:mod:`billiard.events` describes; :class:`billiard.events.EventLocator` is this, run
+interpreted): substeps proven clear by the gap's deceleration bound, grazing
+candidates, halving, and the root refinement. A substep split in two is one loop over a
+stack of substeps, not a recursion. "No time" is :data:`NONE` (the times searched are
+>= 0).
 """
 
 from __future__ import annotations
 
 import math
 
-from billiard.events import (
-    _MAX_SPLITS,
-    CONTACT_TOLERANCE,
-    GAP_NOISE,
-    MAX_FLIGHT_TIME,
-    _provably_clear,
-)
-from billiard.kernels import flight
-from billiard.kernels.borrow import inline
-from billiard.kernels.borrow import ulp as _ulp
-from billiard.kernels.layout import (
+from . import flight
+from .borrow import inline
+from .borrow import ulp as _ulp
+from .layout import (
     AMP,
     DRIVE_ACCEL,
     E_EXTREMUM,
@@ -47,14 +41,42 @@ from billiard.kernels.layout import (
     G,
     KernelError,
 )
-from billiard.kernels.surfaces import contact, gap_accel, gap_rate, max_gap_deceleration
+from .surfaces import contact, gap_accel, gap_rate, max_gap_deceleration
 
-assert _MAX_SPLITS < STACK_DEPTH  # every split keeps at most one pending substep
+# The longest flight the locators follow before giving up (s of simulated time).
+MAX_FLIGHT_TIME = 1.0e3
+# How many times a substep may be halved when the bound cannot prove it clear.
+MAX_SPLITS = 8
+# A gap this small (m) is contact to within rounding: G is a difference of heights of
+# order 0.1 m, so its rounding error is ~1e-17 m; a surface that close at the start of a
+# flight and moving away is being left, not approached.
+CONTACT_TOLERANCE = 1e-13
+# Rounding noise of a computed gap (m): below this a gap's sign carries no information.
+GAP_NOISE = 1e-16
+
+assert MAX_SPLITS < STACK_DEPTH  # every split keeps at most one pending substep
 
 #: "no impact in this substep"
 NONE = -1.0
 
-provably_clear = inline(_provably_clear)
+
+@inline
+def provably_clear(ga, dga, gb, dgb, h, m):
+    """True when G > 0 on the whole substep of length h, given G and dG/dtau at both ends
+    (both G > 0) and m >= -d2G/dtau2 on it.
+
+    From each end, G is above a parabola: L_a(t) = ga + dga t - m t^2 / 2 and
+    L_b(t) = gb - dgb (h - t) - m (h - t)^2 / 2, so G >= max(L_a, L_b). Both are concave,
+    so the minimum of their maximum is at an end (where it is ga or gb > 0) or where they
+    cross; L_a - L_b is linear in t, so there is at most one crossing.
+    """
+    slope = dga - dgb - m * h
+    if slope == 0.0:
+        return True  # one parabola lies above the other throughout
+    tc = (gb - ga - dgb * h - 0.5 * m * h * h) / slope
+    if not 0.0 < tc < h:
+        return True
+    return ga + dga * tc - 0.5 * m * tc * tc > 0.0
 
 
 @inline
@@ -203,14 +225,14 @@ def rate_root(ctx, p, walls, j, a, da, b, db):
 
 @inline
 def scan(ctx, p, walls, j, ta, ga, dga, tb, gb, dgb, m, splits, leaving):
-    """First time in (ta, tb] at which the ball reaches surface j, or NONE
-    (``EventLocator._scan``, and ``_scan_leaving`` when ``leaving``).
+    """First time in (ta, tb] at which the ball reaches surface j, or NONE. G and
+    dG/dtau are known at both ends, m >= -d2G/dtau2 on the substep; ``leaving``: the
+    ball is separating from j at ta (G ~ 0, dG/dtau >= 0), else it is clear of it.
 
-    The recursion of the interpreted locator is unrolled into a loop: a substep split in
-    two continues with its left half and keeps the right half on a stack, scanned
-    when the left one holds no contact. The gaps are evaluated in the same order (the
-    warm starts of the offset inversion depend on it). numba cannot reload a cached
-    recursive function, hence the loop.
+    A substep split in two continues with its left half and keeps the right half on a
+    stack, scanned when the left one holds no contact: the gaps are evaluated from left
+    to right (the warm starts of the offset inversion depend on the order). A loop, not
+    a recursion: numba cannot reload a cached recursive function.
     """
     top = 0
     while True:
@@ -352,7 +374,7 @@ def locate(ctx, p, walls, theta0, q1, q2, u1, u2, u3):
                 ctx[base + S_GB],
                 ctx[base + S_DGB],
                 m,
-                _MAX_SPLITS,
+                MAX_SPLITS,
                 ctx[base + S_LEAVING] != 0.0,
             )
             if tau != NONE and (first_j < 0 or tau < first):

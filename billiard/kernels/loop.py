@@ -16,12 +16,12 @@ from billiard.engine_phases import (
 from billiard.engine_phases import (
     compensated_add as _compensated_add,
 )
-from billiard.jit import jit
-from billiard.kernels import flight
-from billiard.kernels.ball import energy, frame_velocity
-from billiard.kernels.borrow import borrow, inline
-from billiard.kernels.impact import kane_levinson
-from billiard.kernels.layout import (
+
+from . import flight
+from .ball import energy, frame_velocity
+from .borrow import borrow, inline, jit
+from .impact import kane_levinson
+from .layout import (
     AMP,
     COLLAPSE,
     COUNTS,
@@ -66,8 +66,8 @@ from billiard.kernels.layout import (
     G,
     KernelError,
 )
-from billiard.kernels.locate import locate
-from billiard.kernels.surfaces import gap_accel
+from .locate import locate
+from .surfaces import gap_accel
 
 compensated_add = inline(_compensated_add)
 

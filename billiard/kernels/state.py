@@ -19,9 +19,10 @@ from collections.abc import Sequence
 from typing import Any
 
 from billiard.engine_phases import COLLAPSE_COUNT
+from billiard.flight import AdaptiveFlight, ExactFlight
 from billiard.kernels import layout as L
 from billiard.state import BallState, EngineState
-from billiard.surfaces import EscapeLevel, FlatLid, OffsetLine, OffsetWall
+from billiard.surfaces import FlatLid, OffsetWall
 
 __all__ = ["COUNT_KEYS", "RING", "engine_state", "state_vector", "write_ball", "write_state"]
 
@@ -37,44 +38,17 @@ def _ball_values(ball: BallState) -> tuple[float, ...]:
 
 
 def _flight_constants(ctx: list[float], fl: Any) -> None:
-    name = type(fl).__name__
-    if name == "ExactFlight":
-        ctx[L.FL_KIND] = L.FLIGHT_EXACT
-    elif name == "AdaptiveFlight":
-        ctx[L.FL_KIND] = L.FLIGHT_ADAPTIVE
-        ctx[L.FL_M] = fl.m
-        ctx[L.FL_CLIN] = fl.c_lin
-        ctx[L.FL_CQUAD] = fl.c_quad
-        ctx[L.FL_CMAG] = fl.c_magnus
-        ctx[L.FL_RTOL] = fl.rtol
-        ctx[L.FL_H] = fl._h
-    else:
-        raise ValueError(f"the kernels have no flight model {name}")
+    if not isinstance(fl, (ExactFlight, AdaptiveFlight)):
+        raise ValueError(f"the kernels have no flight model {type(fl).__name__}")
+    # the model's constants and step proposal, as its own ctx holds them
+    ctx[L.FL_KIND : L.FL_U3] = fl.ctx[L.FL_KIND : L.FL_U3]
 
 
 def _surface_constants(ctx: list[float], j: int, surface: Any) -> None:
-    base = L.SURF + j * L.SURF_STRIDE
-    if isinstance(surface, OffsetLine):
-        ctx[base + L.S_KIND] = L.LINE
-        ctx[base + L.S_WALL] = float(surface.index)
-        ctx[base + L.S_A] = surface.b
-        ctx[base + L.S_B] = surface.intercept
-        ctx[base + L.S_C] = surface.shift
-        ctx[base + L.S_D] = surface.z
-    elif isinstance(surface, OffsetWall):
-        ctx[base + L.S_KIND] = L.CURVED
-        ctx[base + L.S_WALL] = float(surface.index)
-        ctx[base + L.S_A] = surface.r
-        ctx[base + L.S_B] = surface.bend_bound
-        ctx[base + L.S_C] = surface.bend_abs_bound
-    elif isinstance(surface, EscapeLevel):
-        ctx[base + L.S_KIND] = L.ESCAPE
-        ctx[base + L.S_A] = surface.level
-    elif isinstance(surface, FlatLid):
-        ctx[base + L.S_KIND] = L.LID
-        ctx[base + L.S_A] = surface.level
-    else:
+    if not isinstance(surface, (OffsetWall, FlatLid)):
         raise ValueError(f"the kernels have no surface {type(surface).__name__}")
+    base = L.SURF + j * L.SURF_STRIDE
+    ctx[base : base + L.S_WS] = surface.block()
 
 
 def state_vector(sim: Any) -> list[float]:
@@ -97,14 +71,8 @@ def state_vector(sim: Any) -> list[float]:
     surfaces = sim.boundary.surfaces
     ctx[L.NSURF] = float(len(surfaces))
     _flight_constants(ctx, sim.flight)
-    law = sim.impact
-    ctx[L.IM_M] = law.m
-    ctx[L.IM_R] = law.r
-    ctx[L.IM_K] = law.k
-    ctx[L.IM_E] = law.e
-    ctx[L.IM_MUS] = law.mu_s
-    ctx[L.IM_MUK] = law.mu_k
-    ctx[L.IM_EB] = law.low_velocity.threshold
+    # Kane and Levinson's law (see supports): its coefficients, as its own ctx holds them
+    ctx[L.IM_M : L.IM_EB + 1] = sim.impact.ctx[L.IM_M : L.IM_EB + 1]
     for j, surface in enumerate(surfaces):
         _surface_constants(ctx, j, surface)
         base = L.SURF + j * L.SURF_STRIDE

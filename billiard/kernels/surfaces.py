@@ -1,7 +1,6 @@
-"""The surfaces of :mod:`billiard.surfaces` over the state vector: the offset curve of a
-curved wall (:class:`~billiard.surfaces.OffsetWall`), of a straight one
-(:class:`~billiard.surfaces.OffsetLine`), the lid and the escape level. Same operations
-in the same order, the same warm starts (kept in the surface's block of ``ctx``).
+"""The surfaces over the state vector: the offset curve of a curved wall, of a straight
+one, the lid and the escape level, with the warm starts in the surface's block of
+``ctx``. The classes of :mod:`billiard.surfaces` are these functions, run interpreted.
 
 A curved wall's functions come in ``walls = (f, df, d2f)``, each a tuple with one
 function per wall of the curve, called as ``walls[1][w](x, p)``; compiled, they are
@@ -13,8 +12,8 @@ from __future__ import annotations
 
 import math
 
-from billiard.kernels.borrow import inline
-from billiard.kernels.layout import (
+from .borrow import inline
+from .layout import (
     CURVED,
     E_INVERSION,
     EN_ERR_VALUE,
@@ -31,7 +30,25 @@ from billiard.kernels.layout import (
     SURF_STRIDE,
     KernelError,
 )
-from billiard.surfaces import _FOOT_STEP_TOL
+
+# Newton on the offset inversion stops once a step is below this (m); the error left after
+# that step is of order curvature * step^2, far below a double's resolution.
+FOOT_STEP_TOL = 1e-11
+
+
+@inline
+def offset_stretch(fp, f2, r):
+    """dX/ds = 1 - r f''/(1 + f'^2)^(3/2) of the offset curve at a wall point with slope
+    ``fp`` and second derivative ``f2`` (1/m), ball radius r (m): positive while the ball
+    fits the curvature."""
+    q = 1.0 + fp * fp
+    return 1.0 - r * f2 / (q * math.sqrt(q))
+
+
+@inline
+def offset_curvature(fp, f2, r):
+    """Curvature term F''(X) = f'' / (dX/ds) of the offset curve (1/m)."""
+    return f2 / offset_stretch(fp, f2, r)
 
 
 @inline
@@ -47,7 +64,7 @@ def foot(ctx, p, walls, base, x, s):
         wr = r / math.sqrt(q)
         ds = (s - fp * wr - x) / (1.0 - d2f(s, p) * wr / q)
         s -= ds
-        if abs(ds) < _FOOT_STEP_TOL:
+        if abs(ds) < FOOT_STEP_TOL:
             return s
     ctx[EN_ERR_VALUE] = x
     raise KernelError(E_INVERSION)
@@ -81,10 +98,7 @@ def gap_accel(ctx, p, walls, j, px, py, vx, vy, ax, ay):
         ctx[base + S_WS] = s
         w = int(ctx[base + S_WALL])
         fp = walls[1][w](s, p)
-        f2 = walls[2][w](s, p)
-        # billiard.surfaces.offset_curvature
-        q = 1.0 + fp * fp
-        curvature = f2 / (1.0 - ctx[base + S_A] * f2 / (q * math.sqrt(q)))
+        curvature = offset_curvature(fp, walls[2][w](s, p), ctx[base + S_A])
         return ay - walls[1][w](s, p) * ax - curvature * vx * vx
     if kind == LINE:
         return ay - ctx[base + S_A] * ax
