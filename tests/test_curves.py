@@ -159,7 +159,9 @@ def test_an_edited_user_curve_module_is_refused(tmp_path, monkeypatch):
 
     assert main(["derive", "--name", "edited", "--curve", "30*x**4 + 0.0063"]) == 0
     path = tmp_path / "curves" / "edited.py"
-    path.write_text(path.read_text().replace("return 30*x", "return 31*x"))
+    text = path.read_text()
+    assert "return 30*" in text
+    path.write_text(text.replace("return 30*", "return 31*"))
     with pytest.raises(CurveNotFoundError, match="changed after it was generated") as info:
         load_curve("edited")
     assert "billiard derive --name edited" in str(info.value) and "--force" in str(info.value)
