@@ -395,8 +395,11 @@ class CsvRecorder:
             self._check = None
 
     def _discard_pending(self) -> None:
-        self._pending.seek(0)
-        self._pending.truncate()
+        # a new buffer rather than seek(0) and truncate(): once seeked, a StringIO keeps
+        # 4 bytes per character, and a compiled run collects tens of megabytes of rows
+        # between two flushes
+        self._pending = io.StringIO()
+        self._writer = csv.writer(self._pending, lineterminator=self.line_end)
         self._pending_rows = 0
 
     def flush(self) -> CsvMark:
