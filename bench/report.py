@@ -499,7 +499,7 @@ def section_throughput(t: dict, command: str) -> str:
             f"Streaming costs time, though: the streamed run "
             f"makes {big['impacts'] / big['wall']:,.0f} impacts/s against "
             f"{mem['rate']:,.0f} in memory (each row's 18 values are formatted with `repr` "
-            "through `csv.writer`). `ru_maxrss` (the brief's measure) is not usable here: on "
+            "straight from the rows). `ru_maxrss` (the brief's measure) is not usable here: on "
             "Linux it keeps the peak of the address space the process had before `exec`, "
             "i.e. of the benchmark process that forked it; `VmHWM` from `/proc/self/status` "
             "is the peak of the process's own address space.\n"
