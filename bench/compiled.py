@@ -13,24 +13,12 @@ Not a timed test: the machine's load moves every number here.
 from __future__ import annotations
 
 import argparse
-import os
 import statistics
-import subprocess
 import sys
 import tempfile
 import time
 
 SCENES = (("wedge-6.6hz", "none"), ("parabola-5.4hz", "fowles"))
-
-_STARTUP = """
-import time
-start = time.perf_counter()
-from billiard.compiled import simulate_compiled
-from billiard.scene import load_scene
-run = simulate_compiled(load_scene({name!r}), 1)
-assert run.impacts == 1
-print(time.perf_counter() - start)
-"""
 
 
 class _Discard:
@@ -77,20 +65,9 @@ def kernel(name: str, drag: str, impacts: int, repeats: int) -> tuple[float, flo
 
 def startup(name: str, repeats: int, cache_dir: str | None = None) -> float:
     """Median wall seconds from a fresh interpreter's first line to the first impact."""
-    env = dict(os.environ)
-    if cache_dir is not None:
-        env["NUMBA_CACHE_DIR"] = cache_dir
-    times = []
-    for _ in range(repeats):
-        out = subprocess.run(
-            [sys.executable, "-c", _STARTUP.format(name=name)],
-            env=env,
-            capture_output=True,
-            text=True,
-            check=True,
-        )
-        times.append(float(out.stdout.split()[-1]))
-    return statistics.median(times)
+    from bench.throughput import first_impact
+
+    return statistics.median(first_impact(name, repeats, cache_dir))
 
 
 def refcount_cost(calls: int = 2_000_000, repeats: int = 5) -> tuple[float, float, float]:

@@ -236,18 +236,22 @@ class Simulation(ContactPhases):
     def state(self) -> EngineState:
         """The complete engine state after the last event (a snapshot)."""
         if self._kernel is not None:
-            # the warm starts and the step proposal belong to sim.warm and sim.flight
-            return dataclasses.replace(
-                self._kernel.state(),
-                walls=tuple((w[0], w[1]) for w in self.warm[: len(self.boundary.offsets)]),
-                flight=self.flight.memory(),
-                locator=self.locator.memory(),
-                mode=self._mode,
-                contact=self._contact,
-                samples=self._samples,
-                phase_time=dict(self._phase_time),
-            )
+            # the ball, clock and counters live in the kernels' state vector; the warm
+            # starts and the step proposal belong to sim.warm and sim.flight
+            return dataclasses.replace(self._kernel.state(), **self._held_state())
         return self._python_state()
+
+    def _held_state(self) -> dict[str, Any]:
+        """The parts of the engine state the Python objects hold in either engine."""
+        return {
+            "walls": tuple((w[0], w[1]) for w in self.warm[: len(self.boundary.offsets)]),
+            "flight": self.flight.memory(),
+            "locator": self.locator.memory(),
+            "mode": self._mode,
+            "contact": self._contact,
+            "samples": self._samples,
+            "phase_time": dict(self._phase_time),
+        }
 
     def _python_state(self) -> EngineState:
         return EngineState(
@@ -258,13 +262,7 @@ class Simulation(ContactPhases):
             zero_flights=self._zero_flights,
             recent=tuple(self._recent),
             counts=dict(self._counts),
-            walls=tuple((w[0], w[1]) for w in self.warm[: len(self.boundary.offsets)]),
-            flight=self.flight.memory(),
-            locator=self.locator.memory(),
-            mode=self._mode,
-            contact=self._contact,
-            samples=self._samples,
-            phase_time=dict(self._phase_time),
+            **self._held_state(),
         )
 
     def start_state(self) -> EngineState:

@@ -8,21 +8,18 @@ parabola with drag run by default; the other paper scenes, drag on and off, are 
 from __future__ import annotations
 
 import hashlib
-import json
 import os
 import subprocess
 import sys
-from pathlib import Path
 
 import pytest
+from csv_pins import PINS, pinned_cases
 
 from billiard import jit
 from billiard.scene import load_scene, with_values
 from billiard.simulate import simulate
 
-PINS = json.loads((Path(__file__).parent / "data" / "collisions_sha256.json").read_text())
 IMPACTS = PINS["impacts"]
-DEFAULT = {("wedge-6.6hz", "none"), ("parabola-5.4hz", "fowles")}
 
 compiled = pytest.mark.skipif(not jit.ENABLED, reason=f"numba unavailable: {jit.numba_problem()}")
 
@@ -45,17 +42,8 @@ def _first_difference(a: bytes, b: bytes) -> str:
     return f"lengths {len(a)} and {len(b)}"
 
 
-def _cases() -> list:
-    cases = []
-    for key in PINS["sha256"]:
-        name, drag = key.split()
-        marks = () if (name, drag) in DEFAULT else (pytest.mark.slow,)
-        cases.append(pytest.param(name, drag, marks=marks, id=f"{name}-{drag}"))
-    return cases
-
-
 @compiled
-@pytest.mark.parametrize(("name", "drag"), _cases())
+@pytest.mark.parametrize(("name", "drag"), pinned_cases())
 def test_interpreted_and_compiled_kernels_write_the_pinned_bytes(name, drag, tmp_path):
     scene = with_values(load_scene(name), {"air.drag": drag})
     result = simulate(scene, collisions=IMPACTS, out_dir=tmp_path / "compiled")

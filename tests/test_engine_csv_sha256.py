@@ -6,16 +6,13 @@ default, the other six under ``-m slow``."""
 from __future__ import annotations
 
 import hashlib
-import json
 from pathlib import Path
 
 import pytest
+from csv_pins import PINS, pinned_cases
 
 from billiard.scene import load_scene, with_values
 from billiard.simulate import simulate
-
-PINS = json.loads((Path(__file__).parent / "data" / "collisions_sha256.json").read_text())
-DEFAULT = {("wedge-6.6hz", "none"), ("parabola-5.4hz", "fowles")}
 
 
 def csv_sha256(name: str, drag: str, out: Path) -> str:
@@ -26,15 +23,6 @@ def csv_sha256(name: str, drag: str, out: Path) -> str:
     return hashlib.sha256((out / "collisions.csv").read_bytes()).hexdigest()
 
 
-def _cases() -> list:
-    cases = []
-    for key in PINS["sha256"]:
-        name, drag = key.split()
-        marks = () if (name, drag) in DEFAULT else (pytest.mark.slow,)
-        cases.append(pytest.param(name, drag, marks=marks, id=f"{name}-{drag}"))
-    return cases
-
-
-@pytest.mark.parametrize(("name", "drag"), _cases())
+@pytest.mark.parametrize(("name", "drag"), pinned_cases())
 def test_collisions_csv_has_the_pinned_bytes(name, drag, tmp_path):
     assert csv_sha256(name, drag, tmp_path) == PINS["sha256"][f"{name} {drag}"]

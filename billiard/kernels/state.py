@@ -58,16 +58,9 @@ def state_vector(sim: Any) -> list[float]:
         ValueError: a flight model or surface the kernels do not have.
     """
     ctx = [0.0] * L.SIZE
-    loc = sim.locator
-    ctx[L.AMP] = loc.amplitude
-    ctx[L.OMEGA] = loc.omega
-    ctx[L.HORIZ] = 1.0 if loc.horizontal else 0.0
-    ctx[L.DRIVE_ACCEL] = loc.drive_accel
-    ctx[L.G] = loc.g
-    ctx[L.H_FIRST] = loc.h_first
-    ctx[L.H_LONGEST] = loc.h_longest
-    ctx[L.TURN] = loc.turn_length
-    ctx[L.H_BRACKET] = loc.h_bracket
+    # the drive and the locator's substep lengths, as the locator's own ctx holds them
+    loc = sim.locator.ctx
+    ctx[L.AMP : L.H_BRACKET + 1] = loc[L.AMP : L.H_BRACKET + 1]
     surfaces = sim.boundary.surfaces
     ctx[L.NSURF] = float(len(surfaces))
     _flight_constants(ctx, sim.flight)
