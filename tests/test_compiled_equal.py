@@ -1,8 +1,8 @@
 """One source, two ways to run it: the kernels interpreted (``NUMBA_DISABLE_JIT=1``, in
 a fresh interpreter) write the same ``collisions.csv`` as the kernels compiled by numba,
 and both have the bytes of the engine before it ran on the kernels
-(``tests/data/collisions_sha256.json``, 20,000 impacts). The wedge without drag and the
-parabola with drag run by default; the other paper scenes, drag on and off, are slow.
+(``tests/data/collisions_sha256.json``, 20,000 impacts): every paper scene, drag on
+and off.
 """
 
 from __future__ import annotations

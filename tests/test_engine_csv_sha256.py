@@ -1,7 +1,6 @@
 """collisions.csv of 20,000 impacts of every paper scene, drag on and off, has the
 bytes the engine wrote before it ran on the kernels (``tests/data/collisions_sha256.json``):
-the switch of engines is checked against the engine it replaced. Two combinations run by
-default, the other six under ``-m slow``."""
+the switch of engines is checked against the engine it replaced."""
 
 from __future__ import annotations
 
