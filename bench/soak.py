@@ -355,39 +355,55 @@ class ImpactAudit:
         return res
 
 
+class _Clearances:
+    """Tally of the ball's clearance at recorded states: penetrations and detached states
+    (beyond ``GAP_LIMIT``), the extremes, and the first few examples."""
+
+    def __init__(self, boundary: Boundary, drive: Any):
+        self.boundary, self.drive = boundary, drive
+        self.penetrations = self.detached = 0
+        self.lowest, self.highest = math.inf, -math.inf
+        self.examples: list[str] = []
+
+    def check(self, t: float, q1: float, q2: float, where: Callable[[], str]) -> None:
+        px, py, _, _ = self.drive.to_boundary_frame(self.drive.angle(t), q1, q2, 0.0, 0.0)
+        gap = self.boundary.clearance(px, py)
+        self.lowest, self.highest = min(self.lowest, gap), max(self.highest, gap)
+        if gap < -GAP_LIMIT or gap > GAP_LIMIT:
+            if gap < 0.0:
+                self.penetrations += 1
+            else:
+                self.detached += 1
+            if len(self.examples) < 5:
+                self.examples.append(f"{where()}: clearance {gap:.3g} m")
+
+
+def _finite_rows(columns: Mapping[str, np.ndarray], rows: int) -> np.ndarray:
+    finite = np.ones(rows, dtype=bool)
+    for values in columns.values():
+        if values.dtype.kind == "f":
+            finite &= np.isfinite(values)
+    return finite
+
+
 def audit_rows(boundary: Boundary, drive: Any, columns: Mapping[str, np.ndarray]) -> dict[str, Any]:
     """Check a run's rows against the geometry: penetrations and detached impacts
     (clearance beyond ``GAP_LIMIT``), non-finite values; with the extreme clearances."""
-    floats = [name for name, values in columns.items() if values.dtype.kind == "f"]
-    finite = np.ones(len(columns["n"]), dtype=bool)
-    for name in floats:
-        finite &= np.isfinite(columns[name])
-    penetrations = detached = 0
-    lowest, highest = math.inf, -math.inf
-    examples: list[str] = []
+    finite = _finite_rows(columns, len(columns["n"]))
+    tally = _Clearances(boundary, drive)
     for i, (t, q1, q2) in enumerate(
         zip(columns["t"].tolist(), columns["q1"].tolist(), columns["q2"].tolist(), strict=True)
     ):
-        if not finite[i]:
-            continue
-        px, py, _, _ = drive.to_boundary_frame(drive.angle(t), q1, q2, 0.0, 0.0)
-        gap = boundary.clearance(px, py)
-        lowest, highest = min(lowest, gap), max(highest, gap)
-        if gap < -GAP_LIMIT or gap > GAP_LIMIT:
-            if gap < 0.0:
-                penetrations += 1
-            else:
-                detached += 1
-            if len(examples) < 5:
-                examples.append(f"impact {i + 1} (t = {t!r} s): clearance {gap:.3g} m")
+        if finite[i]:
+            tally.check(t, q1, q2, lambda i=i, t=t: f"impact {i + 1} (t = {t!r} s)")
     return {
         "rows": len(finite),
-        "penetrations": penetrations,
-        "detached": detached,
+        "penetrations": tally.penetrations,
+        "detached": tally.detached,
         "non_finite_rows": int((~finite).sum()),
-        "lowest_clearance": lowest,
-        "highest_clearance": highest,
-        "examples": examples,
+        "lowest_clearance": tally.lowest,
+        "highest_clearance": tally.highest,
+        "examples": tally.examples,
     }
 
 
@@ -661,41 +677,32 @@ def audit_contact_rows(
     """Check contacts.csv rows against the geometry: at each phase's start and end the
     centre is on the wall's offset curve, |clearance| <= ``GAP_LIMIT`` (else a
     penetration, of a wall or the lid, or detached: off the wall); non-finite values."""
-    floats = [name for name, values in columns.items() if values.dtype.kind == "f"]
     rows = len(columns["t_start"])
-    finite = np.ones(rows, dtype=bool)
-    for name in floats:
-        finite &= np.isfinite(columns[name])
-    penetrations = detached = 0
-    lowest, highest = math.inf, -math.inf
-    examples: list[str] = []
+    finite = _finite_rows(columns, rows)
+    tally = _Clearances(boundary, drive)
     for i in range(rows):
         if not finite[i]:
             continue
         for end in ("start", "end"):
             t = float(columns[f"t_{end}"][i])
             q1, q2 = float(columns[f"q1_{end}"][i]), float(columns[f"q2_{end}"][i])
-            px, py, _, _ = drive.to_boundary_frame(drive.angle(t), q1, q2, 0.0, 0.0)
-            gap = boundary.clearance(px, py)
-            lowest, highest = min(lowest, gap), max(highest, gap)
-            if gap < -GAP_LIMIT or gap > GAP_LIMIT:
-                if gap < 0.0:
-                    penetrations += 1
-                else:
-                    detached += 1
-                if len(examples) < 5:
-                    examples.append(
-                        f"contact phase {i + 1} {end} ({columns['mode'][i]}, end "
-                        f"{columns['end'][i]}, t = {t!r} s): clearance {gap:.3g} m"
-                    )
+            tally.check(
+                t,
+                q1,
+                q2,
+                lambda i=i, end=end, t=t: (
+                    f"contact phase {i + 1} {end} ({columns['mode'][i]}, end "
+                    f"{columns['end'][i]}, t = {t!r} s)"
+                ),
+            )
     return {
         "contact_rows": rows,
-        "contact_penetrations": penetrations,
-        "contact_detached": detached,
+        "contact_penetrations": tally.penetrations,
+        "contact_detached": tally.detached,
         "contact_non_finite_rows": int((~finite).sum()),
-        "contact_lowest_clearance": lowest,
-        "contact_highest_clearance": highest,
-        "contact_examples": examples,
+        "contact_lowest_clearance": tally.lowest,
+        "contact_highest_clearance": tally.highest,
+        "contact_examples": tally.examples,
     }
 
 

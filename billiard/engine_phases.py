@@ -237,22 +237,18 @@ class ContactPhases:
             theta = theta0 + omega * tau
             self._report_sample(t0 + tau, *model.lab_state(wall, theta, y, mode), mode)
 
-        try:
-            end = model.run_phase(
+        end = self._phase_end(
+            t0,
+            lambda: model.run_phase(
                 wall, mode, sgn, theta0, (s, sd, ball.u3), until - t0, self._other_gaps(index),
                 self._sample_times(t0, until) if self.on_sample is not None else (),
                 on_sample if self.on_sample is not None else None,
-            )  # fmt: skip
-        except BallAtRest as rest:
-            # the run ends here, complete: its clock stops where the rest was established
-            self.final_time = t0 + rest.tau
-            raise
+            ),
+        )  # fmt: skip
         if end.reason is None:
             return None
         tau = end.tau
-        total, error = compensated_add(self._clock, self._clock_error, tau)
-        t = total + error
-        theta = (theta0 + omega * tau) % (2.0 * math.pi)
+        total, error, t, theta = self._clock_after(theta0, tau)
         q1, q2, u1, u2, u3 = model.lab_state(wall, theta, end.y, mode)
         if not math.isfinite(q1 + q2 + u1 + u2 + u3):
             raise SimulationError(
@@ -371,6 +367,21 @@ class ContactPhases:
         self._mode = HELD
         self._contact = (float(a), float(b), px, py, t, settle)
 
+    def _phase_end(self, t0: float, run: Callable[[], Any]) -> Any:
+        """The end of the phase or hold that ``run`` integrates from time ``t0``. A ball
+        found at rest ends the run, complete: its clock stops where the rest began."""
+        try:
+            return run()
+        except BallAtRest as rest:
+            self.final_time = t0 + rest.tau
+            raise
+
+    def _clock_after(self, theta0: float, tau: float) -> tuple[float, float, float, float]:
+        """(clock sum, its error, time t, drive angle) ``tau`` after the phase's start."""
+        total, error = compensated_add(self._clock, self._clock_error, tau)
+        theta = (theta0 + self.drive.omega * tau) % (2.0 * math.pi)
+        return total, error, total + error, theta
+
     def _hold_step(self, until: float) -> ContactRecord | None:
         """The ball held by two walls, to the release of one (or to ``until``: None)."""
         hold = self.vertex_hold
@@ -392,21 +403,18 @@ class ContactPhases:
             self._report_sample(t0 + tau, *lab(theta0 + drive.omega * tau, u3), HELD)
 
         sampling = self.on_sample is not None
-        try:
-            end = hold.run_hold(
+        end = self._phase_end(
+            t0,
+            lambda: hold.run_hold(
                 za, zb, theta0, ball.u3, until - t0,
                 self._sample_times(t0, until) if sampling else (),
                 on_sample if sampling else None,
-            )  # fmt: skip
-        except BallAtRest as rest:
-            self.final_time = t0 + rest.tau
-            raise
+            ),
+        )  # fmt: skip
         if end.reason is None:
             return None
         tau = end.tau
-        total, error = compensated_add(self._clock, self._clock_error, tau)
-        t = total + error
-        theta = (theta0 + drive.omega * tau) % (2.0 * math.pi)
+        total, error, t, theta = self._clock_after(theta0, tau)
         q1, q2, u1, u2, u3 = lab(theta, end.u3)
         # the spin decays linearly in time on a static boundary: the trapezoid is exact
         q3 = ball.q3 + 0.5 * (ball.u3 + u3) * tau

@@ -135,6 +135,11 @@ def rings(ax: Axes, x: np.ndarray, y: np.ndarray, label: str, size: float) -> Li
     return line
 
 
+def marker_handle(marker: str, color: Any, label: str) -> Line2D:
+    """A legend entry for points drawn with ``marker`` (no line)."""
+    return Line2D([], [], linestyle="none", marker=marker, markersize=4, color=color, label=label)
+
+
 def camera_handle(frame_interval: float, label: str | None = None) -> Line2D:
     """A legend entry for the camera's rings."""
     return Line2D(

@@ -19,6 +19,7 @@ from .common import (
     camera_filter,
     camera_handle,
     lid_mask,
+    marker_handle,
     new_figure,
     save,
 )
@@ -73,31 +74,11 @@ def _paper_grid(
         if frame_interval is not None:
             count += f", camera {camera_filter(columns, frame_interval)['t'].size}"
         axes[0, j].set_title(f"{short_label(scene)}\n{count}", fontsize=9)
-    handles = [
-        Line2D(
-            [],
-            [],
-            linestyle="none",
-            marker="o",
-            markersize=4,
-            color=MODEL_COLOR,
-            label="model: every impact",
-        )
-    ]
+    handles = [marker_handle("o", MODEL_COLOR, "model: every impact")]
     if frame_interval is not None:
         handles.append(camera_handle(frame_interval))
     if any_lid and lid_legend:
-        handles.append(
-            Line2D(
-                [],
-                [],
-                linestyle="none",
-                marker="x",
-                markersize=4,
-                color=LID_COLOR,
-                label="lid impacts",
-            )
-        )
+        handles.append(marker_handle("x", LID_COLOR, "lid impacts"))
     handles.append(Line2D([], [], color="0.35", linewidth=0.8, linestyle="--", label=guide))
     fig.legend(
         handles=handles,
@@ -243,15 +224,7 @@ def paper_models_figure(
                     if line.get_label() in _DIAGONALS:
                         line.set_data([lo, hi], [lo, hi])
     handles = [
-        Line2D(
-            [],
-            [],
-            linestyle="none",
-            marker="o",
-            markersize=4,
-            color=MODEL_COLOR,
-            label="every impact",
-        ),
+        marker_handle("o", MODEL_COLOR, "every impact"),
         Line2D(
             [],
             [],
@@ -264,15 +237,7 @@ def paper_models_figure(
     if any(lid_mask(c).any() for model in runs.values() for c, _ in model):
         handles.insert(
             1,
-            Line2D(
-                [],
-                [],
-                linestyle="none",
-                marker="x",
-                markersize=4,
-                color=LID_COLOR,
-                label="pairs with a lid impact",
-            ),
+            marker_handle("x", LID_COLOR, "pairs with a lid impact"),
         )
     fig.legend(
         handles=handles,
