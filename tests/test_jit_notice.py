@@ -60,6 +60,29 @@ def test_a_warm_start_prints_nothing(tmp_path):
     assert runs[1].stderr == ""  # the first run filled the cache if it was empty
 
 
+@compiled
+def test_a_warm_start_loads_no_registries_and_can_still_compile(tmp_path):
+    """Loading the kernels from the cache skips numba's registries (its linear algebra
+    among them); a function compiled afterwards in the same process still compiles and
+    runs (the compiler loads them itself)."""
+    script = (
+        "import sys; from billiard.engine import Simulation; "
+        "from billiard.record import MemoryRecorder; from billiard.scene import load_scene; "
+        "Simulation(load_scene('wedge-6.6hz')).run(5, MemoryRecorder()); "
+        "print('linalg' if 'numba.np.linalg' in sys.modules else 'light'); "
+        "import numba, numpy; "
+        "print(numba.njit(lambda a: numpy.sum(a))(numpy.full(3, 3.0)))"
+    )
+    env = {**os.environ, "BILLIARD_HOME": str(tmp_path)}
+    env.pop("NUMBA_DISABLE_JIT", None)
+    runs = [
+        subprocess.run([sys.executable, "-c", script], env=env, capture_output=True, text=True)
+        for _ in range(2)
+    ]
+    assert all(r.returncode == 0 for r in runs), runs[-1].stderr
+    assert runs[1].stdout.split() == ["light", "9.0"]
+
+
 def test_missing_numba_is_announced_in_one_line():
     script = (
         "import sys; sys.modules['numba'] = None; from billiard import jit; "

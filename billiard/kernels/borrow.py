@@ -78,7 +78,6 @@ if COMPILED:
     from llvmlite import ir
     from numba.core import types
     from numba.extending import intrinsic
-    from numba.np.arrayobj import make_array, populate_array
 
     @intrinsic
     def borrow(typingctx, array):
@@ -86,6 +85,9 @@ if COMPILED:
             return None
 
         def codegen(context, builder, signature, args):
+            # imported when compiling, not when loading from the cache (30 ms)
+            from numba.np.arrayobj import make_array, populate_array
+
             source = make_array(array)(context, builder, args[0])
             view = make_array(array)(context, builder)
             populate_array(
