@@ -43,6 +43,10 @@ __all__ = ["CsvMark", "CsvRecorder", "RowMismatchError", "RunBusyError", "Trunca
 
 #: Wall-clock seconds between flushes of a streamed file.
 FLUSH_INTERVAL = 1.0
+#: Characters of rows collected before they are written to the file, synced or not,
+#: whatever the time since the last flush: a compiled run makes hundreds of thousands
+#: of rows a second, which would otherwise all wait in memory for the next flush.
+SPILL_CHARS = 1 << 22
 
 
 @dataclass(frozen=True)
@@ -208,6 +212,8 @@ class CsvRecorder:
         self._pending = io.StringIO()
         self._writer = csv.writer(self._pending, lineterminator=line_end)
         self._pending_rows = 0
+        self._pending_chars = 0
+        self._unsynced = False  # rows written without a sync since the last one
         self._last_flush = time.monotonic()
         #: the write error that ended writing (None while writes succeed)
         self.failed: OSError | CheckpointError | None = None
@@ -353,10 +359,16 @@ class CsvRecorder:
             for row in block.tolist():
                 self.append(record_of(row))
             return
-        self._pending.write(format_rows(block, self.line_end))
+        text = format_rows(block, self.line_end)
+        self._pending.write(text)
         self._pending_rows += len(block)
+        self._pending_chars += len(text)
         if self.autoflush and time.monotonic() - self._last_flush >= FLUSH_INTERVAL:
             self.flush()
+        elif self._pending_chars >= SPILL_CHARS:
+            # written, not synced: the next flush syncs them with the rest; a checkpoint
+            # comes only after a flush, and rows on disk past it are checked on resume
+            self._write(sync=False)
 
     def _check_row(self) -> None:
         """Compare the one pending row with the next row in the file."""
@@ -401,6 +413,7 @@ class CsvRecorder:
         self._pending = io.StringIO()
         self._writer = csv.writer(self._pending, lineterminator=self.line_end)
         self._pending_rows = 0
+        self._pending_chars = 0
 
     def flush(self) -> CsvMark:
         """Write the rows collected since the last flush in one system call, sync them
@@ -412,22 +425,35 @@ class CsvRecorder:
                 more is written.
         """
         self._last_flush = time.monotonic()
+        return self._write(sync=self.durable)
+
+    def _write(self, sync: bool) -> CsvMark:
+        """Write the pending rows in one system call (then sync them if ``sync``)."""
         if self.failed is not None:
             raise self.failed
         text = self._pending.getvalue()
         if not text:
+            if sync and self._unsynced and self._fd is not None:
+                # rows written unsynced since the last sync (spilled)
+                try:
+                    os.fsync(self._fd)
+                except OSError as exc:
+                    self.failed = exc
+                    raise
+                self._unsynced = False
             return self._mark
         if self._fd is None:
             raise ValueError(f"{self.path} is closed")
         data = text.encode("utf-8")
         try:
             _write_all(self._fd, data)
-            if self.durable:
+            if sync:
                 os.fsync(self._fd)
         except _ShortWrite as short:
             self._fail(data, short.written, short.error)
         except OSError as exc:  # the sync failed: the bytes are in the file
             self._fail(data, len(data), exc)
+        self._unsynced = not sync
         self._advance(text, len(data), self._pending_rows)
         self._discard_pending()
         return self._mark

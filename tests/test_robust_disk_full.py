@@ -25,6 +25,7 @@ from billiard.simulate import CHECKPOINT_NAME, CSV_NAME, resume, simulate
 
 engine = importlib.import_module("billiard.engine")
 persist = importlib.import_module("billiard.persist")
+stream = importlib.import_module("billiard.stream")
 
 IMPACTS = 300
 
@@ -35,6 +36,7 @@ class Disk:
     def __init__(self, budget: float):
         self.budget = budget
         self.written = 0
+        self.whole = 0  # writes to collisions.csv that wrote all they were given
         self._write = os.write
 
     def __call__(self, fd: int, data) -> int:
@@ -45,6 +47,7 @@ class Disk:
         done = self._write(fd, bytes(data[: int(min(len(data), self.budget))]))
         self.budget -= done
         self.written += done
+        self.whole += done == len(data)
         return done
 
 
@@ -74,9 +77,30 @@ def full_disk_run(out: Path, disk: Disk, monkeypatch):
 def test_a_write_cut_short_keeps_the_whole_rows_and_resume_keeps_them(
     tmp_path, reference, frequent_checkpoints, monkeypatch
 ):
-    budget = 20_000 + 17  # runs out in the middle of a row, in the middle of a flush
+    cut_short_then_resumed(tmp_path, reference, monkeypatch)
+
+
+def test_a_spill_cut_short_keeps_the_whole_rows_and_resume_keeps_them(
+    tmp_path, reference, monkeypatch
+):
+    """The same with rows written between checkpoints because enough are pending
+    (``SPILL_CHARS``): the write that fails is a spill, the checkpoint the first one."""
+    monkeypatch.setattr(stream, "SPILL_CHARS", 3000)
+    monkeypatch.setattr(engine, "CHECKPOINT_INTERVAL", 3600.0)
+    # the engine hands out rows in chunks of 64 or more: room for a few of them
+    disk = cut_short_then_resumed(tmp_path, reference, monkeypatch, budget=60_000 + 17)
+    assert disk.whole >= 2  # the header, and rows written before the run's end
+
+
+def cut_short_then_resumed(
+    tmp_path: Path, reference: bytes, monkeypatch, budget: int = 20_000 + 17
+) -> Disk:
+    """Run until the disk is full, resume on a full disk, resume with space: returns
+    the disk of the first run."""
+    # budget: runs out in the middle of a row, in the middle of a flush
     out = tmp_path / "run"
-    error = full_disk_run(out, Disk(budget), monkeypatch)
+    first = Disk(budget)
+    error = full_disk_run(out, first, monkeypatch)
     whole = reference.rfind(b"\n", 0, budget) + 1
     kept = reference[:whole].count(b"\n") - 1
     assert error.errno == errno.ENOSPC and error.rows == kept
@@ -105,6 +129,7 @@ def test_a_write_cut_short_keeps_the_whole_rows_and_resume_keeps_them(
     resume(out)
     assert (out / CSV_NAME).read_bytes() == reference
     assert disk.written == len(reference) - whole  # the kept rows were not rewritten
+    return first
 
 
 def test_a_failed_checkpoint_write_loses_no_row(

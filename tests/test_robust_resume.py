@@ -15,6 +15,7 @@ import sys
 import time
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from billiard import jit
@@ -590,3 +591,50 @@ def test_recorder_writes_whole_rows_at_least_once_a_second(tmp_path, monkeypatch
     assert (mark.rows, mark.size) == (2, len(data)) and data.endswith(mark.last_line.encode())
     recorder.close()
     assert read_collisions(path)["t"].tolist() == [0.5, 0.5]
+
+
+def test_rows_beyond_the_spill_size_are_written_unsynced_before_a_flush(tmp_path, monkeypatch):
+    """A block of rows longer than SPILL_CHARS goes to the file at once, without a sync;
+    the next flush syncs it; the file's bytes are those of the same rows written in
+    memory (MemoryRecorder.write_csv)."""
+    sim = engine.Simulation(load_scene("wedge-6.6hz"))
+    kept = record.MemoryRecorder()
+    sim.run(300, kept)
+    reference_csv = tmp_path / "memory.csv"
+    kept.write_csv(reference_csv)
+    block = np.concatenate(kept._blocks)
+    syncs: list[int] = []
+    monkeypatch.setattr(stream.os, "fsync", lambda fd: syncs.append(fd))
+    path = tmp_path / "rows.csv"
+    recorder = stream.CsvRecorder(path, autoflush=False)
+    header = path.read_bytes()
+    monkeypatch.setattr(stream, "SPILL_CHARS", 20 * 300)  # about 20 rows
+    recorder.append_rows(block[:10])
+    assert path.read_bytes() == header  # short of the spill size: still pending
+    syncs.clear()
+    recorder.append_rows(block[10:])
+    assert syncs == [] and recorder.mark.rows == 300  # written, not synced
+    assert path.read_bytes() == reference_csv.read_bytes()
+    mark = recorder.flush()
+    assert len(syncs) == 1 and mark.rows == 300  # nothing pending; the spilled rows synced
+    recorder.flush()
+    assert len(syncs) == 1  # nothing left to sync
+    recorder.close()
+    assert path.read_bytes() == reference_csv.read_bytes()
+
+
+def test_interrupt_and_resume_with_rows_spilled_between_checkpoints(tmp_path, monkeypatch):
+    """Rows written between two checkpoints (spilled) leave an interrupted run and its
+    resumption as without them: byte-identical to an uninterrupted run."""
+    name, changes, method, impacts, _ = CASES["event-no-drag"]
+    scene = case_scene(name, changes)
+    ref = reference(tmp_path, scene, method, impacts)
+    monkeypatch.setattr(stream, "SPILL_CHARS", 3000)
+    monkeypatch.setattr(engine, "CHECKPOINT_INTERVAL", 3600.0)  # only the first and last
+    out = tmp_path / "run"
+    stop = interrupted(scene, method, impacts, out, "1500", monkeypatch)
+    assert (stop.rows, stop.checkpoint_rows) == (1500, 1500)
+    text = (out / CSV_NAME).read_bytes()
+    assert text == (ref / CSV_NAME).read_bytes()[: len(text)]
+    resume(out)
+    assert same_run(ref, out)
