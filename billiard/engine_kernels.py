@@ -219,10 +219,10 @@ class KernelEngine:
             )
         code = exc.args[0]
         if code == L.E_NON_FINITE:
-            from billiard.engine import _check_finite
+            from billiard.event_step import check_finite
 
             try:
-                _check_finite(record_of(as_block(self._buffer, row, row + 1)[0].tolist()))
+                check_finite(record_of(as_block(self._buffer, row, row + 1)[0].tolist()))
             except SimulationError as stop:
                 return stop
             return SimulationError(
