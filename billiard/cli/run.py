@@ -41,10 +41,10 @@ class ProgressBar:
             self.last = now
             frac = done / total if total else 1.0
             filled = int(self.width * frac)
-            rate = (done - self.first_done) / max(now - self.first_time, 1e-9)
+            counted = done - self.first_done
+            rate = f", {counted / max(now - self.first_time, 1e-9):,.0f}/s" if counted else ""
             self.stream.write(
-                f"\r[{'#' * filled}{'.' * (self.width - filled)}] "
-                f"{done}/{total} impacts, {rate:,.0f}/s "
+                f"\r[{'#' * filled}{'.' * (self.width - filled)}] {done}/{total} impacts{rate} "
             )
             if done >= total:
                 self.stream.write("\n")
@@ -58,15 +58,16 @@ class ProgressBar:
 
     def line(self, done: int, total: int, now: float) -> str:
         """The log line: impacts, simulated time, rate and estimated time left."""
-        elapsed = max(now - self.first_time, 1e-9)
-        rate = (done - (self.first_done or 0)) / elapsed
         parts = [f"billiard: {done:,}/{total:,} impacts"]
         if self.clock is not None:
             simulated = self.clock()
             if simulated is not None:
                 parts.append(f"t = {simulated:.6g} s simulated")
-        parts.append(f"{rate:,.0f} impacts/s")
-        if rate > 0:
+        counted = done - (self.first_done or 0)
+        if counted > 0:
+            # a rate needs two counts: the first one may come after a compile
+            rate = counted / max(now - self.first_time, 1e-9)
+            parts.append(f"{rate:,.0f} impacts/s")
             parts.append(f"about {_duration((total - done) / rate)} left")
         return ", ".join(parts)
 
