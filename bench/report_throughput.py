@@ -173,10 +173,24 @@ def section_throughput(t: dict, command: str) -> str:
     parts.append(_table(["scene", "how", "impacts", "runs (s)", "median (s)"], rows) + "\n")
     parts.append("A long wedge run in a fresh process (the run call; start-up excluded):\n")
     rows = [
-        [f"{m['impacts']:,}", m["how"], f"{m['wall']:.2f}", f"{m['peak_mb']:.0f}"]
+        [
+            f"{m['impacts']:,}",
+            m["how"],
+            f"{m['wall']:.2f}",
+            f"{m['peak_mb']:.0f}",
+            f"{m['file_mb']:.0f}" if "file_mb" in m else "",
+            f"{m['anon_mb']:.0f}" if "anon_mb" in m else "",
+        ]
         for m in t["million"]
     ]
-    parts.append(_table(["impacts", "how", "wall (s)", "peak RSS, VmHWM (MB)"], rows) + "\n")
+    header = ["impacts", "how", "wall (s)", "peak RSS, VmHWM (MB)"]
+    header += ["at the end: mapped files, RssFile (MB)", "own memory, RssAnon (MB)"]
+    parts.append(_table(header, rows) + "\n")
+    parts.append(
+        "Mapped files are mostly numba's LLVM library (libllvmlite.so, about 100 MB once "
+        "loaded), shared by every process that imports numba; the process's own memory "
+        "is the rest.\n"
+    )
     s = t["compiled_startup"]
     parts.append(
         f"Start-up of a fresh process to the first impact of `{s['scene']}`, kernels "

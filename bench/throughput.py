@@ -212,8 +212,9 @@ start = time.perf_counter()
 result = simulate(load_scene(name), collisions=n, out_dir=out or None)
 assert len(result) == n, result.stop_reason
 seconds = time.perf_counter() - start
-hwm = next(line.split()[1] for line in open("/proc/self/status") if line.startswith("VmHWM"))
-print(hwm, seconds)
+status = dict(line.split(":", 1) for line in open("/proc/self/status"))
+kb = [status[key].split()[0] for key in ("VmHWM", "RssFile", "RssAnon")]
+print(*kb, seconds)
 """
 
 
@@ -234,7 +235,7 @@ def million(name: str, impacts: int) -> list[dict]:
             )
         finally:
             shutil.rmtree(tmp, ignore_errors=True)
-        hwm, seconds = done.stdout.split()[-2:]
+        hwm, file_kb, anon_kb, seconds = done.stdout.split()[-4:]
         rows.append(
             {
                 "scene": name,
@@ -242,6 +243,10 @@ def million(name: str, impacts: int) -> list[dict]:
                 "impacts": impacts,
                 "wall": float(seconds),
                 "peak_mb": int(hwm) / 1024.0,
+                # at the end of the run: mapped files (numba's LLVM library, ~100 MB,
+                # shared between processes) and the process's own memory
+                "file_mb": int(file_kb) / 1024.0,
+                "anon_mb": int(anon_kb) / 1024.0,
             }
         )
         print(f"  {how} {name} {impacts}: {float(seconds):.2f} s, {int(hwm) / 1024:.0f} MB")
