@@ -411,10 +411,6 @@ def audit_rows(boundary: Boundary, drive: Any, columns: Mapping[str, np.ndarray]
 #: :mod:`billiard.contact_phase` (its ``_ATOL``): the absolute part of the phase-energy
 #: tolerance.
 PHASE_ATOL = 1e-12
-#: Evaluations of the contact equations per accepted step of a contact phase, at least:
-#: five stages and the end of the Dormand-Prince step, and the transition functions at
-#: its end (``ContactModel.run_phase``); evaluations // 7 bounds the steps from above.
-EVALUATIONS_PER_STEP = 7
 
 
 @dataclass
@@ -452,9 +448,8 @@ class PhaseAudit:
     phase's end must not exceed that at its start by more than the integrator's
     tolerance: per step, ``rtol`` (``run.rtol``) of the energies involved,
     KE_start + KE_end + m g (|q2_start| + |q2_end|), plus the absolute tolerance
-    ``PHASE_ATOL`` times m (g + |v_start| + |v_end|); times the phase's steps (bounded
-    from above by the evaluations of the contact equations counted over the phase,
-    ``// EVALUATIONS_PER_STEP``). Measured, the growth per step stays below 1e-3 of it
+    ``PHASE_ATOL`` times m (g + |v_start| + |v_end|); times the phase's accepted steps
+    (``ContactModel.steps`` counts them). Measured, the growth per step stays below 1e-3 of it
     (rolling without drag, rtol = 1e-10). On a shaken boundary the drive does work
     through the normal force and friction, and in the boundary's frame the fictitious
     force -m D''(t) is not conservative (D'' depends on time): the energy balance over
@@ -631,29 +626,21 @@ class AuditedSimulation(Simulation):
     :class:`ImpactAudit` (``impact_audit``) and, with ``contact.model = "phases"``,
     every finished contact phase also given to a :class:`PhaseAudit`
     (``phase_audit``) before it goes wherever ``on_contact`` sends it (a streamed run
-    sets that to contacts.csv). On a static boundary the evaluations of the contact
-    equations are counted per phase: the bound on its steps the energy tolerance needs.
+    sets that to contacts.csv). On a static boundary each phase's accepted steps
+    (the contact model's ``steps``, read at each finished phase) scale the energy
+    tolerance.
     """
 
     def __init__(self, scene: Any, method: str | None = None, history: list | None = None):
         self._forward: Callable[[Any], None] | None = None
         self.phase_audit: PhaseAudit | None = None
-        self._evaluations = 0
+        self._steps_seen = 0
         super().__init__(scene, method)
         self.impact_audit = ImpactAudit(self.impact, history=history)
         self.impact = self.impact_audit
         if self.phases:
             self.phase_audit = PhaseAudit.of(self)
             self.impact_audit.on_impact = self.phase_audit.impact
-            if self.phase_audit.static:
-                model = self.contact_model
-                forces = model.forces
-
-                def counted(*args: Any) -> tuple:
-                    self._evaluations += 1
-                    return forces(*args)
-
-                model.forces = counted
 
     @property  # type: ignore[override]
     def on_contact(self) -> Callable[[Any], None] | None:
@@ -664,8 +651,8 @@ class AuditedSimulation(Simulation):
         self._forward = forward
 
     def _tap(self, record: Any) -> None:
-        steps = self._evaluations // EVALUATIONS_PER_STEP
-        self._evaluations = 0
+        done = self.contact_model.steps
+        steps, self._steps_seen = done - self._steps_seen, done
         self.phase_audit.contact(record, steps)
         if self._forward is not None:
             self._forward(record)

@@ -21,6 +21,11 @@ fourth-order continuous extension, on which the phase's end is located:
 
 Each end is a root of a smooth function of time found by bisection-secant (Illinois) on
 the dense output to 1e-13 s.
+
+The numerics are the kernels of :mod:`billiard.kernels.contact`, run interpreted (the
+twin :mod:`billiard.kernels_py`): :meth:`ContactModel.run_phase` fills the kernels' state
+vector, runs the phase from one sample time to the next, and words the kernels' stops as
+before.
 """
 
 from __future__ import annotations
@@ -32,53 +37,29 @@ from typing import Any
 
 from billiard.drive import Drive
 from billiard.errors import BallAtRest, SimulationError
-from billiard.generated import contact as _c
+from billiard.kernels_python import contact as _k
+from billiard.kernels_python import contact_equations as _c
+from billiard.kernels_python import contact_forces as _f
+from billiard.kernels_python import layout as _L
+from billiard.kernels_python import stop as _stop
 from billiard.status import Status
 
-__all__ = ["CONTACT_MODES", "ContactModel", "PhaseEnd", "first_root", "skip_periods"]
+__all__ = ["CONTACT_MODES", "ContactModel", "PhaseEnd", "Watched", "first_root", "skip_periods"]
 
 #: the contact modes (motion states other than flight)
 CONTACT_MODES = ("roll", "slide")
 
 #: time resolution (s) of a phase's end
-EVENT_TOL = 1e-13
-#: A phase that starts touching another wall (its gap zero to rounding, possibly just
-#: below zero, as in the wedge's vertex) ends with an impact there at once when the
-#: centre then goes deeper into it than this (m; the impact locator's resolution).
-CONTACT_GAP = 1e-12
-#: absolute error allowed per step on s (m), s_dot (m/s) and u3 (rad/s), added to
-#: rtol times the size of each
-_ATOL = (1e-12, 1e-12, 1e-9)
-
-# Dormand-Prince 5(4) (Dormand & Prince 1980) and its 4th-order continuous extension
-# (Shampine 1986; the coefficients scipy's RK45 uses).
-_C = (0.0, 1 / 5, 3 / 10, 4 / 5, 8 / 9, 1.0)
-_A = (
-    (),
-    (1 / 5,),
-    (3 / 40, 9 / 40),
-    (44 / 45, -56 / 15, 32 / 9),
-    (19372 / 6561, -25360 / 2187, 64448 / 6561, -212 / 729),
-    (9017 / 3168, -355 / 33, 46732 / 5247, 49 / 176, -5103 / 18656),
-)
-_B = (35 / 384, 0.0, 500 / 1113, 125 / 192, -2187 / 6784, 11 / 84)
-_E = (-71 / 57600, 0.0, 71 / 16695, -71 / 1920, 17253 / 339200, -22 / 525, 1 / 40)
-_P = (
-    (1.0, -8048581381 / 2820520608, 8663915743 / 2820520608, -12715105075 / 11282082432),
-    (0.0, 0.0, 0.0, 0.0),
-    (0.0, 131558114200 / 32700410799, -68118460800 / 10900136933, 87487479700 / 32700410799),
-    (0.0, -1754552775 / 470086768, 14199869525 / 1410260304, -10690763975 / 1880347072),
-    (
-        0.0,
-        127303824393 / 49829197408,
-        -318862633887 / 49829197408,
-        701980252875 / 199316789632,
-    ),
-    (0.0, -282668133 / 205662961, 2019193451 / 616988883, -1453857185 / 822651844),
-    (0.0, 40617522 / 29380423, -110615467 / 29380423, 69997945 / 29380423),
-)
+EVENT_TOL = _k.EVENT_TOL
+#: see :data:`billiard.kernels.contact.CONTACT_GAP`
+CONTACT_GAP = _k.CONTACT_GAP
 
 Vec = tuple[float, ...]
+#: a surface a phase watches, with the engine's warm start of it (updated in place)
+Watched = tuple[Any, list]
+
+#: why a phase ends, by the kernels' condition index (3: friction; 4 and up: impact)
+_REASONS = ("lift-off", "wall-end", "wall-end")
 
 
 @dataclass(slots=True)
@@ -100,6 +81,10 @@ class ContactModel:
     Args:
         scene: a :class:`billiard.scene.Scene`.
         drive: the boundary's drive.
+
+    Attributes:
+        steps: accepted integration steps of all phases run so far (they bound a
+            phase's accumulated error; the soak's energy audit reads them).
     """
 
     def __init__(self, scene: Any, drive: Drive):
@@ -115,6 +100,41 @@ class ContactModel:
         self.rtol = float(scene.run.rtol)
         self.drive = drive
         self.static = drive.amplitude == 0.0 or drive.omega == 0.0
+        self.steps = 0
+        # the kernels' state vector of a phase, and one for single force evaluations
+        # (a query between two calls of a phase must not touch the phase's state)
+        self.ctx = self._new_ctx()
+        self._query = self._new_ctx()
+        self._walls: dict[tuple[int, ...], tuple] = {}
+
+    def _new_ctx(self) -> list[float]:
+        ctx = [0.0] * _L.SIZE
+        ctx[_L.AMP] = float(self.drive.amplitude)
+        ctx[_L.OMEGA] = float(self.drive.omega)
+        ctx[_L.HORIZ] = 1.0 if self.drive.horizontal else 0.0
+        constants = (self.m, self.r, self.k, self.g, self.c_lin, self.c_quad, self.mu_s,
+                     self.mu_k, self.rtol)  # fmt: skip
+        ctx[_L.PH_M : _L.PH_RTOL + 1] = constants
+        return ctx
+
+    def wall_functions(self, wall: Any, others: Sequence[Watched] = ()) -> tuple:
+        """(f, df, d2f, d3f) as the kernels take them: one entry per wall index of the
+        curve, the phase's wall and the watched walls at their indices (an index that is
+        neither, never called, holds the phase's wall)."""
+        walls = [wall] + [s.wall for s, _ in others if s.kind == "wall"]
+        key = tuple(id(w) for w in walls)
+        functions = self._walls.get(key)
+        if functions is None:
+            by_index = {w.index: w for w in walls}
+            row = [by_index.get(i, wall) for i in range(max(by_index) + 1)]
+            functions = (
+                tuple(w.f for w in row),
+                tuple(w.df for w in row),
+                tuple(w.d2f for w in row),
+                tuple(w.d3f for w in row),
+            )
+            self._walls[key] = functions
+        return functions
 
     # ------------------------------------------------------------------ kinematics
 
@@ -134,16 +154,11 @@ class ContactModel:
 
     def forces(self, wall: Any, mode: str, sgn: float, theta: float, y: Vec) -> tuple:
         """(s_ddot, u3_dot, N, F): u3_dot is that of the no-slip spin while rolling."""
-        s, sd = y[0], y[1]
-        _, fp, f2, f3 = self.geometry(wall, s)
-        _, _, vb1, vb2, ab1, ab2 = self.boundary(theta)
-        m, r, k, g = self.m, self.r, self.k, self.g
-        if mode == "roll":
-            sdd, n, f = _c.roll_rhs(sd, fp, f2, f3, ab1, ab2, vb1, vb2, m, r, k, g,
-                                    self.c_lin, self.c_quad)  # fmt: skip
-            return sdd, 0.0, n, f
-        return _c.slide_rhs(sd, fp, f2, f3, ab1, ab2, vb1, vb2, m, r, k, g,
-                            self.c_lin, self.c_quad, self.mu_k, sgn)  # fmt: skip
+        ctx = self._query
+        ctx[_L.PH_WALL] = float(wall.index)
+        ctx[_L.PH_MODE] = _L.ROLL if mode == "roll" else _L.SLIDE
+        ctx[_L.PH_SGN] = sgn
+        return _f.forces(ctx, wall.p, self.wall_functions(wall), theta, y[0], y[1])
 
     def spin(self, wall: Any, y: Vec, mode: str) -> float:
         """The spin u3 (rad/s): the no-slip value while rolling."""
@@ -195,158 +210,85 @@ class ContactModel:
         theta0: float,
         y0: Vec,
         limit: float,
-        gaps: Sequence[Callable[[float, float], float]] = (),
+        others: Sequence[Watched] = (),
         samples: Iterable[float] = (),
         on_sample: Callable[[float, Vec], None] | None = None,
     ) -> PhaseEnd:
         """Integrate one contact phase from y0 at drive angle theta0 for at most
-        ``limit`` seconds.
+        ``limit`` seconds (:func:`billiard.kernels.contact.advance`).
 
         Args:
-            gaps: for each other surface (wall, lid, escape level), gap(px, py) (m)
-                of the centre (relative to the boundary) from it (a wall's offset curve,
-                the lid's level less r, the escape level); its zero is an ``impact``.
+            others: the other surfaces (walls, lid, escape level), each with the
+                engine's warm start of it (a wall's ``[s, slope]``, whose s the phase
+                moves as it evaluates that wall's offset height); the centre's reaching
+                one (a wall's offset curve, the lid's level less r, the escape level)
+                is an ``impact``.
             samples: increasing times (s, from the phase's start; an iterable, read as
                 far as the phase goes) at which to report the state to
                 ``on_sample(tau, y)``.
         """
-        omega = self.drive.omega
-        lo, hi = wall.lo, wall.hi
-        mu_s = self.mu_s
-        frictionless = mu_s == 0.0
-        n_y = 2 if mode == "roll" else 3
-        y0 = tuple(y0[:n_y])
-
-        def rhs(tau: float, y: Vec) -> Vec:
-            sdd, u3d, _, _ = self.forces(wall, mode, sgn, theta0 + omega * tau, y)
-            return (y[1], sdd) if n_y == 2 else (y[1], sdd, u3d)
-
-        def conditions(tau: float, y: Vec) -> list[float]:
-            """Functions positive while the phase lasts, by end reason."""
-            theta = theta0 + omega * tau
-            _, _, n, f = self.forces(wall, mode, sgn, theta, y)
-            out = [n, y[0] - lo, hi - y[0]]
-            if mode == "roll":
-                out.append(mu_s * n - abs(f))
-            elif frictionless:
-                out.append(1.0)  # no friction: the slip's sign changes nothing
-            else:
-                out.append(sgn * self.slip(wall, y[0], y[1], y[2]))
-            if gaps:
-                s, sd = y[0], y[1]
-                f0, fp, f2, _ = self.geometry(wall, s)
-                px, py, _, _ = _c.centre_state(s, sd, f0, fp, f2, 0.0, 0.0, 0.0, 0.0, self.r)
-                out.extend(gap(px, py) for gap in gaps)
-            return out
-
-        reasons = ["lift-off", "wall-end", "wall-end", "slip" if mode == "roll" else "roll"]
-        reasons += ["impact"] * len(gaps)
-        rtol = self.rtol
-        atol = _ATOL[:n_y]
-
-        tau, y = 0.0, y0
-        k1 = rhs(0.0, y)
-        scale = max(abs(k1[0]), abs(k1[1]), 1e-3)
-        h = min(limit, 1e-3 / scale + 1e-4) if limit > 0.0 else 0.0
-        c_prev = conditions(0.0, y)
+        ctx = self.ctx
+        walls = self.wall_functions(wall, others)
+        roll = mode == "roll"
+        n_y = 2 if roll else 3
+        ctx[_L.PH_WALL] = float(wall.index)
+        ctx[_L.PH_LO], ctx[_L.PH_HI] = wall.lo, wall.hi
+        ctx[_L.PH_MODE] = _L.ROLL if roll else _L.SLIDE
+        ctx[_L.PH_SGN] = sgn
+        ctx[_L.PH_THETA0] = theta0
+        ctx[_L.PH_LIMIT] = limit
+        ctx[_L.PH_Y : _L.PH_Y + 3] = (y0[0], y0[1], 0.0 if roll else y0[2])
+        # the phase's own wall is surface 0 (not watched), the others follow in order
+        ctx[_L.PH_SURF] = 0.0
+        ctx[_L.NSURF] = float(1 + len(others))
+        curved = []
+        for j, (surface, warm) in enumerate(others, 1):
+            base = _L.SURF + j * _L.SURF_STRIDE
+            ctx[base : base + _L.S_WS] = surface.block()
+            if ctx[base + _L.S_KIND] == _L.CURVED:
+                ctx[base + _L.S_WS] = warm[0]
+                curved.append((base, warm))
         samples = iter(samples)
-        next_sample = next(samples, math.inf)
-        steps = 0
-        # the step is at most 1/20 of the drive period, so that the conditions, which
-        # the drive moves, cannot change sign twice unseen within a step
-        h_max = math.inf if self.static else 0.1 * math.pi / abs(omega)
-        rest_span = 0.0 if self.static else 2.0 * math.pi / abs(omega)
-        rest_since = 0.0 if _at_rest(k1) else math.inf
-        while tau < limit:
-            h = min(h, limit - tau, h_max)
-            for _ in range(60):
-                ks = [k1]
-                for i in range(1, 6):
-                    a = _A[i]
-                    yi = tuple(
-                        y[j] + h * sum(a[q] * ks[q][j] for q in range(i)) for j in range(n_y)
-                    )
-                    ks.append(rhs(tau + _C[i] * h, yi))
-                y_new = tuple(
-                    y[j] + h * sum(_B[q] * ks[q][j] for q in range(6)) for j in range(n_y)
-                )
-                k7 = rhs(tau + h, y_new)
-                ks.append(k7)
-                err = 0.0
-                for j in range(n_y):
-                    e = h * sum(_E[q] * ks[q][j] for q in range(7))
-                    sc = atol[j] + rtol * max(abs(y[j]), abs(y_new[j]))
-                    err = max(err, abs(e) / sc)
-                if err <= 1.0:
-                    break
-                h *= max(0.2, 0.9 * err**-0.2)
-            else:
-                raise SimulationError(
-                    "the contact phase's step-size control failed (60 rejected steps)",
-                    Status.SOLVER_FAILED,
-                )
-            steps += 1
-            t_a, y_a, h_step = tau, y, h
+        ctx[_L.PH_NEXT] = next(samples, math.inf) if on_sample is not None else math.inf
+        ctx[_L.PH_STEPS] = 0.0
+        p = wall.p
+        try:
+            _k.begin(ctx, p, walls)
+            status = _k.advance(ctx, p, walls)
+            while status == _L.PHASE_SAMPLE:
+                y = tuple(ctx[_L.PH_SAMPLE_Y : _L.PH_SAMPLE_Y + n_y])
+                on_sample(ctx[_L.PH_SAMPLE_T], y)  # type: ignore[misc]
+                ctx[_L.PH_NEXT] = next(samples, math.inf)
+                status = _k.advance(ctx, p, walls)
+        except _L.KernelError as exc:
+            raise self._stop(exc) from None
+        finally:
+            for base, warm in curved:
+                warm[0] = ctx[base + _L.S_WS]
+            self.steps += int(ctx[_L.PH_STEPS])
+        if status == _L.PHASE_LIMIT:
+            return PhaseEnd(limit, None, tuple(ctx[_L.PH_Y : _L.PH_Y + n_y]))
+        i = int(ctx[_L.PH_END_I])
+        if i < 3:
+            reason = _REASONS[i]
+        elif i == 3:
+            reason = "slip" if roll else "roll"
+        else:
+            reason = "impact"
+        end_y = tuple(ctx[_L.PH_END_Y : _L.PH_END_Y + n_y])
+        return PhaseEnd(ctx[_L.PH_END_T], reason, end_y, i - 4 if i >= 4 else -1)
 
-            def dense(t: float, t_a: float = t_a, y_a: Vec = y_a, h_step: float = h_step,
-                      ks: list = ks, y_b: Vec = y_new) -> Vec:  # fmt: skip
-                x = (t - t_a) / h_step
-                if x == 1.0:
-                    return y_b
-                w = [x * (p[0] + x * (p[1] + x * (p[2] + x * p[3]))) for p in _P]
-                return tuple(
-                    y_a[j] + h_step * sum(w[q] * ks[q][j] for q in range(7)) for j in range(n_y)
-                )
-
-            t_b = tau + h
-            c_new = conditions(t_b, y_new)
-            crossed = [
-                i
-                for i, (a, b) in enumerate(zip(c_prev, c_new, strict=True))
-                if a > 0.0 >= b
-                or (a == 0.0 and b < 0.0)
-                # another wall touched at the start (the wedge's vertex: its gap is 0
-                # to rounding, either sign) and then entered: an impact at the start
-                or (i >= 4 and a < 0.0 and b < -CONTACT_GAP)
-            ]
-            end_t, end_y, end_i = t_b, y_new, -1
-            if crossed:
-                best = None
-                for i in crossed:
-                    t_root = first_root(
-                        lambda t, i=i: conditions(t, dense(t))[i], t_a, t_b, c_prev[i]
-                    )
-                    if best is None or t_root < best[0]:
-                        best = (t_root, i)
-                end_t, end_i = best
-                end_y = dense(end_t)
-            if on_sample is not None:
-                while next_sample <= end_t:
-                    ts = next_sample
-                    on_sample(ts, dense(ts) if ts > t_a else y_a)
-                    next_sample = next(samples, math.inf)
-            if end_i >= 0:
-                other = end_i - 4 if reasons[end_i] == "impact" else -1
-                return PhaseEnd(end_t, reasons[end_i], end_y, other)
-            tau, y, k1, c_prev = t_b, y_new, k7, c_new
-            factor = 5.0 if err == 0.0 else min(5.0, max(0.2, 0.9 * err**-0.2))
-            h *= factor
-            if not _at_rest(k1):
-                rest_since = math.inf
-            elif rest_since == math.inf:
-                rest_since = tau
-            if math.isinf(limit) and steps > 4 and tau - rest_since >= rest_span:
-                # at rest relative to the boundary, with every condition kept, for a
-                # whole drive period (or, on a static boundary, a few steps): the drive
-                # is periodic, so this repeats for ever
-                raise BallAtRest(rest_since)
-            if rest_span > 0.0 and steps > 4 and tau - rest_since >= rest_span:
-                # the same argument with a time limit: whole drive periods repeat the one
-                # just simulated exactly, so they are skipped (samples at the rest state)
-                tau, next_sample = skip_periods(tau, limit, rest_span, y, next_sample,
-                                                samples, on_sample)  # fmt: skip
-                rest_since = tau
-        return PhaseEnd(limit, None, y)
+    def _stop(self, exc: Exception) -> SimulationError:
+        """The error a kernel's stop stands for, worded as before."""
+        code = exc.args[0]
+        if code == _L.E_AT_REST:
+            return BallAtRest(self.ctx[_L.PH_RSINCE])
+        if code == _L.E_PHASE_STEPS:
+            return SimulationError(
+                "the contact phase's step-size control failed (60 rejected steps)",
+                Status.SOLVER_FAILED,
+            )
+        return _stop(exc, self.ctx)
 
 
 def skip_periods(
@@ -370,10 +312,6 @@ def skip_periods(
             on_sample(next_sample, y)
         next_sample = next(samples, math.inf)
     return tau, next_sample
-
-
-def _at_rest(k: Vec) -> bool:
-    return all(abs(x) <= 1e-15 for x in k)
 
 
 def first_root(fn: Callable[[float], float], a: float, b: float, fa: float) -> float:

@@ -138,20 +138,16 @@ class ContactPhases:
                 self._contact = (float(j), s, sd, sgn, ball.t, ball.t)
                 return
 
-    def _other_gaps(self, index: int) -> list[Callable[[float, float], float]]:
-        """The gaps (m) a phase on surface ``index`` watches, in the order of
-        ``boundary.surfaces`` without ``index``: the other walls' offset curves, the lid
-        and the escape level (a ball rolling or sliding up a wall reaches them too)."""
-        gaps = []
-        for j, surface in enumerate(self.boundary.surfaces):
-            if j == index:
-                continue
-            if surface.kind == "wall":
-                warm = self.warm[j]
-                gaps.append(lambda px, py, o=surface, w=warm: py - o.height(px, w))
-            else:
-                gaps.append(lambda px, py, level=surface.level: level - py)
-        return gaps
+    def _watched(self, index: int) -> list[tuple[Any, list]]:
+        """The surfaces a phase on surface ``index`` watches, each with its warm start,
+        in the order of ``boundary.surfaces`` without ``index``: the other walls' offset
+        curves, the lid and the escape level (a ball rolling or sliding up a wall
+        reaches them too)."""
+        return [
+            (surface, self.warm[j])
+            for j, surface in enumerate(self.boundary.surfaces)
+            if j != index
+        ]
 
     def _emit_samples(self, t_from: float, t_to: float, state_at: Callable) -> None:
         """Report the samples k dt (from the run's start) in [t_from, t_to]."""
@@ -240,7 +236,7 @@ class ContactPhases:
         end = self._phase_end(
             t0,
             lambda: model.run_phase(
-                wall, mode, sgn, theta0, (s, sd, ball.u3), until - t0, self._other_gaps(index),
+                wall, mode, sgn, theta0, (s, sd, ball.u3), until - t0, self._watched(index),
                 self._sample_times(t0, until) if self.on_sample is not None else (),
                 on_sample if self.on_sample is not None else None,
             ),

@@ -47,6 +47,7 @@ KERNEL_SOURCES = (
     "billiard.jit",
     "billiard.engine_phases",
     "billiard.generated.ball",
+    "billiard.generated.contact",
 )
 _source_hash: bytes | None = None
 

@@ -26,7 +26,19 @@ from types import ModuleType
 
 from billiard.errors import SimulationError
 
-__all__ = ["PACKAGE", "ball", "flight", "impact", "layout", "locate", "stop", "surfaces"]
+__all__ = [
+    "PACKAGE",
+    "ball",
+    "contact",
+    "contact_equations",
+    "contact_forces",
+    "flight",
+    "impact",
+    "layout",
+    "locate",
+    "stop",
+    "surfaces",
+]
 
 #: the twin's package name
 PACKAGE = "billiard.kernels_py"
@@ -64,6 +76,9 @@ flight = _load("flight")
 surfaces = _load("surfaces")
 locate = _load("locate")
 impact = _load("impact")
+contact_equations = _load("contact_equations")
+contact_forces = _load("contact_forces")
+contact = _load("contact")
 
 #: the documented stops of the kernels the classes call, worded as the engine words them
 _TEXTS = {

@@ -54,6 +54,7 @@ _gap_rate = _surfaces.gap_rate
 _gap_accel = _surfaces.gap_accel
 _contact = _surfaces.contact
 _max_gap_deceleration = _surfaces.max_gap_deceleration
+_offset_height = _surfaces.offset_height
 
 
 class Surface:
@@ -190,10 +191,14 @@ class OffsetWall(Surface):
 
     def height(self, x: float, warm: WarmStart) -> float:
         """F(x): height of the ball centre touching this wall at abscissa x (m)."""
-        s = self.foot(x, warm[0])
-        warm[0] = s
-        fp = self.df(s, self.p)
-        return self.f(s, self.p) + self.r / math.sqrt(1.0 + fp * fp)
+        ctx = self.ctx
+        ctx[_WS] = warm[0]
+        try:
+            height = _offset_height(ctx, self._p, self._walls, 0, x)
+        except _KernelError as exc:
+            raise _stop(exc, ctx) from None
+        warm[0] = ctx[_WS]
+        return height
 
     def gap_rate(
         self, px: float, py: float, vx: float, vy: float, warm: WarmStart
@@ -262,7 +267,7 @@ class OffsetLine(OffsetWall):
         return x + self.shift
 
     def height(self, x: float, warm: WarmStart) -> float:
-        return self.b * x + self.intercept
+        return _offset_height(self.ctx, self._p, self._walls, 0, x)
 
     def gap_rate(
         self, px: float, py: float, vx: float, vy: float, warm: WarmStart

@@ -64,6 +64,16 @@ def incline(theta, s0, contact):
     return scene("wedge", {"b": b, "c": 0.0}, contact, {"q1": q1, "q2": q2, "v1": 0.0, "v2": 0.0})
 
 
+def count_forces(monkeypatch) -> list:
+    """A list that grows by one at each evaluation of the contact forces in a phase."""
+    from billiard.kernels_python import contact_forces as contact
+
+    calls: list = []
+    forces = contact.forces
+    monkeypatch.setattr(contact, "forces", lambda *a: calls.append(1) or forces(*a))
+    return calls
+
+
 def first_phase(sim: Simulation) -> ContactRecord:
     """The first finished contact phase (a phase that ends at an impact makes the step
     return the impact; every phase goes to ``on_contact``)."""
@@ -151,12 +161,9 @@ def test_small_oscillations_in_a_bowl(mu, factor):
 
 
 def test_rest_in_a_static_bowl_is_kept_cheaply(monkeypatch):
-    # the cost counted as evaluations of the contact forces (never as time in a test)
-    from billiard.contact_phase import ContactModel
-
-    calls = []
-    forces = ContactModel.forces
-    monkeypatch.setattr(ContactModel, "forces", lambda *a: calls.append(1) or forces(*a))
+    # the cost counted as evaluations of the contact forces (never as time in a test):
+    # the phase kernel's, which the interpreted twin looks up at each call
+    calls = count_forces(monkeypatch)
     sim = Simulation(bowl(10.0, 0.0, {}))
     assert sim.mode == "roll"
     calls.clear()
@@ -209,11 +216,7 @@ def test_a_shaken_table_keeps_the_ball_below_gamma_one():
 def test_a_ball_resting_on_a_shaken_table_moves_with_it_at_the_cost_of_one_period(monkeypatch):
     # at rest relative to the table through a drive period, the periods after it repeat
     # it exactly: skipped, with the samples taken at the rest state
-    from billiard.contact_phase import ContactModel
-
-    calls = []
-    forces = ContactModel.forces
-    monkeypatch.setattr(ContactModel, "forces", lambda *a: calls.append(1) or forces(*a))
+    calls = count_forces(monkeypatch)
     sc, w = table(0.9)
     amplitude = sc.drive.amplitude
     sim = Simulation(sc)

@@ -11,6 +11,11 @@ One concept per module:
   and escape level; the wall functions arrive as first-class function values;
 * :mod:`~billiard.kernels.locate`: the event locator (bound, root refinement);
 * :mod:`~billiard.kernels.impact`: Kane and Levinson's law with the low-velocity rule;
+* :mod:`~billiard.kernels.contact_equations`: the generated contact equations;
+* :mod:`~billiard.kernels.contact_forces`: a contact phase's forces, rates and
+  transition functions;
+* :mod:`~billiard.kernels.contact`: a rolling or sliding phase on one wall, resumable
+  at sample times;
 * :mod:`~billiard.kernels.loop`: one impact, and ``run_chunk`` (up to N impacts into a
   preallocated array).
 

@@ -108,7 +108,63 @@ STACK = 640
 STACK_ENTRY = 7  # ta, G(ta), dG(ta), tb, G(tb), dG(tb), splits
 STACK_DEPTH = 24
 
-SIZE = STACK + STACK_ENTRY * STACK_DEPTH
+# --- a contact phase (rolling or sliding on one wall) -----------------------------
+# The phase's constants, its Dormand-Prince state between calls (a phase is resumable:
+# it returns at every sample time and goes on from there), the step's dense output, and
+# the transition functions ("conditions") at the step's ends. Kernels: contact.py.
+PH = STACK + STACK_ENTRY * STACK_DEPTH
+PH_M = PH  # mass (kg)
+PH_R = PH + 1  # radius (m)
+PH_K = PH + 2  # inertia factor
+PH_G = PH + 3  # gravity (m/s^2)
+PH_CLIN = PH + 4  # Fowles linear drag (N s/m)
+PH_CQUAD = PH + 5  # Fowles quadratic drag (N s^2/m^2)
+PH_MUS = PH + 6  # static friction
+PH_MUK = PH + 7  # kinetic friction
+PH_RTOL = PH + 8  # the step's relative tolerance
+PH_WALL = PH + 9  # index of the phase's wall in the wall functions
+PH_SURF = PH + 10  # index of the phase's wall among the surfaces (not watched)
+PH_LO = PH + 11  # the wall's interval (m)
+PH_HI = PH + 12
+PH_MODE = PH + 13  # ROLL or SLIDE
+PH_SGN = PH + 14  # sign of the slip while sliding
+PH_THETA0 = PH + 15  # drive angle at the phase's start (rad)
+PH_LIMIT = PH + 16  # longest duration (s; inf: none)
+PH_STAGE = PH + 17  # where the phase goes on: STAGE_STEP, STAGE_EMIT, STAGE_SKIP
+PH_TAU = PH + 18  # time since the phase's start (s)
+PH_H = PH + 19  # step proposal (s)
+PH_STEPS = PH + 20  # accepted steps
+PH_HMAX = PH + 21  # longest step (s)
+PH_RSPAN = PH + 22  # rest span: a drive period (0 on a static boundary)
+PH_RSINCE = PH + 23  # at rest relative to the boundary since (s; inf: moving)
+PH_NEXT = PH + 24  # next sample time (s; inf: none)
+PH_ERR = PH + 25  # scaled error of the last step
+PH_TA = PH + 26  # the last step: its start (s), length (s), end (s)
+PH_HSTEP = PH + 27
+PH_TB = PH + 28
+PH_END_T = PH + 29  # the end found in the last step: time (s), condition (-1: none)
+PH_END_I = PH + 30
+PH_SAMPLE_T = PH + 31  # a sample handed out: time (s)
+PH_Y = PH + 32  # y = (s, s_dot, u3) at PH_TAU: 32..34 (u3 unused while rolling)
+PH_YB = PH + 35  # y at the last step's end: 35..37
+PH_YI = PH + 38  # a stage's argument: 38..40
+PH_YD = PH + 41  # the dense output at a root candidate: 41..43
+PH_END_Y = PH + 44  # y at the end found: 44..46
+PH_SAMPLE_Y = PH + 47  # y of the sample handed out: 47..49
+PH_KS = PH + 50  # the seven stages' derivatives, 3 per stage: 50..70
+PH_NCOND = 20  # conditions: normal force, two wall ends, friction, one per other surface
+PH_CPREV = PH + 71  # conditions at the step's start
+PH_CNEW = PH_CPREV + PH_NCOND  # ... at its end
+PH_CTMP = PH_CNEW + PH_NCOND  # ... at a root candidate
+PH_END = PH_CTMP + PH_NCOND
+
+ROLL = 0.0
+SLIDE = 1.0
+STAGE_STEP = 0.0  # take the next step
+STAGE_EMIT = 1.0  # hand out the samples up to the step's end, then end or go on
+STAGE_SKIP = 2.0  # hand out the samples of skipped drive periods at rest
+
+SIZE = PH_END
 
 # --- rows ---------------------------------------------------------------------------
 # one row per impact, the columns of collisions.csv in order; regime and wall as codes
@@ -125,6 +181,11 @@ FULL = 1  # the chunk's rows are full
 TIME_LIMIT = 2  # the next impact comes after EN_UNTIL
 COLLAPSE = 3  # an inelastic collapse after the last row
 
+# --- contact phase statuses (contact.advance) --------------------------------------
+PHASE_END = 0  # a transition ends the phase: PH_END_T, PH_END_I, PH_END_Y
+PHASE_LIMIT = 1  # the time limit came first: the state is PH_Y at PH_LIMIT
+PHASE_SAMPLE = 2  # a sample at PH_SAMPLE_T: PH_SAMPLE_Y; set PH_NEXT and call again
+
 # --- KernelError codes --------------------------------------------------------------
 E_ESCAPED = 1
 E_NO_IMPACT = 2
@@ -134,6 +195,8 @@ E_STEP_CONTROL = 5
 E_INVERSION = 6
 E_NON_FINITE = 7
 E_COLLAPSE = 8
+E_PHASE_STEPS = 9  # a contact phase's step-size control failed
+E_AT_REST = 10  # at rest relative to the boundary for good: from PH_RSINCE
 
 
 class KernelError(Exception):

@@ -71,6 +71,22 @@ def foot(ctx, p, walls, base, x, s):
 
 
 @inline
+def offset_height(ctx, p, walls, j, x):
+    """F(x): the height (m) of a centre touching wall surface j at abscissa x, the warm
+    start s of its block moved to the foot (its slope left as it was). A contact phase
+    watches the other walls by py - F(px), the quantity it always compared; gap_rate's
+    py - f(s) - r/sqrt(1 + f'^2) rounds differently."""
+    base = SURF + j * SURF_STRIDE
+    if ctx[base + S_KIND] == CURVED:
+        s = foot(ctx, p, walls, base, x, ctx[base + S_WS])
+        ctx[base + S_WS] = s
+        w = int(ctx[base + S_WALL])
+        fp = walls[1][w](s, p)
+        return walls[0][w](s, p) + ctx[base + S_A] / math.sqrt(1.0 + fp * fp)
+    return ctx[base + S_A] * x + ctx[base + S_B]
+
+
+@inline
 def gap_rate(ctx, p, walls, j, px, py, vx, vy):
     """(G, dG/dt) of surface j for a centre at p moving at v relative to the boundary."""
     base = SURF + j * SURF_STRIDE

@@ -1,0 +1,152 @@
+"""The contact phases as kernels (``billiard.kernels.contact``): the interpreted twin
+that :class:`billiard.contact_phase.ContactModel` runs is the kernel file itself, and the
+compiled kernels continue every phase of real runs, sample by sample, to the same bits.
+
+The phases are captured where the engine begins them (the twin's ``begin``: the state
+vector, the parameters and the wall functions then), and run again from there, once
+through the twin and once compiled, with sample times every ``SAMPLE_DT`` seconds so
+that the resumable path runs too; after every return the whole state vector must be the
+same bytes, and a stop the same code."""
+
+from __future__ import annotations
+
+import importlib
+import inspect
+import math
+import types
+
+import numpy as np
+import pytest
+
+from billiard import jit
+from billiard import kernels_python as twin
+from billiard.errors import BallAtRest
+from billiard.scene import load_scene, with_values
+from billiard.simulate import Simulation
+
+compiled = pytest.mark.skipif(not jit.ENABLED, reason=f"numba unavailable: {jit.numba_problem()}")
+L = twin.layout
+MODULES = ("contact", "contact_forces", "contact_equations")
+#: sample spacing (s) of the replayed table phases
+SAMPLE_DT = 2.5e-3
+
+
+@pytest.mark.parametrize("name", MODULES)
+def test_the_twin_runs_the_contact_kernel_files_as_plain_functions(name):
+    kernel = importlib.import_module(f"billiard.kernels.{name}")
+    plain = importlib.import_module(f"{twin.PACKAGE}.{name}")
+    assert plain.__file__ == kernel.__file__
+    functions = [
+        key
+        for key, value in vars(plain).items()
+        if isinstance(value, types.FunctionType)
+        and (value.__module__ == plain.__name__ or name == "contact_equations")
+    ]
+    assert functions
+    for key in functions:
+        fn = getattr(plain, key)
+        assert inspect.isfunction(fn), key
+        source = getattr(kernel, key)
+        source = getattr(source, "py_func", source)
+        assert fn.__code__.co_filename == source.__code__.co_filename, key
+        assert fn.__code__.co_code == source.__code__.co_code, key
+    from billiard.generated import contact
+
+    assert twin.contact_equations.roll_rhs is contact.roll_rhs
+
+
+def _capture(monkeypatch, scene, impacts: int, most: int, sample: float | None = None):
+    """The first ``most`` phases a run of ``scene`` (to its ``run.duration``) begins:
+    (ctx, p, walls) each."""
+    phases = []
+    begin = twin.contact.begin
+
+    def capture(ctx, p, walls):
+        if len(phases) < most:
+            phases.append((list(ctx), p, walls))
+        return begin(ctx, p, walls)
+
+    monkeypatch.setattr(twin.contact, "begin", capture)
+    sim = Simulation(scene)
+    until = scene.run.duration or math.inf
+    if sample is not None:
+        sim.sample_dt = sample
+        sim.on_sample = lambda *row: None
+    try:
+        for _ in range(impacts):
+            if len(phases) >= most or sim.step(until=until) is None:
+                break
+    except BallAtRest:
+        pass  # the static bowl's last phase: captured already
+    monkeypatch.undo()
+    return phases
+
+
+def _replay(module, layout, ctx, p, walls, dt: float) -> list:
+    """Run a captured phase to its end with samples every ``dt`` seconds: after every
+    return the status and the state vector's bytes (a stop: its code and the bytes)."""
+    trace = []
+    ctx[layout.PH_NEXT] = dt
+    try:
+        module.begin(ctx, p, walls)
+        while True:
+            status = module.advance(ctx, p, walls)
+            trace.append((status, np.asarray(ctx, dtype=np.float64).tobytes()))
+            if status != layout.PHASE_SAMPLE:
+                break
+            ctx[layout.PH_NEXT] = ctx[layout.PH_SAMPLE_T] + dt
+    except layout.KernelError as exc:
+        trace.append(("stop", exc.args[0], np.asarray(ctx, dtype=np.float64).tobytes()))
+    return trace
+
+
+def _cases():
+    """(scene, impacts, phases, the run's sample interval, the replay's) of each run:
+    the wedge without and with drag (every way a phase ends but the stops), a
+    static bowl (the ball comes to rest: a stop; no samples, as its last steps are
+    long), a shaken table (a time limit: drive periods at rest skipped, with samples)."""
+    from bench.contact import _table
+
+    def paper(name, drag):
+        return with_values(load_scene(name), {"contact.model": "phases", "air.drag": drag})
+
+    bowl = with_values(paper("parabola-5.4hz", "fowles"), {"drive.amplitude": 0.0})
+    table = with_values(_table("phases"), {"run.duration": 0.3})
+    return [
+        (paper("wedge-6.6hz", "none"), 3000, 200, None, 1e-3),
+        (paper("wedge-6.6hz", "fowles"), 3000, 100, 0.004, 1e-3),
+        (bowl, 50, 5, None, math.inf),
+        (table, 50, 5, 0.004, SAMPLE_DT),
+    ]
+
+
+def test_captured_phases_cover_the_kernel_paths(monkeypatch):
+    """The phases replayed below end in every way the kernel can end one."""
+    seen = set()
+    for scene, impacts, most, sample, dt in _cases():
+        for ctx, p, walls in _capture(monkeypatch, scene, impacts, most, sample):
+            for entry in _replay(twin.contact, L, list(ctx), p, walls, dt):
+                seen.add(entry[0] if entry[0] != "stop" else ("stop", entry[1]))
+                if entry[0] == L.PHASE_END:
+                    seen.add(("end", int(np.frombuffer(entry[1])[L.PH_END_I])))
+    assert {L.PHASE_SAMPLE, L.PHASE_END, L.PHASE_LIMIT, ("stop", L.E_AT_REST)} <= seen
+    assert {("end", 0), ("end", 3), ("end", 4)} <= seen  # lift-off, friction, impact
+
+
+@compiled
+def test_phases_are_the_same_interpreted_and_compiled(monkeypatch):
+    from billiard.kernel_walls import WallFunction
+    from billiard.kernels import contact as kernel
+    from billiard.kernels import layout as layout
+
+    assert hasattr(kernel.advance, "py_func")  # compiled: a numba dispatcher
+    replayed = 0
+    for scene, impacts, most, sample, dt in _cases():
+        for ctx, p, walls in _capture(monkeypatch, scene, impacts, most, sample):
+            expected = _replay(twin.contact, L, list(ctx), p, walls, dt)
+            typed = tuple(tuple(WallFunction(fn) for fn in row) for row in walls)
+            values = np.asarray(ctx, dtype=np.float64)
+            got = _replay(kernel, layout, values, np.asarray(p, dtype=np.float64), typed, dt)
+            assert got == expected
+            replayed += 1
+    assert replayed >= 300
