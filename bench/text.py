@@ -47,9 +47,10 @@ the verdict counts the cases where both reach it.
 What limits the speed now: compiled, an impact costs 0.7-5 us of arithmetic (section 5:
 libm's sine and cosine of the drive angle in the wedge, the square-root and division
 chains of the offset-curve foot and of the drag stages in the curved scenes). A run of
-25,000 impacts is bound by start-up (numba's import and registries, about 1 s), a
-streamed run of many impacts by formatting its rows with `repr` (about 15 us per row);
-a run kept in memory makes 10^6 wedge impacts in about 1 s. Between methods, both
+25,000 impacts is bound by start-up (importing numpy and numba, about 0.45 s, then
+loading the cached kernels, about 0.1 s); a streamed run of many impacts by writing its
+rows (about 1 us per row formatted compiled, then the file's write); a run kept in
+memory makes 10^6 wedge impacts in about 1 s. Between methods, both
 interpreted, the default method stays 3-40x cheaper than rk4 at equal accuracy: rk4 is
 exact for drag-free arcs at any step, so with drag off its cheapest accurate step is
 only a few times dearer; its real advantage is in section 2: it is the only method
@@ -224,14 +225,17 @@ PROFILE_AFTER = """Where the time goes now, and what would make it shorter:
    66 evaluations of the drag per impact, each with a square root). Carrying the drive's
    sine and cosine and the last slope from one kernel to the next would save a few per
    cent; fewer foot iterations (a better warm start) is the larger gain left.
-2. **Start-up** dominates a short run: importing numba and building its typing and
-   target registries (which import `scipy.linalg` for numba's BLAS check) takes about
-   0.8 s of the 1-1.5 s before the first impact, then loading the cached kernels and
-   the curve's wall functions. A run of 25,000 impacts spends more time starting than
+2. **Start-up** dominates a short run: importing numpy and numba takes about 0.45 s of
+   the 0.5-0.7 s before the first impact, then loading the cached kernels and the
+   curve's wall functions about 0.1 s. numba's cache would first load its typing and
+   target registries (every implementation it can compile, 0.35 s and 20 MB more); the
+   kernels' caches load only numba's runtime (`billiard/jit.py`), as the machine code
+   needs nothing else. A run of 25,000 impacts still spends more time starting than
    simulating (section 4).
-3. **Writing rows**: a streamed run formats every float with `repr` (the only
-   formatting that reads back bit for bit), about as long as the compiled wedge takes to
-   compute the impact.
+3. **Writing rows**: a streamed run formats its rows compiled (`kernels/float_text.py`,
+   Ryu's shortest digits laid out as `repr` lays them out, byte for byte), about 1 us
+   per row against 12-16 us for `repr`: about as long as the compiled wedge takes to
+   compute the impact; then the file's write.
 4. **Building the simulation** (`Boundary`: offset-curve bounds sampled at start-up,
    radius validation): milliseconds, once per run; it matters only for runs of a few
    hundred impacts, such as the work-precision settings of section 1.

@@ -74,7 +74,7 @@ _compile_noticed = False
 #: printed once when the kernels are compiled (an empty or outdated cache)
 COMPILE_NOTICE = (
     "billiard: compiling the engine's kernels with numba (once per install or update, "
-    "about 15 s; cached afterwards)"
+    "about half a minute; cached afterwards)"
 )
 
 
