@@ -43,6 +43,19 @@ def test_other_compiles_are_not_announced(capsys, monkeypatch):
     assert capsys.readouterr().err == ""
 
 
+def two_compiled_runs(script: str, tmp_path) -> list[subprocess.CompletedProcess]:
+    """``script`` run twice in fresh interpreters with numba enabled (the first fills
+    the cache if it is empty); both must succeed."""
+    env = {**os.environ, "BILLIARD_HOME": str(tmp_path)}
+    env.pop("NUMBA_DISABLE_JIT", None)
+    runs = [
+        subprocess.run([sys.executable, "-c", script], env=env, capture_output=True, text=True)
+        for _ in range(2)
+    ]
+    assert all(r.returncode == 0 for r in runs), runs[-1].stderr
+    return runs
+
+
 @compiled
 def test_a_warm_start_prints_nothing(tmp_path):
     script = (
@@ -50,13 +63,7 @@ def test_a_warm_start_prints_nothing(tmp_path):
         "from billiard.scene import load_scene; "
         "Simulation(load_scene('wedge-6.6hz')).run(5, MemoryRecorder())"
     )
-    env = {**os.environ, "BILLIARD_HOME": str(tmp_path)}
-    env.pop("NUMBA_DISABLE_JIT", None)
-    runs = [
-        subprocess.run([sys.executable, "-c", script], env=env, capture_output=True, text=True)
-        for _ in range(2)
-    ]
-    assert all(r.returncode == 0 for r in runs), runs[0].stderr
+    runs = two_compiled_runs(script, tmp_path)
     assert runs[1].stderr == ""  # the first run filled the cache if it was empty
 
 
@@ -73,13 +80,7 @@ def test_a_warm_start_loads_no_registries_and_can_still_compile(tmp_path):
         "import numba, numpy; "
         "print(numba.njit(lambda a: numpy.sum(a))(numpy.full(3, 3.0)))"
     )
-    env = {**os.environ, "BILLIARD_HOME": str(tmp_path)}
-    env.pop("NUMBA_DISABLE_JIT", None)
-    runs = [
-        subprocess.run([sys.executable, "-c", script], env=env, capture_output=True, text=True)
-        for _ in range(2)
-    ]
-    assert all(r.returncode == 0 for r in runs), runs[-1].stderr
+    runs = two_compiled_runs(script, tmp_path)
     assert runs[1].stdout.split() == ["light", "9.0"]
 
 

@@ -1,6 +1,7 @@
 """The contact phases as kernels (``billiard.kernels.contact``): the interpreted twin
-that :class:`billiard.contact_phase.ContactModel` runs is the kernel file itself, and the
-compiled kernels continue every phase of real runs, sample by sample, to the same bits.
+that :class:`billiard.contact_phase.ContactModel` runs is the kernel file itself
+(``tests/test_kernels_twin.py``), and the compiled kernels continue every phase of real
+runs, sample by sample, to the same bits.
 
 The phases are captured where the engine begins them (the twin's ``begin``: the state
 vector, the parameters and the wall functions then), and run again from there, once
@@ -10,10 +11,7 @@ same bytes, and a stop the same code."""
 
 from __future__ import annotations
 
-import importlib
-import inspect
 import math
-import types
 
 import numpy as np
 import pytest
@@ -26,33 +24,8 @@ from billiard.simulate import Simulation
 
 compiled = pytest.mark.skipif(not jit.ENABLED, reason=f"numba unavailable: {jit.numba_problem()}")
 L = twin.layout
-MODULES = ("contact", "contact_forces", "contact_equations")
 #: sample spacing (s) of the replayed table phases
 SAMPLE_DT = 2.5e-3
-
-
-@pytest.mark.parametrize("name", MODULES)
-def test_the_twin_runs_the_contact_kernel_files_as_plain_functions(name):
-    kernel = importlib.import_module(f"billiard.kernels.{name}")
-    plain = importlib.import_module(f"{twin.PACKAGE}.{name}")
-    assert plain.__file__ == kernel.__file__
-    functions = [
-        key
-        for key, value in vars(plain).items()
-        if isinstance(value, types.FunctionType)
-        and (value.__module__ == plain.__name__ or name == "contact_equations")
-    ]
-    assert functions
-    for key in functions:
-        fn = getattr(plain, key)
-        assert inspect.isfunction(fn), key
-        source = getattr(kernel, key)
-        source = getattr(source, "py_func", source)
-        assert fn.__code__.co_filename == source.__code__.co_filename, key
-        assert fn.__code__.co_code == source.__code__.co_code, key
-    from billiard.generated import contact
-
-    assert twin.contact_equations.roll_rhs is contact.roll_rhs
 
 
 def _capture(monkeypatch, scene, impacts: int, most: int, sample: float | None = None):

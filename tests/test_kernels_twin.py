@@ -20,7 +20,15 @@ from billiard.kernels.state import state_vector
 from billiard.scene import load_scene, with_values
 
 compiled = pytest.mark.skipif(not jit.ENABLED, reason=f"numba unavailable: {jit.numba_problem()}")
-MODULES = ("flight", "surfaces", "locate", "impact", "loop")
+MODULES = (
+    "flight",
+    "surfaces",
+    "locate",
+    "impact",
+    "loop",
+    "contact",
+    "contact_forces",
+)
 
 
 def _kernel(name: str) -> types.ModuleType:
@@ -53,9 +61,10 @@ def test_the_twin_runs_the_kernel_files_as_plain_functions(name):
         assert fn.__code__.co_filename == source.__code__.co_filename, key
         assert fn.__code__.co_code == source.__code__.co_code, key
     # the generated equations are the generated functions themselves
-    from billiard.generated import ball
+    from billiard.generated import ball, contact
 
     assert _twin("ball").impact_stick is ball.impact_stick
+    assert _twin("contact_equations").roll_rhs is contact.roll_rhs
 
 
 def _setup(scene_name: str, drag: str = "none"):
