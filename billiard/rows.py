@@ -21,7 +21,15 @@ import numpy as np
 from billiard import jit as _jit
 from billiard.kernels.layout import LID_LABEL, NCOL, REGIMES
 
-__all__ = ["NCOL", "as_block", "column_arrays", "format_rows", "record_of", "row_of"]
+__all__ = [
+    "NCOL",
+    "as_block",
+    "column_arrays",
+    "format_rows",
+    "format_rows_bytes",
+    "record_of",
+    "row_of",
+]
 
 _N, _REGIME, _WALL = 0, 10, 13
 
@@ -68,10 +76,20 @@ def format_rows(block: np.ndarray, line_end: str) -> str:
     written by the compiled formatter when the kernels are compiled, with ``repr``
     otherwise (the same bytes)."""
     if _jit.ENABLED and len(block):
-        text = _format_rows_compiled(block, line_end)
-        if text is not None:
-            return text
+        data = _format_rows_compiled(block, line_end)
+        if data is not None:
+            # decoded straight from the buffer (tobytes() would copy it once more)
+            return str(data, "ascii")
     return _format_rows_repr(block, line_end)
+
+
+def format_rows_bytes(block: np.ndarray, line_end: str) -> bytes:
+    """:func:`format_rows` as the bytes written to the file (ASCII)."""
+    if _jit.ENABLED and len(block):
+        data = _format_rows_compiled(block, line_end)
+        if data is not None:
+            return data.tobytes()
+    return _format_rows_repr(block, line_end).encode("ascii")
 
 
 #: what the compiled formatter is given besides the rows, built on its first call
@@ -102,7 +120,7 @@ def _constants() -> tuple[np.ndarray, np.ndarray, np.ndarray, int]:
     return _compiled_constants
 
 
-def _format_rows_compiled(block: np.ndarray, line_end: str) -> str | None:
+def _format_rows_compiled(block: np.ndarray, line_end: str) -> memoryview | None:
     """:func:`format_rows` by :func:`billiard.kernels.float_text.format_rows`; None
     for a block with a code that formatter leaves to ``repr``'s path (a nan or
     out-of-range number or regime: that path formats it or raises as it always did)."""
@@ -116,8 +134,7 @@ def _format_rows_compiled(block: np.ndarray, line_end: str) -> str | None:
     size = float_text.format_rows(block, rows, out, labels, starts, lid, end)
     if size < 0:
         return None
-    # decoded straight from the buffer (tobytes() would copy it once more)
-    return str(out[:size].data, "ascii")
+    return out[:size].data
 
 
 def _format_rows_repr(block: np.ndarray, line_end: str) -> str:

@@ -32,7 +32,7 @@ from billiard.record import (
     _header_line,
     read_collisions,
 )
-from billiard.rows import format_rows, record_of
+from billiard.rows import format_rows_bytes, record_of
 
 try:  # advisory file locks (POSIX); elsewhere two processes are not kept apart
     import fcntl
@@ -43,10 +43,10 @@ __all__ = ["CsvMark", "CsvRecorder", "RowMismatchError", "RunBusyError", "Trunca
 
 #: Wall-clock seconds between flushes of a streamed file.
 FLUSH_INTERVAL = 1.0
-#: Characters of rows collected before they are written to the file, synced or not,
+#: Bytes of rows collected before they are written to the file, synced or not,
 #: whatever the time since the last flush: a compiled run makes hundreds of thousands
 #: of rows a second, which would otherwise all wait in memory for the next flush.
-SPILL_CHARS = 1 << 22
+SPILL_BYTES = 1 << 22
 
 
 @dataclass(frozen=True)
@@ -209,10 +209,12 @@ class CsvRecorder:
         self.autoflush = autoflush
         self.durable = durable
         self.line_end = line_end
-        self._pending = io.StringIO()
-        self._writer = csv.writer(self._pending, lineterminator=line_end)
+        # the rows' bytes, as they go to the file (a row appended as a record is
+        # formatted by the csv module in _row_text first)
+        self._pending = bytearray()
+        self._row_text = io.StringIO()
+        self._writer = csv.writer(self._row_text, lineterminator=line_end)
         self._pending_rows = 0
-        self._pending_chars = 0
         self._unsynced = False  # rows written without a sync since the last one
         self._last_flush = time.monotonic()
         #: the write error that ended writing (None while writes succeed)
@@ -340,6 +342,9 @@ class CsvRecorder:
 
     def append(self, row: Sequence[Any]) -> None:
         self._writer.writerow([_format(v) for v in row])
+        self._pending += self._row_text.getvalue().encode("utf-8")
+        self._row_text.seek(0)
+        self._row_text.truncate()
         self._pending_rows += 1
         if self._check is not None:
             self._check_row()
@@ -359,13 +364,11 @@ class CsvRecorder:
             for row in block.tolist():
                 self.append(record_of(row))
             return
-        text = format_rows(block, self.line_end)
-        self._pending.write(text)
+        self._pending += format_rows_bytes(block, self.line_end)
         self._pending_rows += len(block)
-        self._pending_chars += len(text)
         if self.autoflush and time.monotonic() - self._last_flush >= FLUSH_INTERVAL:
             self.flush()
-        elif self._pending_chars >= SPILL_CHARS:
+        elif len(self._pending) >= SPILL_BYTES:
             # written, not synced: the next flush syncs them with the rest; a checkpoint
             # comes only after a flush, and rows on disk past it are checked on resume
             self._write(sync=False)
@@ -376,14 +379,13 @@ class CsvRecorder:
         if self._mark.size >= self._check_end:
             self.end_check()
             return
-        text = self._pending.getvalue()
-        line = text.encode("utf-8")
+        line = bytes(self._pending)
         if self._check.readline() != line:
             self._discard_pending()
             self._close_check()
             self.failed = RowMismatchError(self.path, self._mark.rows + 1)
             raise self.failed
-        self._mark = CsvMark(self._mark.rows + 1, self._mark.size + len(line), text)
+        self._mark = CsvMark(self._mark.rows + 1, self._mark.size + len(line), line.decode())
         self._check_rows -= 1
         self._discard_pending()
 
@@ -407,13 +409,9 @@ class CsvRecorder:
             self._check = None
 
     def _discard_pending(self) -> None:
-        # a new buffer rather than seek(0) and truncate(): once seeked, a StringIO keeps
-        # 4 bytes per character, and a compiled run collects tens of megabytes of rows
-        # between two flushes
-        self._pending = io.StringIO()
-        self._writer = csv.writer(self._pending, lineterminator=self.line_end)
+        # a new buffer: the written one may be megabytes
+        self._pending = bytearray()
         self._pending_rows = 0
-        self._pending_chars = 0
 
     def flush(self) -> CsvMark:
         """Write the rows collected since the last flush in one system call, sync them
@@ -431,8 +429,8 @@ class CsvRecorder:
         """Write the pending rows in one system call (then sync them if ``sync``)."""
         if self.failed is not None:
             raise self.failed
-        text = self._pending.getvalue()
-        if not text:
+        data = self._pending
+        if not data:
             if sync and self._unsynced and self._fd is not None:
                 # rows written unsynced since the last sync (spilled)
                 try:
@@ -444,7 +442,6 @@ class CsvRecorder:
             return self._mark
         if self._fd is None:
             raise ValueError(f"{self.path} is closed")
-        data = text.encode("utf-8")
         try:
             _write_all(self._fd, data)
             if sync:
@@ -454,23 +451,23 @@ class CsvRecorder:
         except OSError as exc:  # the sync failed: the bytes are in the file
             self._fail(data, len(data), exc)
         self._unsynced = not sync
-        self._advance(text, len(data), self._pending_rows)
+        self._advance(data, len(data), self._pending_rows)
         self._discard_pending()
         return self._mark
 
-    def _advance(self, text: str, size: int, rows: int) -> None:
+    def _advance(self, data: bytes | bytearray, size: int, rows: int) -> None:
         # the last line of what was written (every row ends with the line terminator)
-        start = text.rfind("\n", 0, len(text) - 1) + 1
-        self._mark = CsvMark(self._mark.rows + rows, self._mark.size + size, text[start:])
+        start = data.rfind(b"\n", 0, size - 1) + 1
+        last = bytes(data[start:size]).decode("utf-8")
+        self._mark = CsvMark(self._mark.rows + rows, self._mark.size + size, last)
 
-    def _fail(self, data: bytes, written: int, error: OSError) -> None:
+    def _fail(self, data: bytes | bytearray, written: int, error: OSError) -> None:
         """A flush failed after ``written`` bytes of ``data``: keep the whole rows among
         them, cut a row cut short (which frees space rather than needing it), write
         nothing more, and raise ``error``."""
         whole = data.rfind(b"\n", 0, written) + 1
         if whole:
-            text = data[:whole].decode("utf-8")
-            self._advance(text, whole, text.count("\n"))
+            self._advance(data, whole, data.count(b"\n", 0, whole))
         if whole < written:
             with contextlib.suppress(OSError):
                 os.ftruncate(self._fd, self._mark.size)  # type: ignore[arg-type]

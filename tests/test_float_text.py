@@ -218,12 +218,15 @@ def _random_block(rng: np.random.Generator, size: int) -> np.ndarray:
 @pytest.mark.parametrize("line_end", ["\n", "\r\n"])
 def test_format_rows_is_the_repr_path_on_random_rows(line_end):
     block = _random_block(np.random.default_rng(17), 20_000)
-    text = rows._format_rows_compiled(block, line_end)
-    assert text is not None
-    assert text == rows._format_rows_repr(block, line_end)
+    data = rows._format_rows_compiled(block, line_end)
+    assert data is not None
+    text = rows._format_rows_repr(block, line_end)
+    assert bytes(data) == text.encode("ascii")
     assert rows.format_rows(block, line_end) == text
+    assert rows.format_rows_bytes(block, line_end) == text.encode("ascii")
     assert text.count(line_end) == len(block)
     assert rows.format_rows(block[:0], line_end) == ""
+    assert rows.format_rows_bytes(block[:0], line_end) == b""
 
 
 @compiled
@@ -235,7 +238,10 @@ def test_rows_the_compiled_formatter_leaves_to_repr():
     assert rows._format_rows_compiled(block[:1], "\n") is None
     assert rows.format_rows(block, "\n") == rows._format_rows_repr(block, "\n")
     assert rows.format_rows(block, "\n").startswith("100000000000000000000,")
-    assert rows._format_rows_compiled(block[1:2], "\n") == rows._format_rows_repr(block[1:2], "\n")
+    assert bytes(rows._format_rows_compiled(block[1:2], "\n")) == (
+        rows._format_rows_repr(block[1:2], "\n").encode("ascii")
+    )
+    assert rows.format_rows_bytes(block, "\n") == rows._format_rows_repr(block, "\n").encode()
     assert f",{REGIMES[-1]}," in rows.format_rows(block[1:2], "\n")
     # a code int() cannot convert raises as it always did
     block[2, 10] = math.nan
@@ -259,9 +265,9 @@ def test_format_rows_is_the_repr_path_on_a_run():
         dtype=np.float64,
     )
     assert block.shape == (2000, NCOL)
-    text = rows._format_rows_compiled(block, "\n")
-    assert text is not None
-    assert text == rows._format_rows_repr(block, "\n")
+    data = rows._format_rows_compiled(block, "\n")
+    assert data is not None
+    assert bytes(data) == rows._format_rows_repr(block, "\n").encode("ascii")
 
 
 @compiled

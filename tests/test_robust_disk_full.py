@@ -84,8 +84,8 @@ def test_a_spill_cut_short_keeps_the_whole_rows_and_resume_keeps_them(
     tmp_path, reference, monkeypatch
 ):
     """The same with rows written between checkpoints because enough are pending
-    (``SPILL_CHARS``): the write that fails is a spill, the checkpoint the first one."""
-    monkeypatch.setattr(stream, "SPILL_CHARS", 3000)
+    (``SPILL_BYTES``): the write that fails is a spill, the checkpoint the first one."""
+    monkeypatch.setattr(stream, "SPILL_BYTES", 3000)
     monkeypatch.setattr(engine, "CHECKPOINT_INTERVAL", 3600.0)
     # the engine hands out rows in chunks of 64 or more: room for a few of them
     disk = cut_short_then_resumed(tmp_path, reference, monkeypatch, budget=60_000 + 17)
