@@ -35,6 +35,9 @@ from collections.abc import Callable, Iterable, Iterator, Sequence
 from dataclasses import dataclass
 from typing import Any
 
+import numpy as np
+
+from billiard import jit as _jit
 from billiard.drive import Drive
 from billiard.errors import BallAtRest, SimulationError
 from billiard.kernels_python import contact as _k
@@ -57,6 +60,23 @@ CONTACT_GAP = _k.CONTACT_GAP
 Vec = tuple[float, ...]
 #: a surface a phase watches, with the engine's warm start of it (updated in place)
 Watched = tuple[Any, list]
+
+
+def _kernel_errors() -> tuple[type, ...]:
+    """The KernelError of the twin, and of the compiled kernels when there are any (a
+    class of their own: the same file loaded as another package)."""
+    if not _jit.ENABLED:
+        return (_L.KernelError,)
+    from billiard.kernels.layout import KernelError
+
+    return (_L.KernelError, KernelError)
+
+
+_KERNEL_ERRORS = _kernel_errors()
+#: phases run by the compiled kernels (else by the twin, interpreted: the same bits)
+COMPILED = _jit.ENABLED
+#: the compiled phase's entry point, by the number of walls it is given
+_ENTRIES: dict[int, Any] = {}
 
 #: why a phase ends, by the kernels' condition index (3: friction; 4 and up: impact)
 _REASONS = ("lift-off", "wall-end", "wall-end")
@@ -106,6 +126,7 @@ class ContactModel:
         self.ctx = self._new_ctx()
         self._query = self._new_ctx()
         self._walls: dict[tuple[int, ...], tuple] = {}
+        self._compiled: dict[tuple[int, ...], tuple] = {}
 
     def _new_ctx(self) -> list[float]:
         ctx = [0.0] * _L.SIZE
@@ -253,14 +274,17 @@ class ContactModel:
         ctx[_L.PH_STEPS] = 0.0
         p = wall.p
         try:
-            _k.begin(ctx, p, walls)
-            status = _k.advance(ctx, p, walls)
-            while status == _L.PHASE_SAMPLE:
-                y = tuple(ctx[_L.PH_SAMPLE_Y : _L.PH_SAMPLE_Y + n_y])
-                on_sample(ctx[_L.PH_SAMPLE_T], y)  # type: ignore[misc]
-                ctx[_L.PH_NEXT] = next(samples, math.inf)
+            if COMPILED:
+                status = self._run_compiled(wall, others, samples, on_sample)
+            else:
+                _k.begin(ctx, p, walls)
                 status = _k.advance(ctx, p, walls)
-        except _L.KernelError as exc:
+                while status == _L.PHASE_SAMPLE:
+                    y = tuple(ctx[_L.PH_SAMPLE_Y : _L.PH_SAMPLE_Y + n_y])
+                    on_sample(ctx[_L.PH_SAMPLE_T], y)  # type: ignore[misc]
+                    ctx[_L.PH_NEXT] = next(samples, math.inf)
+                    status = _k.advance(ctx, p, walls)
+        except _KERNEL_ERRORS as exc:
             raise self._stop(exc) from None
         finally:
             for base, warm in curved:
@@ -277,6 +301,56 @@ class ContactModel:
             reason = "impact"
         end_y = tuple(ctx[_L.PH_END_Y : _L.PH_END_Y + n_y])
         return PhaseEnd(ctx[_L.PH_END_T], reason, end_y, i - 4 if i >= 4 else -1)
+
+    def _run_compiled(
+        self,
+        wall: Any,
+        others: Sequence[Watched],
+        samples: Iterator[float],
+        on_sample: Callable[[float, Vec], None] | None,
+    ) -> int:
+        """The phase set up in ``self.ctx``, run by the compiled kernels
+        (:func:`billiard.kernels.contact.run_phase`) on a float64 copy of it, copied
+        back (also after a stop) so that the rest reads Python floats as before."""
+        ctx = self.ctx
+        n_y = 2 if ctx[_L.PH_MODE] == _L.ROLL else 3
+        walls, entry = self._compiled_walls(wall, others)
+        state = np.array(ctx, dtype=np.float64)
+        p = np.array(wall.p, dtype=np.float64)
+        try:
+            status = entry(state, p, walls, True)
+            while status == _L.PHASE_SAMPLE:
+                y = tuple(state[_L.PH_SAMPLE_Y : _L.PH_SAMPLE_Y + n_y].tolist())
+                on_sample(float(state[_L.PH_SAMPLE_T]), y)  # type: ignore[misc]
+                state[_L.PH_NEXT] = next(samples, math.inf)
+                status = entry(state, p, walls, False)
+        finally:
+            ctx[:] = state.tolist()
+        return status
+
+    def _compiled_walls(self, wall: Any, others: Sequence[Watched]) -> tuple[tuple, Any]:
+        """The phase's wall functions as compiled function values, and the compiled
+        overload's entry point for them (the dispatcher would type the tuple of wall
+        functions anew on every call, tens of microseconds)."""
+        from numba import typeof
+
+        from billiard.kernel_walls import WallFunction
+        from billiard.kernels.contact import run_phase
+
+        functions = self.wall_functions(wall, others)
+        key = tuple(id(f) for f in functions[0])
+        walls = self._compiled.get(key)
+        if walls is None:
+            walls = tuple(tuple(WallFunction(f) for f in row) for row in functions)
+            self._compiled[key] = walls
+        # the wall functions are typed by their signature alone: one overload per count
+        entry = _ENTRIES.get(len(walls[0]))
+        if entry is None:
+            args = (np.zeros(_L.SIZE), np.array(wall.p, dtype=np.float64), walls, True)
+            signature = tuple(typeof(a) for a in args)
+            run_phase.compile(signature)
+            entry = _ENTRIES[len(walls[0])] = run_phase.overloads[signature].entry_point
+        return walls, entry
 
     def _stop(self, exc: Exception) -> SimulationError:
         """The error a kernel's stop stands for, worded as before."""

@@ -16,7 +16,7 @@ import math
 import numpy as np
 import pytest
 
-from billiard import jit
+from billiard import contact_phase, jit
 from billiard import kernels_python as twin
 from billiard.errors import BallAtRest
 from billiard.scene import load_scene, with_values
@@ -40,6 +40,7 @@ def _capture(monkeypatch, scene, impacts: int, most: int, sample: float | None =
         return begin(ctx, p, walls)
 
     monkeypatch.setattr(twin.contact, "begin", capture)
+    monkeypatch.setattr(contact_phase, "COMPILED", False)  # phases through the twin
     sim = Simulation(scene)
     until = scene.run.duration or math.inf
     if sample is not None:
@@ -123,3 +124,46 @@ def test_phases_are_the_same_interpreted_and_compiled(monkeypatch):
             assert got == expected
             replayed += 1
     assert replayed >= 300
+
+
+@compiled
+@pytest.mark.parametrize("case", [0, 1, 3])
+def test_the_engine_runs_phases_compiled_to_the_same_records(case, monkeypatch):
+    """ContactModel runs its phases through the compiled entry (run_phase) when the
+    kernels are compiled: the engine's impacts, finished phases and samples are those of
+    the twin's phases, to the last bit."""
+    scene, impacts, _, sample, _ = _cases()[case]
+
+    def run(compiled: bool):
+        monkeypatch.setattr(contact_phase, "COMPILED", compiled)
+        calls = []
+        entry = contact_phase.ContactModel._run_compiled
+
+        def counted(self, *args):
+            calls.append(1)
+            return entry(self, *args)
+
+        monkeypatch.setattr(contact_phase.ContactModel, "_run_compiled", counted)
+        sim = Simulation(scene)
+        out = {"records": [], "contacts": [], "samples": []}
+        sim.on_contact = out["contacts"].append
+        if sample is not None:
+            sim.sample_dt = sample
+            sim.on_sample = lambda *row: out["samples"].append(row)
+        until = scene.run.duration or math.inf
+        for _ in range(min(impacts, 1500)):
+            record = sim.step(until=until)
+            if record is None:
+                break
+            out["records"].append(record)
+        monkeypatch.undo()
+        return out, len(calls)
+
+    twin_run, twin_calls = run(False)
+    compiled_run, compiled_calls = run(True)
+    assert twin_calls == 0 and compiled_calls > 0
+    assert compiled_run["contacts"] or compiled_run["samples"]  # phases made something
+    for key in ("records", "contacts", "samples"):
+        # repr: every float to the last bit, and a numpy scalar would show as one
+        got = [repr(tuple(r)) for r in compiled_run[key]]
+        assert got == [repr(tuple(r)) for r in twin_run[key]], key
