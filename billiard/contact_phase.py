@@ -47,7 +47,7 @@ from billiard.kernels_python import layout as _L
 from billiard.kernels_python import stop as _stop
 from billiard.status import Status
 
-__all__ = ["CONTACT_MODES", "ContactModel", "PhaseEnd", "Watched", "first_root", "skip_periods"]
+__all__ = ["CONTACT_MODES", "ContactModel", "PhaseEnd", "Watched"]
 
 #: the contact modes (motion states other than flight)
 CONTACT_MODES = ("roll", "slide")
@@ -123,12 +123,14 @@ class ContactModel:
         self.steps = 0
         # the kernels' state vector of a phase, and one for single force evaluations
         # (a query between two calls of a phase must not touch the phase's state)
-        self.ctx = self._new_ctx()
-        self._query = self._new_ctx()
+        self.ctx = self.new_ctx()
+        self._query = self.new_ctx()
         self._walls: dict[tuple[int, ...], tuple] = {}
         self._compiled: dict[tuple[int, ...], tuple] = {}
 
-    def _new_ctx(self) -> list[float]:
+    def new_ctx(self) -> list[float]:
+        """A state vector of the kernels (a list) with this scene's drive and contact
+        constants set (a phase's, and a hold's in :mod:`billiard.vertex`)."""
         ctx = [0.0] * _L.SIZE
         ctx[_L.AMP] = float(self.drive.amplitude)
         ctx[_L.OMEGA] = float(self.drive.omega)
@@ -363,53 +365,3 @@ class ContactModel:
                 Status.SOLVER_FAILED,
             )
         return _stop(exc, self.ctx)
-
-
-def skip_periods(
-    tau: float,
-    limit: float,
-    period: float,
-    y: Any,
-    next_sample: float,
-    samples: Iterator[float],
-    on_sample: Callable[[float, Any], None] | None,
-) -> tuple[float, float]:
-    """Skip the whole drive periods (s) left before ``limit`` of a state at rest relative
-    to the boundary; report the samples in the skipped span at that state. Returns the
-    new time and the next sample time."""
-    whole = math.floor((limit - tau) / period)
-    if whole < 1:
-        return tau, next_sample
-    tau += whole * period
-    while next_sample <= tau:
-        if on_sample is not None:
-            on_sample(next_sample, y)
-        next_sample = next(samples, math.inf)
-    return tau, next_sample
-
-
-def first_root(fn: Callable[[float], float], a: float, b: float, fa: float) -> float:
-    """The first time in (a, b] where fn, positive at a (or zero and falling), reaches
-    zero or below: Illinois regula falsi, to EVENT_TOL."""
-    fb = fn(b)
-    if fa <= 0.0:
-        return a
-    side = 0
-    for _ in range(200):
-        if b - a <= EVENT_TOL:
-            break
-        m = b - fb * (b - a) / (fb - fa) if fb != fa else 0.5 * (a + b)
-        if not a < m < b:
-            m = 0.5 * (a + b)
-        fm = fn(m)
-        if fm > 0.0:
-            a, fa = m, fm
-            if side == -1:
-                fb *= 0.5
-            side = -1
-        else:
-            b, fb = m, fm
-            if side == 1:
-                fa *= 0.5
-            side = 1
-    return b

@@ -4,7 +4,8 @@ second time as the package ``billiard.kernels_py``, in which every decorator of
 (whether numba is there or not) and the generated equations are the generated functions.
 
 The runtime's classes (:mod:`billiard.flight`, :mod:`billiard.surfaces`,
-:mod:`billiard.events`, :mod:`billiard.impact`) call these one gap or one step at a
+:mod:`billiard.events`, :mod:`billiard.impact`, :mod:`billiard.contact_phase`,
+:mod:`billiard.vertex`) call these one gap or one step at a
 time, over a state vector ``ctx`` that is a list of Python floats: a compiled kernel
 called from Python costs tens of microseconds per call (numba types the tuple of wall
 functions at each call), a plain function call under a microsecond. One source, run
@@ -38,6 +39,7 @@ __all__ = [
     "locate",
     "stop",
     "surfaces",
+    "vertex",
 ]
 
 #: the twin's package name
@@ -79,6 +81,7 @@ impact = _load("impact")
 contact_equations = _load("contact_equations")
 contact_forces = _load("contact_forces")
 contact = _load("contact")
+vertex = _load("vertex")
 
 #: the documented stops of the kernels the classes call, worded as the engine words them
 _TEXTS = {

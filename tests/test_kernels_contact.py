@@ -7,7 +7,10 @@ The phases are captured where the engine begins them (the twin's ``begin``: the 
 vector, the parameters and the wall functions then), and run again from there, once
 through the twin and once compiled, with sample times every ``SAMPLE_DT`` seconds so
 that the resumable path runs too; after every return the whole state vector must be the
-same bytes, and a stop the same code."""
+same bytes, and a stop the same code.
+
+The holds by two walls (``billiard.kernels.vertex``, which
+:class:`billiard.vertex.VertexHold` runs) are captured and replayed the same way."""
 
 from __future__ import annotations
 
@@ -28,21 +31,32 @@ L = twin.layout
 SAMPLE_DT = 2.5e-3
 
 
-def _capture(monkeypatch, scene, impacts: int, most: int, sample: float | None = None):
-    """The first ``most`` phases a run of ``scene`` (to its ``run.duration``) begins:
-    (ctx, p, walls) each."""
+def _capture(
+    monkeypatch,
+    scene,
+    impacts: int,
+    most: int,
+    sample: float | None = None,
+    module=twin.contact,
+    until: float | None = None,
+):
+    """The first ``most`` phases (or holds: ``module`` the twin's ``vertex``) a run of
+    ``scene`` to ``until`` (default its ``run.duration``) begins: the arguments of
+    ``begin`` each, the state vector copied ((ctx, p, walls) of a phase, (ctx,) of a
+    hold)."""
     phases = []
-    begin = twin.contact.begin
+    begin = module.begin
 
-    def capture(ctx, p, walls):
+    def capture(ctx, *args):
         if len(phases) < most:
-            phases.append((list(ctx), p, walls))
-        return begin(ctx, p, walls)
+            phases.append((list(ctx), *args))
+        return begin(ctx, *args)
 
-    monkeypatch.setattr(twin.contact, "begin", capture)
+    monkeypatch.setattr(module, "begin", capture)
     monkeypatch.setattr(contact_phase, "COMPILED", False)  # phases through the twin
     sim = Simulation(scene)
-    until = scene.run.duration or math.inf
+    if until is None:
+        until = scene.run.duration or math.inf
     if sample is not None:
         sim.sample_dt = sample
         sim.on_sample = lambda *row: None
@@ -167,3 +181,119 @@ def test_the_engine_runs_phases_compiled_to_the_same_records(case, monkeypatch):
         # repr: every float to the last bit, and a numpy scalar would show as one
         got = [repr(tuple(r)) for r in compiled_run[key]]
         assert got == [repr(tuple(r)) for r in twin_run[key]], key
+
+
+# ---------------------------------------------------------------- holds by two walls
+
+
+def _replay_hold(module, layout, ctx, dt: float) -> list:
+    """Run a captured hold to its end with samples every ``dt`` seconds: after every
+    return the status and the state vector's bytes (a stop: its code and the bytes)."""
+    trace = []
+    ctx[layout.VX_NEXT] = dt
+    try:
+        module.begin(ctx)
+        while True:
+            status = module.advance(ctx)
+            trace.append((status, np.asarray(ctx, dtype=np.float64).tobytes()))
+            if status != layout.PHASE_SAMPLE:
+                break
+            ctx[layout.VX_NEXT] = ctx[layout.VX_SAMPLE_T] + dt
+    except layout.KernelError as exc:
+        trace.append(("stop", exc.args[0], np.asarray(ctx, dtype=np.float64).tobytes()))
+    return trace
+
+
+def _hold_cases():
+    """(scene, until, impacts, holds, the run's sample interval, the replay's) of each
+    run, the wedge's vertex scenes of ``tests/test_validation_vertex.py``: at rest on a
+    static wedge (a stop), spinning on it (the spin stops at a known time; a time
+    limit), shaken so that a wall releases the ball (with and without drag), spinning
+    in a shaken wedge (the spin stops within a step; released or, shaken gently, whole
+    drive periods skipped before the time limit, or at rest for good without one), a
+    ball that rolls into the vertex from a wall; and, for many holds, a wedge shaken
+    just hard enough to release the ball (Gamma = 1.2, inelastic: it comes back into
+    the vertex and is held again twice a period, released by either wall), with and
+    without drag."""
+    from test_validation_contact import G, R, scene
+    from test_validation_vertex import B, wedge
+
+    from billiard.scene import with_values
+
+    w = 2 * math.pi * 5.0
+    drag = {"air.drag": "fowles", "air.c_lin": 5e-5, "air.c_quad": 1e-4}
+
+    def shaken(gamma):
+        amplitude = gamma * G * B / w**2
+        drive = {"amplitude": amplitude, "frequency": 5.0, "direction": "horizontal"}
+        return amplitude, drive
+
+    def spinning(gamma, spin, restitution=0.5):
+        amplitude, drive = shaken(gamma)
+        contact = {"mu_static": 0.3, "mu_kinetic": 0.2, "restitution": restitution}
+        return wedge(contact, {"v1": amplitude * w, "omega": spin}, drive)
+
+    frictionless = {"mu_static": 0.0, "mu_kinetic": 0.0}
+    amplitude, drive = shaken(1.5)
+    dragged = with_values(wedge(frictionless, {"v1": amplitude * w}, drive), drag)
+    amplitude3, drive3 = shaken(3.0)
+    beta = math.atan(B)
+    rolling_in = scene(
+        "wedge", {"b": B, "c": 0.0}, {"restitution": 0.5},
+        {"q1": 0.01, "q2": B * 0.01 + R / math.cos(beta), "v1": 0.0, "v2": 0.0},
+    )  # fmt: skip
+    static_spin = wedge({"mu_static": 0.4, "mu_kinetic": 0.3}, {"omega": -80.0})
+    inf = math.inf
+    return [
+        (wedge(), inf, 5, 5, None, SAMPLE_DT),
+        (static_spin, 0.2, 5, 5, 0.004, SAMPLE_DT),
+        (wedge(frictionless, {"v1": amplitude * w}, drive), 1.0, 400, 40, None, SAMPLE_DT),
+        (wedge(frictionless, {"v1": amplitude3 * w}, drive3), 1.0, 400, 40, 0.004, 1e-3),
+        (dragged, 1.0, 400, 40, None, 1e-3),
+        (spinning(2.0, 5.0), 1.0, 400, 40, 0.004, SAMPLE_DT),
+        (spinning(0.6, 400.0), 1.0, 5, 5, None, SAMPLE_DT),
+        (spinning(0.8, -300.0), inf, 5, 5, None, SAMPLE_DT),
+        (rolling_in, inf, 5000, 5, None, SAMPLE_DT),
+        (spinning(1.2, 5.0, 0.3), 6.0, 3000, 60, 0.004, 1e-3),
+        (with_values(spinning(1.2, -50.0, 0.3), drag), 6.0, 3000, 60, None, SAMPLE_DT),
+    ]
+
+
+def _captured_holds(monkeypatch):
+    for scene, until, impacts, most, sample, dt in _hold_cases():
+        holds = _capture(monkeypatch, scene, impacts, most, sample, twin.vertex, until)
+        for (ctx,) in holds:
+            yield ctx, dt
+
+
+def test_captured_holds_cover_the_kernel_paths(monkeypatch):
+    """The holds replayed below end in every way the kernel can end one, and go through
+    its samples, skipped periods and a static boundary's spin stop."""
+    seen = set()
+    for ctx, dt in _captured_holds(monkeypatch):
+        for entry in _replay_hold(twin.vertex, L, list(ctx), dt):
+            seen.add(entry[0] if entry[0] != "stop" else ("stop", entry[1]))
+            values = np.frombuffer(entry[-1])
+            if entry[0] == L.PHASE_END:
+                seen.add(("keeps", int(values[L.VX_KEEPS])))
+            if entry[0] == L.PHASE_SAMPLE and values[L.VX_STAGE] == L.STAGE_SKIP:
+                seen.add("skipped")
+            if math.isfinite(values[L.VX_STOPS]):
+                seen.add("stops")
+    assert {L.PHASE_SAMPLE, L.PHASE_END, L.PHASE_LIMIT, ("stop", L.E_AT_REST)} <= seen
+    assert {("keeps", 0), ("keeps", 1), "skipped", "stops"} <= seen
+
+
+@compiled
+def test_holds_are_the_same_interpreted_and_compiled(monkeypatch):
+    from billiard.kernels import layout as layout
+    from billiard.kernels import vertex as kernel
+
+    assert hasattr(kernel.advance, "py_func")  # compiled: a numba dispatcher
+    replayed = 0
+    for ctx, dt in _captured_holds(monkeypatch):
+        expected = _replay_hold(twin.vertex, L, list(ctx), dt)
+        got = _replay_hold(kernel, layout, np.asarray(ctx, dtype=np.float64), dt)
+        assert got == expected
+        replayed += 1
+    assert replayed >= 100

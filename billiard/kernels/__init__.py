@@ -16,6 +16,8 @@ One concept per module:
   transition functions;
 * :mod:`~billiard.kernels.contact`: a rolling or sliding phase on one wall, resumable
   at sample times;
+* :mod:`~billiard.kernels.vertex`: a hold by two walls (the ball in a vertex), resumable
+  at sample times;
 * :mod:`~billiard.kernels.loop`: one impact, and ``run_chunk`` (up to N impacts into a
   preallocated array).
 

@@ -164,7 +164,33 @@ STAGE_STEP = 0.0  # take the next step
 STAGE_EMIT = 1.0  # hand out the samples up to the step's end, then end or go on
 STAGE_SKIP = 2.0  # hand out the samples of skipped drive periods at rest
 
-SIZE = PH_END
+# --- a hold by two walls (the ball in a vertex: only its spin moves) --------------
+# Its inputs, the hold's state between calls (resumable at sample times, as a phase),
+# and what the last step found. The constants are the phase's (PH_M .. PH_MUK) and the
+# drive's. Kernels: vertex.py.
+VX = PH_END
+VX_ZA = VX  # tangent angles (rad) of the two walls at their contact points
+VX_ZB = VX + 1
+VX_THETA0 = VX + 2  # drive angle at the hold's start (rad)
+VX_LIMIT = VX + 3  # longest duration (s; inf: none)
+VX_STAGE = VX + 4  # where the hold goes on: STAGE_STEP, STAGE_EMIT, STAGE_SKIP
+VX_TAU = VX + 5  # time since the hold's start (s)
+VX_W = VX + 6  # spin u3 at VX_TAU (rad/s); the spin at the start before begin()
+VX_SIGMA = VX + 7  # its sign (0: no spin, no kinetic friction)
+VX_H = VX + 8  # longest step: 1/64 drive period (inf on a static boundary)
+VX_RSPAN = VX + 9  # rest span: a drive period (0 on a static boundary)
+VX_RSINCE = VX + 10  # without spin since (s; inf: spinning)
+VX_NEXT = VX + 11  # next sample time (s; inf: none)
+VX_STOPS = VX + 12  # the last step: when a static boundary stops the spin (s; inf: no)
+VX_END_T = VX + 13  # ... its end (s): a release, the time limit or the step's end
+VX_KEEPS = VX + 14  # ... the wall still pressing after a release (0, 1; -1 neither;
+#                        -2: no release)
+VX_W_END = VX + 15  # ... the spin at VX_END_T (rad/s)
+VX_SAMPLE_T = VX + 16  # a sample handed out: time (s) and spin (rad/s)
+VX_SAMPLE_W = VX + 17
+VX_END = VX + 18
+
+SIZE = VX_END
 
 # --- rows ---------------------------------------------------------------------------
 # one row per impact, the columns of collisions.csv in order; regime and wall as codes
@@ -185,6 +211,9 @@ COLLAPSE = 3  # an inelastic collapse after the last row
 PHASE_END = 0  # a transition ends the phase: PH_END_T, PH_END_I, PH_END_Y
 PHASE_LIMIT = 1  # the time limit came first: the state is PH_Y at PH_LIMIT
 PHASE_SAMPLE = 2  # a sample at PH_SAMPLE_T: PH_SAMPLE_Y; set PH_NEXT and call again
+# a hold (vertex.advance) returns the same three: PHASE_END a release (VX_END_T,
+# VX_KEEPS, VX_W_END), PHASE_LIMIT the time limit (VX_W_END), PHASE_SAMPLE a sample
+# (VX_SAMPLE_T, VX_SAMPLE_W; set VX_NEXT and call again)
 
 # --- KernelError codes --------------------------------------------------------------
 E_ESCAPED = 1
@@ -196,7 +225,7 @@ E_INVERSION = 6
 E_NON_FINITE = 7
 E_COLLAPSE = 8
 E_PHASE_STEPS = 9  # a contact phase's step-size control failed
-E_AT_REST = 10  # at rest relative to the boundary for good: from PH_RSINCE
+E_AT_REST = 10  # at rest relative to the boundary for good: from PH_RSINCE (a hold: VX_RSINCE)
 
 
 class KernelError(Exception):
