@@ -280,52 +280,41 @@ stops for another reason (an inelastic collapse, the impact cap) is measured ove
 time it reached and not compared.
 """
 
-CONTACT_AFTER = """Why the ratios are what they are (the step counts are from `cProfile` runs of the
-same cases, 30 s of simulated time):
+CONTACT_AFTER = """Why the ratios are what they are. Both models run on compiled pieces where the
+engine has them: the impact model's whole loop is compiled (`run_chunk`), while under
+"phases" a rolling or sliding phase is compiled (`kernels/contact.py`, one call per
+phase and sample) but the flights between phases, the landing and lift-off logic and
+the holds in a vertex run interpreted on the classes (`docs/compiled-engine.md`, "What
+remains").
 
-* **A ball at rest** (bowl at rest, the floor after the drop): the impact model relaunches
-  it about 490 times per simulated second, each hop a flight whose impact is located
-  like any other (65-80 us per hop). Under "phases" the ball lies in one rolling
-  phase; on a static boundary the phase's step grows fivefold per step when the error
-  estimate is zero, so the whole run takes a handful of steps (3 for 30 s) and its cost
-  hardly depends on the duration: the ratio grows with the simulated time and is not
-  a constant. The slide down the steep wall is one sliding phase against about 180 hops
-  per second.
-* **Rolling oscillations in the bowl**: the phase is integrated with Dormand-Prince 5(4)
-  at the scene's `run.rtol` (1e-10, the flights' tolerance): about 500 steps per
-  simulated second, each with six right-hand-side calls and the end conditions (normal
-  force, friction cone, wall interval), 35-40 us per step in Python. The impact
-  model's 580 hops per second cost about twice as much: 2x, not 10x.
-* **The shaken table** (Gamma = 0.9): on a driven boundary a step is at most 1/20 of the
-  drive period, so that the end conditions, which the drive moves, cannot change sign
-  twice unseen within a step: 400 steps per simulated second at 20 Hz, against the
-  impact model's 580 hops. Within a factor 1.5 of the same cost.
-* **The paper scenes**: in the wedge and the hyperbola at 5.8 Hz most *impacts* are
-  relaunches of a resting ball (60-70 %), but most of the *CPU* goes to the long flights
-  between them; the hops are short exact parabolas, cheap to locate. Under "phases" the
-  ball is in contact a few per cent of the time, and each contact phase takes about 8
-  steps of at most 1/20 of the drive period plus the root search of its end (profiled
-  on the wedge): dropping two thirds or more of the impacts saves about what the phases
-  cost, and the ratio is near 1 either way. In the parabola and the hyperbola at 4.5 Hz the ball is
-  in contact only in the first second, before it settles on its stable orbit: the two
-  models cost the same. In the chaotic scenes the two models follow different
-  trajectories after the first contact, so their ratio compares two samples of the same
-  attractor; with the machine's load it moves by tens of per cent from one measurement
-  to the next (see the ratio of each repeat's pair, and the quick mode's 60 s runs).
-* **The ball in the wedge's vertex** cannot be held by "phases": a contact phase is on
-  one wall at a time, and in the vertex a rolling phase on one wall ends at once at an
-  impact on the other, whose rebound is below the landing speed, so a phase starts on
-  that wall and ends at once too; 200 such impacts within 1e-6 s trip the
-  inelastic-collapse stop, at t = 0 for the ball at rest in the vertex (a ball dropped
-  1 mm into the vertex does the same after 0.02 s). The engine has no contact mode for
-  a ball wedged between two walls. The driven wedge scene did not run into it in these
-  runs (its runs reached their duration).
+* **A ball at rest** (bowl at rest, the floor after the drop, the vertex): the impact
+  model relaunches it about 490 times per simulated second, each hop a located flight.
+  Under "phases" the ball lies in one rolling phase (or one hold in the vertex); on a
+  static boundary the phase's step grows fivefold per step when the error estimate is
+  zero, so the whole run takes a handful of steps and its cost hardly depends on the
+  duration: the ratio grows with the simulated time and is not a constant.
+* **Rolling oscillations in the bowl, the slide down the steep wall**: the phase is
+  integrated with Dormand-Prince 5(4) at the scene's `run.rtol` (1e-10, the flights'
+  tolerance), about 500 steps per simulated second in the bowl, each with six
+  right-hand-side calls and the end conditions. Compiled, that is a few times cheaper
+  than the compiled hops it replaces, not ten times: the phase's cost is its step count.
+* **The shaken table** (Gamma = 0.9): a step is at most 1/20 of the drive period, so that
+  the end conditions, which the drive moves, cannot change sign twice unseen within a
+  step; at rest relative to the table whole drive periods are skipped.
+* **The paper scenes**: most of the CPU goes to the long flights between contacts, which
+  "phases" locates on the interpreted classes and the impact model on the compiled
+  loop: the ratio measures that difference (tens of times), not the phases. Interpreted
+  both (before the engine was compiled) the two models cost about the same here: the
+  impacts the phases drop save about what the phases cost. In the chaotic scenes the two
+  models follow different trajectories after the first contact, so their ratio compares
+  two samples of the same attractor and moves by tens of per cent from one measurement
+  to the next.
 
 The target of 10x therefore holds where a contact phase replaces hops of a ball that
-lies still or slides on a static wall, and not where the phase itself must be integrated
-finely (rolling oscillations, a shaken wall) or where the hops are a small part of the
-work (the paper scenes). A looser error tolerance for contact phases than for flights,
-or the closed-form motion where the equations have one (a static straight wall:
-constant acceleration), would cut the step counts above; they are suggestions, not
-measured.
+lies still, slides or is held on a wall, and not where the phase itself must be
+integrated finely (rolling oscillations, a long slide) or where the flights around the
+phases, still interpreted, are most of the work (the paper scenes). Compiling the
+engine's phase loop (flights, landing and holds on the kernels) is what would move the
+paper scenes; a looser error tolerance for contact phases than for flights would cut the
+step counts; neither is measured here.
 """
