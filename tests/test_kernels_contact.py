@@ -70,19 +70,22 @@ def _capture(
     return phases
 
 
-def _replay(module, layout, ctx, p, walls, dt: float) -> list:
-    """Run a captured phase to its end with samples every ``dt`` seconds: after every
-    return the status and the state vector's bytes (a stop: its code and the bytes)."""
+def _replay(module, layout, ctx, args, dt: float, slots: str = "PH") -> list:
+    """Run a captured phase (``args`` = (p, walls)) or hold (``args`` = (), ``slots``
+    "VX") to its end with samples every ``dt`` seconds: after every return the status
+    and the state vector's bytes (a stop: its code and the bytes)."""
+    next_slot = getattr(layout, f"{slots}_NEXT")
+    sample_t = getattr(layout, f"{slots}_SAMPLE_T")
     trace = []
-    ctx[layout.PH_NEXT] = dt
+    ctx[next_slot] = dt
     try:
-        module.begin(ctx, p, walls)
+        module.begin(ctx, *args)
         while True:
-            status = module.advance(ctx, p, walls)
+            status = module.advance(ctx, *args)
             trace.append((status, np.asarray(ctx, dtype=np.float64).tobytes()))
             if status != layout.PHASE_SAMPLE:
                 break
-            ctx[layout.PH_NEXT] = ctx[layout.PH_SAMPLE_T] + dt
+            ctx[next_slot] = ctx[sample_t] + dt
     except layout.KernelError as exc:
         trace.append(("stop", exc.args[0], np.asarray(ctx, dtype=np.float64).tobytes()))
     return trace
@@ -113,7 +116,7 @@ def test_captured_phases_cover_the_kernel_paths(monkeypatch):
     seen = set()
     for scene, impacts, most, sample, dt in _cases():
         for ctx, p, walls in _capture(monkeypatch, scene, impacts, most, sample):
-            for entry in _replay(twin.contact, L, list(ctx), p, walls, dt):
+            for entry in _replay(twin.contact, L, list(ctx), (p, walls), dt):
                 seen.add(entry[0] if entry[0] != "stop" else ("stop", entry[1]))
                 if entry[0] == L.PHASE_END:
                     seen.add(("end", int(np.frombuffer(entry[1])[L.PH_END_I])))
@@ -131,10 +134,10 @@ def test_phases_are_the_same_interpreted_and_compiled(monkeypatch):
     replayed = 0
     for scene, impacts, most, sample, dt in _cases():
         for ctx, p, walls in _capture(monkeypatch, scene, impacts, most, sample):
-            expected = _replay(twin.contact, L, list(ctx), p, walls, dt)
+            expected = _replay(twin.contact, L, list(ctx), (p, walls), dt)
             typed = tuple(tuple(WallFunction(fn) for fn in row) for row in walls)
             values = np.asarray(ctx, dtype=np.float64)
-            got = _replay(kernel, layout, values, np.asarray(p, dtype=np.float64), typed, dt)
+            got = _replay(kernel, layout, values, (np.asarray(p, dtype=np.float64), typed), dt)
             assert got == expected
             replayed += 1
     assert replayed >= 300
@@ -187,21 +190,8 @@ def test_the_engine_runs_phases_compiled_to_the_same_records(case, monkeypatch):
 
 
 def _replay_hold(module, layout, ctx, dt: float) -> list:
-    """Run a captured hold to its end with samples every ``dt`` seconds: after every
-    return the status and the state vector's bytes (a stop: its code and the bytes)."""
-    trace = []
-    ctx[layout.VX_NEXT] = dt
-    try:
-        module.begin(ctx)
-        while True:
-            status = module.advance(ctx)
-            trace.append((status, np.asarray(ctx, dtype=np.float64).tobytes()))
-            if status != layout.PHASE_SAMPLE:
-                break
-            ctx[layout.VX_NEXT] = ctx[layout.VX_SAMPLE_T] + dt
-    except layout.KernelError as exc:
-        trace.append(("stop", exc.args[0], np.asarray(ctx, dtype=np.float64).tobytes()))
-    return trace
+    """:func:`_replay` of a captured hold (its sample slots are the VX_* ones)."""
+    return _replay(module, layout, ctx, (), dt, "VX")
 
 
 def _hold_cases():

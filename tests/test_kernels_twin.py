@@ -28,6 +28,7 @@ MODULES = (
     "loop",
     "contact",
     "contact_forces",
+    "illinois",
     "vertex",
 )
 

@@ -25,6 +25,7 @@ import math
 
 from .borrow import borrow, inline, jit
 from .contact_forces import at_rest, conditions, n_conditions, n_y, rhs
+from .illinois import narrow, secant_point
 from .layout import (
     AMP,
     E_AT_REST,
@@ -167,20 +168,9 @@ def first_root(ctx, p, walls, i, a, b, fa):
     for _ in range(200):
         if b - a <= EVENT_TOL:
             break
-        m = b - fb * (b - a) / (fb - fa) if fb != fa else 0.5 * (a + b)
-        if not a < m < b:
-            m = 0.5 * (a + b)
+        m = secant_point(a, b, fa, fb)
         fm = condition_at(ctx, p, walls, i, m)
-        if fm > 0.0:
-            a, fa = m, fm
-            if side == -1:
-                fb *= 0.5
-            side = -1
-        else:
-            b, fb = m, fm
-            if side == 1:
-                fa *= 0.5
-            side = 1
+        a, b, fa, fb, side = narrow(a, b, fa, fb, m, fm, side)
     return b
 
 
