@@ -232,7 +232,7 @@ PROFILE_AFTER = """Where the time goes now, and what would make it shorter:
    kernels' caches load only numba's runtime (`billiard/jit.py`), as the machine code
    needs nothing else. A run of 25,000 impacts still spends more time starting than
    simulating (section 4).
-3. **Writing rows**: a streamed run formats its rows compiled (`kernels/float_text.py`,
+3. **Writing rows**: a streamed run formats its rows compiled (`kernels/ryu.py`,
    Ryu's shortest digits laid out as `repr` lays them out, byte for byte), about 1 us
    per row against 12-16 us for `repr`: about as long as the compiled wedge takes to
    compute the impact; then the file's write.
