@@ -27,6 +27,7 @@ from billiard.boundary import Boundary, Drive
 from billiard.checkpoint import CheckpointError
 from billiard.contact_phase import ContactModel
 from billiard.curves import load_curve
+from billiard.engine_flights import fly
 from billiard.engine_kernels import KernelEngine, supports
 from billiard.engine_phases import (
     COLLAPSE_COUNT,
@@ -129,6 +130,10 @@ class Simulation(ContactPhases, EventStep):
         self.reset()
         if supports(self) is None:
             self._kernel = KernelEngine(self)
+        #: contact phases: the kernels that run the flights between them (see fly)
+        self._flights: KernelEngine | None = None
+        if self.phases and supports(self, flights=True) is None:
+            self._flights = KernelEngine(self)
 
     # ------------------------------------------------------------------ set-up
 
@@ -393,11 +398,26 @@ class Simulation(ContactPhases, EventStep):
         self.status = None
         reason: str | None = None
         status = Status.COMPLETE
+        # the flights between contact phases run on the kernels, as long as nothing
+        # needs the classes (trajectory samples, an impact law replaced)
+        flights = self._flights
+        if flights is not None and (self.on_sample is not None or self.impact is not flights.law):
+            flights = None
         try:
             while self._impacts < collisions:
                 # a signal arrived: stop here, where the state matches the records exactly
                 if request.signum:
                     raise RunInterrupted(request.signum)
+                if flights is not None and self._mode == "flight" and self._fault is None:
+                    ended = fly(
+                        self, flights, collisions, recorder, progress, checkpoint, request,
+                        until, on_record, next_save,
+                    )  # fmt: skip
+                    next_save = flights.next_save
+                    if ended is not None:
+                        status, reason = ended
+                        break
+                    continue
                 record = self.step(until)
                 if record is None:
                     status = Status.TIME_LIMIT

@@ -47,12 +47,13 @@ _FAST_CHUNK = 0.05
 _PROGRESS_EVERY = 100
 
 
-def supports(sim: Any) -> str | None:
-    """None when ``sim`` runs on the kernels, else why not."""
+def supports(sim: Any, *, flights: bool = False) -> str | None:
+    """None when ``sim`` runs on the kernels (``flights``: its flights between contact
+    phases, under ``contact.model = "phases"``), else why not."""
     if sim.method != "event":
         return f"method {sim.method!r} (the kernels have the event locator only)"
-    if sim.phases:
-        return "contact.model = 'phases' (the kernels have impacts only)"
+    if sim.phases and not flights:
+        return "contact.model = 'phases' (the kernels run its flights only)"
     if len(sim.boundary.surfaces) > L.MAX_SURFACES:
         return f"more than {L.MAX_SURFACES} surfaces"
     if type(sim.impact).__name__ != "KaneLevinsonImpact":
@@ -85,7 +86,14 @@ class KernelEngine:
             self.params: Any = np.array(p, dtype=np.float64)
         else:
             self.ctx, self.params = values, p
+        if sim.phases:
+            # a chunk ends after an impact that settles: the engine lands the ball
+            self.ctx[L.EN_LAND_ON] = 1.0
+            self.ctx[L.EN_LAND_E] = sim.contact_model.e
+            self.ctx[L.EN_LAND_BELOW] = sim.scene.contact.elastic_below
         self.offsets = len(sim.boundary.offsets)
+        #: when the next checkpoint is due (time.monotonic), as the latest run left it
+        self.next_save = math.inf
         self.adaptive = self.ctx[L.FL_KIND] == L.FLIGHT_ADAPTIVE
         self._buffer: Any = None
         self._walls: Any = None
@@ -266,13 +274,25 @@ class KernelEngine:
         request: StopRequest,
         until: float,
         on_record: Callable[[int], None] | None,
-    ) -> tuple[Status, str | None]:
-        """``Simulation.run`` in chunks; returns (status, stop reason)."""
+        *,
+        next_save: float | None = None,
+        final_progress: bool = True,
+    ) -> tuple[Status | None, str | None]:
+        """``Simulation.run`` in chunks; returns (status, stop reason). Under contact
+        phases the run also ends after an impact that settles, with status None: the
+        engine puts the ball in contact (and takes no checkpoint before that).
+
+        Args:
+            next_save: when the first checkpoint is due (``time.monotonic``; default a
+                checkpoint interval from now); the run leaves the next in ``next_save``.
+            final_progress: report progress when the run ends.
+        """
         sim, ctx = self.sim, self.ctx
         sink = rows_sink(recorder)
         monotonic = time.monotonic
         interval = _checkpoint_interval() if checkpoint is not None else math.inf
-        next_save = monotonic() + interval
+        if next_save is None:
+            next_save = monotonic() + interval
         # chunks end at least as often as checkpoints are asked for (every impact when
         # the interval is zero): a checkpoint is taken at the end of a chunk
         fast = min(_FAST_CHUNK, interval)
@@ -310,6 +330,9 @@ class KernelEngine:
                     status = Status.TIME_LIMIT
                     sim.final_time = until
                     break
+                if code == L.LAND:
+                    status = None
+                    break
                 if checkpoint is not None and monotonic() >= next_save:
                     checkpoint(sim.state)
                     next_save = monotonic() + interval
@@ -322,7 +345,8 @@ class KernelEngine:
             # a ball at rest ends the run complete: a status, not a stop reason
             status, reason = exc.status, None if exc.status.finished else str(exc)
         finally:
-            if progress is not None:
+            self.next_save = next_save
+            if progress is not None and final_progress:
                 progress(self.impacts, collisions)
         return status, reason
 

@@ -74,6 +74,16 @@ EN_FAULT = 66  # 1.0: a collapse was detected after the last impact
 EN_ERR_VALUE = 67
 EN_EVENT_T = 68
 COUNTS = 70  # stick, slip, elastic, resting: 70..73
+# landing (contact.model = "phases"): after an impact on a wall whose rebound settles, the
+# chunk ends (status LAND) so that the engine can put the ball in contact
+EN_LAND_ON = 74  # 1.0: watch for landings; 0.0: impacts only
+EN_LAND_E = 75  # the contact model's restitution
+EN_LAND_BELOW = 76  # the landing speed, contact.elastic_below (m/s)
+EN_SETTLES = 77  # 1.0: the last impact settles (the chunk ended with LAND)
+EN_LAST_J = 78  # the last impact: its surface, ...
+EN_LAST_S = 79  # ... the contact point's parameter s (m) ...
+EN_LAST_WN = 80  # ... the relative normal speed before it (m/s) ...
+EN_LAST_REGIME = 81  # ... and its regime (STICK, SLIP, ELASTIC)
 
 # --- surfaces -----------------------------------------------------------------------
 SURF = 100
@@ -206,6 +216,7 @@ DONE = 0  # the target impact number was reached
 FULL = 1  # the chunk's rows are full
 TIME_LIMIT = 2  # the next impact comes after EN_UNTIL
 COLLAPSE = 3  # an inelastic collapse after the last row
+LAND = 4  # the last row's impact settles on a wall (EN_LAST_J, EN_LAST_S, EN_LAST_WN)
 
 # --- contact phase statuses (contact.advance) --------------------------------------
 PHASE_END = 0  # a transition ends the phase: PH_END_T, PH_END_I, PH_END_Y

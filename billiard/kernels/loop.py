@@ -18,7 +18,7 @@ from billiard.engine_phases import (
 )
 
 from . import flight
-from .ball import energy, frame_velocity
+from .ball import contact_velocity, energy, frame_velocity
 from .borrow import borrow, inline, jit
 from .impact import kane_levinson
 from .layout import (
@@ -29,16 +29,25 @@ from .layout import (
     E_COLLAPSE,
     E_ESCAPED,
     E_NON_FINITE,
+    ELASTIC,
     EN_CLOCK,
     EN_CLOCK_ERR,
     EN_EVENT_T,
     EN_FAULT,
     EN_IMPACTS,
+    EN_LAND_BELOW,
+    EN_LAND_E,
+    EN_LAND_ON,
+    EN_LAST_J,
+    EN_LAST_REGIME,
+    EN_LAST_S,
+    EN_LAST_WN,
     EN_Q1,
     EN_Q2,
     EN_Q3,
     EN_RCOUNT,
     EN_RHEAD,
+    EN_SETTLES,
     EN_T,
     EN_TARGET,
     EN_THETA,
@@ -53,6 +62,7 @@ from .layout import (
     IM_K,
     IM_M,
     IM_R,
+    LAND,
     LID,
     LID_LABEL,
     NCOL,
@@ -182,14 +192,36 @@ def step(ctx, p, walls, out, row):
     ctx[EN_RHEAD] = head
     if count > COLLAPSE_COUNT or ctx[EN_ZERO] >= ZERO_FLIGHT_LIMIT:
         ctx[EN_FAULT] = 1.0
+    if ctx[EN_LAND_ON] != 0.0:
+        settles(ctx, j, kind, s, u1, u2, u3, z, vb1, vb2, regime)
     return True
+
+
+@inline
+def settles(ctx, j, kind, s, u1, u2, u3, z, vb1, vb2, regime):
+    """After an impact on surface j at s with speeds (u1, u2, u3) before it: does the
+    chattering it starts settle (``ContactPhases._settles``: an inelastic contact with a
+    wall whose rebound speed e |wn| is at most the landing speed, or the low-velocity
+    rule applied)? Sets EN_SETTLES and the impact's EN_LAST_J, EN_LAST_S, EN_LAST_WN,
+    EN_LAST_REGIME."""
+    wt, wn = contact_velocity(u1, u2, u3, z, vb1, vb2, ctx[IM_R])
+    e = ctx[EN_LAND_E]
+    ctx[EN_LAST_J] = j
+    ctx[EN_LAST_S] = s
+    ctx[EN_LAST_WN] = wn
+    ctx[EN_LAST_REGIME] = regime
+    ctx[EN_SETTLES] = 0.0
+    if kind != LID and e < 1.0:
+        if e * abs(wn) <= ctx[EN_LAND_BELOW] or regime == ELASTIC:
+            ctx[EN_SETTLES] = 1.0
 
 
 @jit
 def run_chunk(ctx, p, walls, out, rows):
     """Up to ``rows`` impacts, one row each in ``out`` (``rows * NCOL`` floats), until
     impact number ``ctx[EN_TARGET]``. Returns (status, rows written): DONE, FULL,
-    TIME_LIMIT or COLLAPSE (after the row that detected it); a documented stop inside
+    TIME_LIMIT, COLLAPSE (after the row that detected it) or LAND (after the row of an
+    impact that settles, when ``ctx[EN_LAND_ON]``); a documented stop inside
     raises KernelError, with ``ctx`` as after the last row written."""
     # the caller owns the arrays throughout: no reference counting inside
     ctx = borrow(ctx)
@@ -204,4 +236,6 @@ def run_chunk(ctx, p, walls, out, rows):
         row += 1
         if ctx[EN_FAULT] != 0.0:
             return COLLAPSE, row
+        if ctx[EN_SETTLES] != 0.0:
+            return LAND, row
     return DONE, row
