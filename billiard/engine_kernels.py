@@ -28,6 +28,7 @@ import numpy as np
 
 from billiard import jit as _jit
 from billiard.errors import SimulationError
+from billiard.fixed_step import answer_foot
 from billiard.interrupt import RunInterrupted, StopRequest
 from billiard.kernels import layout as L
 from billiard.kernels.state import COUNT_KEYS, engine_state, state_vector, write_ball, write_state
@@ -42,6 +43,11 @@ __all__ = ["FIRST_CHUNK", "LAST_CHUNK", "KernelEngine", "rows_sink", "supports"]
 #: impacts of the first chunk of a run, and of the longest
 FIRST_CHUNK = 64
 LAST_CHUNK = 4096
+#: the fixed-step detection's memory between flights: the departures in a row, the feet
+_FIXED_MEMORY = (
+    slice(L.RK_DEPARTURES, L.RK_DEPARTURES + 1),
+    slice(L.RK_FEET, L.RK_FEET + L.MAX_SURFACES),
+)
 #: a chunk that took less wall time (s) than this is followed by one twice as long
 _FAST_CHUNK = 0.05
 _PROGRESS_EVERY = 100
@@ -50,15 +56,15 @@ _PROGRESS_EVERY = 100
 def supports(sim: Any, *, flights: bool = False) -> str | None:
     """None when ``sim`` runs on the kernels (``flights``: its flights between contact
     phases, under ``contact.model = "phases"``), else why not."""
-    if sim.method != "event":
-        return f"method {sim.method!r} (the kernels have the event locator only)"
+    if sim.method not in ("event", "rk4"):
+        return f"method {sim.method!r} (the kernels have the event and rk4 locators only)"
     if sim.phases and not flights:
         return "contact.model = 'phases' (the kernels run its flights only)"
     if len(sim.boundary.surfaces) > L.MAX_SURFACES:
         return f"more than {L.MAX_SURFACES} surfaces"
     if type(sim.impact).__name__ != "KaneLevinsonImpact":
         return "an impact law other than Kane-Levinson"
-    if type(sim.flight).__name__ not in ("ExactFlight", "AdaptiveFlight"):
+    if type(sim.flight).__name__ not in ("ExactFlight", "AdaptiveFlight", "RK4Flight"):
         return f"the flight model {type(sim.flight).__name__}"
     return None
 
@@ -95,8 +101,11 @@ class KernelEngine:
         #: when the next checkpoint is due (time.monotonic), as the latest run left it
         self.next_save = math.inf
         self.adaptive = self.ctx[L.FL_KIND] == L.FLIGHT_ADAPTIVE
+        #: the paper's fixed-step detection (method rk4): its memory is the locator's
+        self.fixed = sim.method == "rk4"
         self._buffer: Any = None
         self._walls: Any = None
+        self._nears: Any = None
         self._entry: Any = None
 
     # ------------------------------------------------------------------ state
@@ -152,6 +161,9 @@ class KernelEngine:
             ctx[base + L.S_WSLOPE] = warm[1]
         if self.adaptive:
             ctx[L.FL_H] = self.sim.flight._h
+        if self.fixed:
+            for slots in _FIXED_MEMORY:
+                ctx[slots] = self.sim.locator.ctx[slots]
 
     def _sync_out(self) -> None:
         ctx = self.ctx
@@ -161,38 +173,56 @@ class KernelEngine:
             warm[1] = float(ctx[base + L.S_WSLOPE])
         if self.adaptive:
             self.sim.flight._h = float(ctx[L.FL_H])
+        if self.fixed:
+            for slots in _FIXED_MEMORY:
+                self.sim.locator.ctx[slots] = [float(x) for x in ctx[slots]]
 
     # ------------------------------------------------------------------ calls
 
     def _prepare(self) -> None:
-        from billiard.kernel_walls import wall_functions
+        from billiard.kernel_walls import near_functions, wall_functions
 
         _jit.notice()
         self._walls = wall_functions(self.sim)
+        if self.fixed:
+            self._nears = near_functions(self.sim)
         if _jit.ENABLED:
             self._buffer = np.empty(LAST_CHUNK * L.NCOL, dtype=np.float64)
         else:
             self._buffer = [0.0] * (LAST_CHUNK * L.NCOL)
 
-    def _call(self, rows: int) -> tuple[int, int]:
-        """``run_chunk`` for up to ``rows`` impacts; compiled, through the overload's
+    def _call(self, rows: int, first: int = 0) -> tuple[int, int]:
+        """``run_chunk`` (``run_chunk_fixed`` for method rk4) for up to ``rows`` impacts
+        into the row buffer from row ``first`` on; compiled, through the overload's
         entry point (the dispatcher would type the tuple of wall functions anew on every
         call, tens of microseconds)."""
         if self._entry is None:
-            from billiard.kernels.loop import run_chunk
+            from billiard.kernels.loop import run_chunk, run_chunk_fixed
 
             if self._walls is None:
                 self._prepare()
-            args = (self.ctx, self.params, self._walls, self._buffer, rows)
+            kernel = run_chunk_fixed if self.fixed else run_chunk
+            args = self._arguments(self._buffer, rows)
             if not _jit.ENABLED:
-                self._entry = run_chunk
+                self._entry = kernel
             else:
                 from numba import typeof
 
                 signature = tuple(typeof(a) for a in args)
-                run_chunk.compile(signature)
-                self._entry = run_chunk.overloads[signature].entry_point
-        return self._entry(self.ctx, self.params, self._walls, self._buffer, rows)
+                kernel.compile(signature)
+                self._entry = kernel.overloads[signature].entry_point
+        out = self._rows_from(first)
+        try:
+            return self._entry(*self._arguments(out, rows))
+        finally:
+            if out is not self._buffer and isinstance(out, list):
+                # interpreted, the rows went into a copy of the list's tail
+                self._buffer[first * L.NCOL :] = out
+
+    def _arguments(self, out: Any, rows: int) -> tuple:
+        if self.fixed:
+            return (self.ctx, self.params, self._walls, self._nears, out, rows)
+        return (self.ctx, self.params, self._walls, out, rows)
 
     def _chunk(self, rows: int, target: int, until: float) -> tuple[int, int, Exception | None]:
         """(status, rows written, the stop as a SimulationError or None)."""
@@ -201,15 +231,33 @@ class KernelEngine:
         ctx[L.EN_TARGET] = float(target)
         ctx[L.EN_UNTIL] = until
         self._sync_in()
+        done = 0
         try:
-            code, done = self._call(rows)
-            error = None
+            while True:
+                try:
+                    code, written = self._call(rows - done, done)
+                    done += written
+                    error = None
+                    break
+                except L.KernelError as exc:
+                    if exc.args[0] != L.E_FOOT:
+                        raise
+                    # the fixed-step search asks for the curve's global nearest point:
+                    # answered, the search runs again from its flight's start
+                    done = int(ctx[L.EN_IMPACTS]) - before
+                    answer_foot(ctx, self.sim.boundary)
         except (L.KernelError, ArithmeticError, ValueError) as exc:
             code, done = L.DONE, int(ctx[L.EN_IMPACTS]) - before
             error = self._stop(exc, done)
         finally:
             self._sync_out()
         return code, done, error
+
+    def _rows_from(self, row: int) -> Any:
+        """The row buffer from row ``row`` on."""
+        if row == 0:
+            return self._buffer
+        return self._buffer[row * L.NCOL :]
 
     def _stop(self, exc: Exception, row: int) -> SimulationError:
         """The engine's stop for an exception out of the kernels, worded as the

@@ -34,7 +34,7 @@ import math
 from collections.abc import Callable, Mapping
 from typing import Any
 
-from billiard.generated import ball as _ball
+from billiard.kernels_python import fixed_step as _fixed_step
 from billiard.kernels_python import flight as _flight
 from billiard.kernels_python import layout as _L
 from billiard.kernels_python import stop as _stop
@@ -181,40 +181,9 @@ class AdaptiveFlight(_KernelFlight):
             raise _stop(exc, ctx) from None
 
 
-class _AirFlight(FlightModel):
-    """Set-up shared by the numerically integrated models: the generated right-hand side
-    and its trailing arguments. A force that is off is not evaluated: the Magnus version
-    of the right-hand side is used only when its coefficient is set."""
-
-    def __init__(
-        self, gravity: float, mass: float, c_lin: float, c_quad: float, c_magnus: float = 0.0
-    ):
-        self.g = float(gravity)
-        self.m = float(mass)
-        self.c_lin, self.c_quad, self.c_magnus = float(c_lin), float(c_quad), float(c_magnus)
-        self._rhs = _ball.flight_rhs_magnus if self.c_magnus != 0.0 else _ball.flight_rhs_drag
-        self._u3 = 0.0
-        self._args: tuple[float, ...] = ()
-
-    def _bind_spin(self, u3: float) -> None:
-        """Fix the right-hand side's arguments for a flight with spin u3 (constant)."""
-        self._u3 = u3
-        if self.c_magnus != 0.0:
-            self._args = (u3, self.m, self.g, self.c_lin, self.c_quad, self.c_magnus)
-        else:
-            self._args = (self.m, self.g, self.c_lin, self.c_quad)
-
-    def acceleration(self, u1: float, u2: float) -> tuple[float, float]:
-        return self._rhs(u1, u2, *self._args)
-
-    def aero_bound(self, speed: float) -> float:
-        return (
-            (self.c_lin + self.c_quad * speed) * speed + abs(self.c_magnus * self._u3) * speed
-        ) / self.m
-
-
-class RK4Flight(_AirFlight):
-    """Classical fourth-order Runge-Kutta with a fixed step: the paper's scheme.
+class RK4Flight(_KernelFlight):
+    """Classical fourth-order Runge-Kutta with a fixed step: the paper's scheme
+    (:func:`billiard.kernels.fixed_step.rk4_step`, interpreted).
 
     Used by the fixed-step locator only (``method = "rk4"``); it integrates the same
     right-hand side as :class:`AdaptiveFlight` (gravity only when the air is off, still
@@ -230,12 +199,20 @@ class RK4Flight(_AirFlight):
         c_magnus: float = 0.0,
         step: float = 1e-4,
     ):
-        super().__init__(gravity, mass, c_lin, c_quad, c_magnus)
+        super().__init__(gravity)
+        self.m = float(mass)
+        self.c_lin, self.c_quad, self.c_magnus = float(c_lin), float(c_quad), float(c_magnus)
         self.max_step = float(step)
+        ctx = self.ctx
+        ctx[_L.FL_KIND] = _L.FLIGHT_RK4
+        ctx[_L.FL_M] = self.m
+        ctx[_L.FL_CLIN] = self.c_lin
+        ctx[_L.FL_CQUAD] = self.c_quad
+        ctx[_L.FL_CMAG] = self.c_magnus
         self.begin(0.0, 0.0, 0.0, 0.0, 0.0)
 
     def begin(self, q1: float, q2: float, u1: float, u2: float, u3: float) -> None:
-        self._bind_spin(u3)
+        self.ctx[_L.FL_U3] = u3
         self._ta = self._tb = 0.0
         self._ya = self._yb = (q1, q2, u1, u2)
 
@@ -255,24 +232,7 @@ class RK4Flight(_AirFlight):
 
     def step(self, y: State, h: float) -> State:
         """One classical RK4 step of length h from y = (q1, q2, u1, u2)."""
-        f = self._rhs
-        args = self._args
-        q1, q2, u1, u2 = y
-        k1x, k1y = f(u1, u2, *args)
-        h2 = 0.5 * h
-        v2x, v2y = u1 + h2 * k1x, u2 + h2 * k1y
-        k2x, k2y = f(v2x, v2y, *args)
-        v3x, v3y = u1 + h2 * k2x, u2 + h2 * k2y
-        k3x, k3y = f(v3x, v3y, *args)
-        v4x, v4y = u1 + h * k3x, u2 + h * k3y
-        k4x, k4y = f(v4x, v4y, *args)
-        h6 = h / 6.0
-        return (
-            q1 + h6 * (u1 + 2.0 * v2x + 2.0 * v3x + v4x),
-            q2 + h6 * (u2 + 2.0 * v2y + 2.0 * v3y + v4y),
-            u1 + h6 * (k1x + 2.0 * k2x + 2.0 * k3x + k4x),
-            u2 + h6 * (k1y + 2.0 * k2y + 2.0 * k3y + k4y),
-        )
+        return _fixed_step.rk4_step(self.ctx, *y, h)
 
 
 def _exact(scene: Any) -> FlightModel:

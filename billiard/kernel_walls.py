@@ -11,19 +11,20 @@ from typing import Any
 
 from billiard import jit as _jit
 
-__all__ = ["WallFunction", "wall_functions"]
+__all__ = ["WallFunction", "near_functions", "wall_functions"]
 
-_SIGNATURE = None
+_SIGNATURES: dict[int, Any] = {}
 _compiled_walls: dict[Any, Any] = {}
 
 
-def _wall_signature() -> Any:
-    global _SIGNATURE
-    if _SIGNATURE is None:
+def _wall_signature(args: int = 1) -> Any:
+    """``float64(float64, float64[::1])`` of a wall function, or with ``args`` = 3 the
+    ``float64(float64, float64, float64, float64[::1])`` of a nearest-point function."""
+    if args not in _SIGNATURES:
         from numba import types
 
-        _SIGNATURE = types.float64(types.float64, types.float64[::1])
-    return _SIGNATURE
+        _SIGNATURES[args] = types.float64(*([types.float64] * args), types.float64[::1])
+    return _SIGNATURES[args]
 
 
 def _wall_function_class() -> type:
@@ -31,15 +32,15 @@ def _wall_function_class() -> type:
     from numba.core.types import WrapperAddressProtocol
 
     class _WallFunction(WrapperAddressProtocol):
-        """A generated wall function, compiled for ``float64(float64, float64[::1])``,
-        as a first-class function value: numba types it by its signature alone, so a
-        kernel taking it is compiled (and cached) once for every curve."""
+        """A generated wall function, compiled for its signature, as a first-class
+        function value: numba types it by its signature alone, so a kernel taking it is
+        compiled (and cached) once for every curve."""
 
-        def __init__(self, fn: Any):
-            sig = _wall_signature()
+        def __init__(self, fn: Any, args: int):
+            self.sig = _wall_signature(args)
             self.dispatcher = _jit.jit(fn)
-            self.dispatcher.compile(sig.args)
-            result = self.dispatcher.get_compile_result(sig)
+            self.dispatcher.compile(self.sig.args)
+            result = self.dispatcher.get_compile_result(self.sig)
             self.address = result.library.get_pointer_to_function(
                 result.fndesc.llvm_cfunc_wrapper_name
             )
@@ -48,7 +49,7 @@ def _wall_function_class() -> type:
             return self.address
 
         def signature(self) -> Any:
-            return _wall_signature()
+            return self.sig
 
     return _WallFunction
 
@@ -56,16 +57,17 @@ def _wall_function_class() -> type:
 _WallFunctionClass: type | None = None
 
 
-def WallFunction(fn: Any) -> Any:  # noqa: N802  (a factory standing for a class)
-    """``fn`` as the kernels take it: a compiled first-class function value, or ``fn``
-    itself when the kernels run interpreted."""
+def WallFunction(fn: Any, args: int = 1) -> Any:  # noqa: N802  (a factory standing for a class)
+    """``fn`` as the kernels take it: a compiled first-class function value of ``args``
+    float arguments and the parameter array, or ``fn`` itself when the kernels run
+    interpreted."""
     global _WallFunctionClass
     if not _jit.ENABLED:
         return fn
     if fn not in _compiled_walls:
         if _WallFunctionClass is None:
             _WallFunctionClass = _wall_function_class()
-        _compiled_walls[fn] = _WallFunctionClass(fn)
+        _compiled_walls[fn] = _WallFunctionClass(fn, args)
     return _compiled_walls[fn]
 
 
@@ -76,4 +78,14 @@ def wall_functions(sim: Any) -> tuple[tuple[Any, ...], ...]:
         tuple(WallFunction(w.f) for w in walls),
         tuple(WallFunction(w.df) for w in walls),
         tuple(WallFunction(w.d2f) for w in walls),
+    )
+
+
+def near_functions(sim: Any) -> tuple[tuple[Any, ...], ...]:
+    """(near, dnear): the walls' nearest-point conditions g(s, px, py, p) and dg/ds, for
+    the fixed-step detection (method ``rk4``)."""
+    walls = sim.boundary.walls
+    return (
+        tuple(WallFunction(w.near, 3) for w in walls),
+        tuple(WallFunction(w.dnear, 3) for w in walls),
     )

@@ -77,6 +77,7 @@ ball = _load("ball")
 flight = _load("flight")
 surfaces = _load("surfaces")
 locate = _load("locate")
+fixed_step = _load("fixed_step")
 impact = _load("impact")
 contact_equations = _load("contact_equations")
 contact_forces = _load("contact_forces")
@@ -101,6 +102,16 @@ def stop_text(code: int, value: float) -> str:
         )
     if code == layout.E_INVERSION:
         return f"offset-curve inversion did not converge at x = {value!r} m"
+    if code == layout.E_DEPARTURES:
+        h = value
+        finer = float(f"{h / 10:.0e}")
+        limit, fraction = fixed_step.DEPARTURE_LIMIT, fixed_step.DEPARTURE_FRACTION
+        return (
+            f"run.step = {h:g} s is too coarse for this scene (use run.step <= "
+            f"{finer:g} s): {limit} impacts in a row were found within "
+            f"{fraction * h:.0e} s of the previous one, where the ball had "
+            f"just left the wall (it comes back within one step)"
+        )
     return _TEXTS.get(code, f"kernel stop {code}")
 
 

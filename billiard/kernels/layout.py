@@ -40,6 +40,7 @@ FL_KB = 36  # acceleration at FL_TB: 36, 37
 
 FLIGHT_EXACT = 0.0
 FLIGHT_ADAPTIVE = 1.0
+FLIGHT_RK4 = 2.0  # the paper's fixed-step RK4 (method "rk4"; kernels: fixed_step.py)
 
 # --- impact law and ball ------------------------------------------------------------
 IM_M = 40  # mass (kg)
@@ -200,7 +201,28 @@ VX_SAMPLE_T = VX + 16  # a sample handed out: time (s) and spin (rad/s)
 VX_SAMPLE_W = VX + 17
 VX_END = VX + 18
 
-SIZE = VX_END
+# --- the paper's fixed-step detection (method "rk4") --------------------------------
+# The step, the locator's memory between flights (the Newton starts of the walls'
+# nearest points, the departures in a row), the walls' intervals, and the global nearest
+# points the Python side computed for the search under way (kernels: fixed_step.py).
+RK = VX_END
+RK_H = RK  # the fixed step (s)
+RK_R = RK + 1  # the ball's radius (m)
+RK_NWALLS = RK + 2  # walls of the curve (the first surfaces)
+RK_LID = RK + 3  # the lid's index among the surfaces (-1: none)
+RK_ESCAPE = RK + 4  # the escape level's index (-1: none)
+RK_DEPARTURES = RK + 5  # impacts in a row found where the ball had just left the wall
+RK_ANSWERS = RK + 6  # global nearest points answered for the search under way
+RK_ASK = RK + 7  # the one asked for (E_FOOT): px, py (m), wall: 7..9
+RK_FEET = RK + 10  # Newton start of each wall's nearest point (m): MAX_SURFACES slots
+RK_FEET0 = RK_FEET + 16  # ... as the search under way found them
+RK_LO = RK_FEET0 + 16  # each wall's interval (m)
+RK_HI = RK_LO + 16
+RK_ANSWER = RK_HI + 16  # answers: px, py, wall, s; RK_MAX_ANSWERS of them
+RK_MAX_ANSWERS = 64
+RK_END = RK_ANSWER + 4 * RK_MAX_ANSWERS
+
+SIZE = RK_END
 
 # --- rows ---------------------------------------------------------------------------
 # one row per impact, the columns of collisions.csv in order; regime and wall as codes
@@ -237,6 +259,8 @@ E_NON_FINITE = 7
 E_COLLAPSE = 8
 E_PHASE_STEPS = 9  # a contact phase's step-size control failed
 E_AT_REST = 10  # at rest relative to the boundary for good: from PH_RSINCE (a hold: VX_RSINCE)
+E_DEPARTURES = 11  # rk4: DEPARTURE_LIMIT departures in a row (the step, s, in EN_ERR_VALUE)
+E_FOOT = 12  # rk4: Newton failed from both starts: the global nearest point at RK_ASK
 
 
 class KernelError(Exception):

@@ -17,7 +17,7 @@ from billiard.engine_phases import (
     compensated_add as _compensated_add,
 )
 
-from . import flight
+from . import fixed_step, flight
 from .ball import contact_velocity, energy, frame_velocity
 from .borrow import borrow, inline, jit
 from .impact import kane_levinson
@@ -112,10 +112,33 @@ def step(ctx, p, walls, out, row):
     if ctx[EN_FAULT] != 0.0:
         raise KernelError(E_COLLAPSE)
     ctx[EN_EVENT_T] = math.nan  # searching: a stop here is "after" the last impact
-    u3 = ctx[EN_U3]
     tau, j, q1, q2, u1, u2, theta, s, z = locate(
-        ctx, p, walls, ctx[EN_THETA], ctx[EN_Q1], ctx[EN_Q2], ctx[EN_U1], ctx[EN_U2], u3
+        ctx, p, walls, ctx[EN_THETA], ctx[EN_Q1], ctx[EN_Q2], ctx[EN_U1], ctx[EN_U2], ctx[EN_U3]
     )
+    return impact(ctx, p, walls, out, row, tau, j, q1, q2, u1, u2, theta, s, z)
+
+
+@inline
+def step_fixed(ctx, p, walls, nears, out, row):
+    """:func:`step` with the paper's fixed-step detection (method ``rk4``,
+    :func:`billiard.kernels.fixed_step.locate`; ``nears``: the nearest-point functions)."""
+    if ctx[EN_FAULT] != 0.0:
+        raise KernelError(E_COLLAPSE)
+    ctx[EN_EVENT_T] = math.nan  # searching: a stop here is "after" the last impact
+    tau, j, q1, q2, u1, u2, theta, s, z = fixed_step.locate(
+        ctx, p, walls, nears, ctx[EN_THETA], ctx[EN_Q1], ctx[EN_Q2], ctx[EN_U1], ctx[EN_U2],
+        ctx[EN_U3],
+    )  # fmt: skip
+    return impact(ctx, p, walls, out, row, tau, j, q1, q2, u1, u2, theta, s, z)
+
+
+@inline
+def impact(ctx, p, walls, out, row, tau, j, q1, q2, u1, u2, theta, s, z):
+    """The impact a search found, tau after the last (on surface j at s, angle z, the
+    ball at (q1, q2, u1, u2), drive angle theta): the impact law, its row ``out[row]``
+    and the engine state after it; False (nothing changed) when it comes after
+    ``ctx[EN_UNTIL]``."""
+    u3 = ctx[EN_U3]
     total, error = compensated_add(ctx[EN_CLOCK], ctx[EN_CLOCK_ERR], tau)
     t = total + error
     ctx[EN_EVENT_T] = t
@@ -234,8 +257,39 @@ def run_chunk(ctx, p, walls, out, rows):
         if not step(ctx, p, walls, out, row):
             return TIME_LIMIT, row
         row += 1
-        if ctx[EN_FAULT] != 0.0:
-            return COLLAPSE, row
-        if ctx[EN_SETTLES] != 0.0:
-            return LAND, row
+        code = chunk_ends(ctx)
+        if code >= 0:
+            return code, row
     return DONE, row
+
+
+@jit
+def run_chunk_fixed(ctx, p, walls, nears, out, rows):
+    """:func:`run_chunk` with the paper's fixed-step detection (method ``rk4``):
+    ``nears`` are the walls' nearest-point functions (:mod:`billiard.kernels.fixed_step`).
+    A search that needs the curve's global nearest point raises KernelError(E_FOOT),
+    ``ctx`` as after the last row written: answered, the next call goes on."""
+    ctx = borrow(ctx)
+    p = borrow(p)
+    out = borrow(out)
+    row = 0
+    while ctx[EN_IMPACTS] < ctx[EN_TARGET]:
+        if row == rows:
+            return FULL, row
+        if not step_fixed(ctx, p, walls, nears, out, row):
+            return TIME_LIMIT, row
+        row += 1
+        code = chunk_ends(ctx)
+        if code >= 0:
+            return code, row
+    return DONE, row
+
+
+@inline
+def chunk_ends(ctx):
+    """The status that ends a chunk after the row just written, or -1 to go on."""
+    if ctx[EN_FAULT] != 0.0:
+        return COLLAPSE
+    if ctx[EN_SETTLES] != 0.0:
+        return LAND
+    return -1

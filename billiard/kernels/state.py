@@ -19,7 +19,7 @@ from collections.abc import Sequence
 from typing import Any
 
 from billiard.engine_phases import COLLAPSE_COUNT
-from billiard.flight import AdaptiveFlight, ExactFlight
+from billiard.flight import AdaptiveFlight, ExactFlight, RK4Flight
 from billiard.kernels import layout as L
 from billiard.state import BallState, EngineState
 from billiard.surfaces import FlatLid, OffsetWall
@@ -38,7 +38,7 @@ def _ball_values(ball: BallState) -> tuple[float, ...]:
 
 
 def _flight_constants(ctx: list[float], fl: Any) -> None:
-    if not isinstance(fl, (ExactFlight, AdaptiveFlight)):
+    if not isinstance(fl, (ExactFlight, AdaptiveFlight, RK4Flight)):
         raise ValueError(f"the kernels have no flight model {type(fl).__name__}")
     # the model's constants and step proposal, as its own ctx holds them
     ctx[L.FL_KIND : L.FL_U3] = fl.ctx[L.FL_KIND : L.FL_U3]
@@ -61,6 +61,9 @@ def state_vector(sim: Any) -> list[float]:
     # the drive and the locator's substep lengths, as the locator's own ctx holds them
     loc = sim.locator.ctx
     ctx[L.AMP : L.H_BRACKET + 1] = loc[L.AMP : L.H_BRACKET + 1]
+    if sim.method == "rk4":
+        # the fixed-step detection's constants and memory, as its own ctx holds them
+        ctx[L.RK : L.RK_END] = loc[L.RK : L.RK_END]
     surfaces = sim.boundary.surfaces
     ctx[L.NSURF] = float(len(surfaces))
     _flight_constants(ctx, sim.flight)
