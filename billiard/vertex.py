@@ -23,19 +23,25 @@ refinement on them (to ``EVENT_TOL``); the spin's decay integrates the forces wi
 Simpson's rule over steps of at most 1/64 drive period (exact on a static boundary,
 where the forces are constant).
 
-The numerics are the kernels of :mod:`billiard.kernels.vertex`, run interpreted (the
-twin :mod:`billiard.kernels_py`): :meth:`VertexHold.run_hold` fills the kernels' state
-vector, runs the hold from one sample time to the next, and words the kernels' stop as
-before.
+The numerics are the kernels of :mod:`billiard.kernels.vertex`, compiled when numba is
+there (one call of ``run_hold`` per hold and per sample, on a float64 copy of the state
+vector) and otherwise interpreted (the twin :mod:`billiard.kernels_py`), as a contact
+phase's: :meth:`VertexHold.run_hold` fills the kernels' state vector, runs the hold from
+one sample time to the next, and words the kernels' stop as before. The force queries
+(``forces``, ``holds``) call the twin: a compiled call costs more than they do.
 """
 
 from __future__ import annotations
 
 import math
-from collections.abc import Callable, Iterable
+from collections.abc import Callable, Iterable, Iterator
 from dataclasses import dataclass
+from typing import Any
 
-from billiard.contact_phase import ContactModel
+import numpy as np
+
+from billiard import contact_phase as _phase
+from billiard.contact_phase import _KERNEL_ERRORS, ContactModel
 from billiard.errors import BallAtRest
 from billiard.kernels_python import layout as _L
 from billiard.kernels_python import vertex as _k
@@ -46,6 +52,8 @@ __all__ = ["EVENT_TOL", "HELD", "HoldEnd", "VertexHold"]
 HELD = "held"
 #: time resolution (s) of a release
 EVENT_TOL = _k.EVENT_TOL
+#: the compiled hold's entry point (when the kernels are compiled)
+_ENTRY: Any = None
 
 
 @dataclass(slots=True)
@@ -118,16 +126,46 @@ class VertexHold:
         samples = iter(samples)
         ctx[_L.VX_NEXT] = next(samples, math.inf) if on_sample is not None else math.inf
         try:
-            _k.begin(ctx)
-            status = _k.advance(ctx)
-            while status == _L.PHASE_SAMPLE:
-                on_sample(ctx[_L.VX_SAMPLE_T], ctx[_L.VX_SAMPLE_W])  # type: ignore[misc]
-                ctx[_L.VX_NEXT] = next(samples, math.inf)
+            if _phase.COMPILED:  # compiled as the phases are
+                status = self._run_compiled(samples, on_sample)
+            else:
+                _k.begin(ctx)
                 status = _k.advance(ctx)
-        except _L.KernelError as exc:
+                while status == _L.PHASE_SAMPLE:
+                    on_sample(ctx[_L.VX_SAMPLE_T], ctx[_L.VX_SAMPLE_W])  # type: ignore[misc]
+                    ctx[_L.VX_NEXT] = next(samples, math.inf)
+                    status = _k.advance(ctx)
+        except _KERNEL_ERRORS as exc:
             if exc.args[0] == _L.E_AT_REST:
                 raise BallAtRest(ctx[_L.VX_RSINCE]) from None
             raise
         if status == _L.PHASE_LIMIT:
             return HoldEnd(limit, None, ctx[_L.VX_W_END])
         return HoldEnd(ctx[_L.VX_END_T], "release", ctx[_L.VX_W_END], int(ctx[_L.VX_KEEPS]))
+
+    def _run_compiled(
+        self, samples: Iterator[float], on_sample: Callable[[float, float], None] | None
+    ) -> int:
+        """The hold set up in ``self.ctx``, run by the compiled kernels
+        (:func:`billiard.kernels.vertex.run_hold`) on a float64 copy of it, copied back
+        (also after a stop) so that the rest reads Python floats as before."""
+        global _ENTRY
+        if _ENTRY is None:
+            from numba import typeof
+
+            from billiard.kernels.vertex import run_hold
+
+            signature = (typeof(np.zeros(_L.SIZE)), typeof(True))
+            run_hold.compile(signature)
+            _ENTRY = run_hold.overloads[signature].entry_point
+        ctx = self.ctx
+        state = np.array(ctx, dtype=np.float64)
+        try:
+            status = _ENTRY(state, True)
+            while status == _L.PHASE_SAMPLE:
+                on_sample(float(state[_L.VX_SAMPLE_T]), float(state[_L.VX_SAMPLE_W]))  # type: ignore[misc]
+                state[_L.VX_NEXT] = next(samples, math.inf)
+                status = _ENTRY(state, False)
+        finally:
+            ctx[:] = state.tolist()
+        return status

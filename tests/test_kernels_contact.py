@@ -53,7 +53,7 @@ def _capture(
         return begin(ctx, *args)
 
     monkeypatch.setattr(module, "begin", capture)
-    monkeypatch.setattr(contact_phase, "COMPILED", False)  # phases through the twin
+    monkeypatch.setattr(contact_phase, "COMPILED", False)  # phases and holds through the twin
     sim = Simulation(scene)
     if until is None:
         until = scene.run.duration or math.inf
@@ -287,3 +287,32 @@ def test_holds_are_the_same_interpreted_and_compiled(monkeypatch):
         assert got == expected
         replayed += 1
     assert replayed >= 100
+
+
+@compiled
+def test_runs_with_holds_are_the_same_with_compiled_and_twin_holds(monkeypatch):
+    """Whole runs through the holds' compiled entry (``VertexHold._run_compiled``) and
+    through the twin: the same impacts, contact phases and samples, bit for bit."""
+    from billiard import vertex
+    from billiard.simulate import simulate
+
+    calls = []
+    compiled_run = vertex.VertexHold._run_compiled
+
+    def counted(self, *args):
+        calls.append(1)
+        return compiled_run(self, *args)
+
+    def outputs(scene, until, impacts, sample):
+        result = simulate(scene, collisions=impacts, duration=until, sample=sample)
+        tables = (result.columns, result.contacts, result.trajectory or {})
+        return [{k: np.asarray(v).tobytes() for k, v in t.items()} for t in tables]
+
+    for scene, until, impacts, _, sample, _ in _hold_cases()[-2:]:
+        monkeypatch.setattr(vertex.VertexHold, "_run_compiled", counted)
+        fast = outputs(scene, until, impacts, sample)
+        assert calls, "no hold ran compiled"
+        monkeypatch.setattr(contact_phase, "COMPILED", False)
+        assert outputs(scene, until, impacts, sample) == fast
+        monkeypatch.undo()
+        calls.clear()

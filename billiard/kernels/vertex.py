@@ -27,7 +27,7 @@ from __future__ import annotations
 
 import math
 
-from .borrow import inline
+from .borrow import borrow, inline, jit
 from .contact import EVENT_TOL, pmin
 from .contact_forces import boundary
 from .illinois import narrow, secant_point
@@ -298,3 +298,15 @@ def advance(ctx):
                     ctx[VX_STAGE] = STAGE_SKIP
                     continue
             step(ctx)
+
+
+@jit
+def run_hold(ctx, start):
+    """:func:`begin` (when ``start``) and :func:`advance` as one compiled function: the
+    entry :class:`billiard.vertex.VertexHold` calls, once per hold and once per sample,
+    when the kernels are compiled."""
+    # the caller owns the array throughout the call: no reference counting inside
+    ctx = borrow(ctx)
+    if start:
+        begin(ctx)
+    return advance(ctx)
