@@ -24,6 +24,7 @@ from bench.common import (
     timed,
 )
 from bench.peer import SolveIvpPeer
+from billiard import jit
 from billiard.scene import Scene, with_values
 from billiard.simulate import Simulation
 
@@ -57,7 +58,7 @@ def run_setting(scene: Scene, how: tuple, impacts: int, repeats: int) -> tuple[d
 
 
 # The default method's settings timed again with the kernels interpreted (a fresh process
-# with NUMBA_DISABLE_JIT=1): the other methods run interpreted, so these are the costs a
+# with NUMBA_DISABLE_JIT=1): the solve_ivp peer runs interpreted, so these are the costs a
 # comparison of methods, not of interpreters, takes. The results are the same bits.
 _INTERPRETED = """
 import json, sys
@@ -136,6 +137,8 @@ def measure_scene(name: str, cfg: Config) -> dict:
                     "impacts": done,
                     "stop": stop,
                     "cpu_per_1000": 1000.0 * cpu / max(done, 1),
+                    # the engine's methods run on the compiled kernels when numba is there
+                    "compiled": jit.ENABLED and how[0] != "peer",
                     "errors": errors(run, ref, cfg.checkpoints),
                 }
             )
