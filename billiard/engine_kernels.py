@@ -1,13 +1,17 @@
 """:class:`billiard.engine.Simulation` on the kernels (:mod:`billiard.kernels`), for
-``contact.model = "impacts"``, method ``event`` and Kane and Levinson's law: the four
-paper scenes. Compiled by numba when it is there, interpreted otherwise (or with
-``NUMBA_DISABLE_JIT=1``): one source either way.
+Kane and Levinson's law with method ``event`` or ``rk4``: the impact model
+(``contact.model = "impacts"``, the four paper scenes), and the flights between contact
+phases (``contact.model = "phases"``, :mod:`billiard.engine_flights`). Compiled by numba
+when it is there, interpreted otherwise (or with ``NUMBA_DISABLE_JIT=1``): one source
+either way.
 
 :class:`KernelEngine` owns the engine state as the state vector ``ctx``
-(:mod:`billiard.kernels.state`); the warm starts and the flight's step proposal stay
-with the ``Simulation``'s objects (``sim.warm``, ``sim.flight``), which the geometry
-queries outside the event loop share, and are copied into ``ctx`` before and out of it
-after every call.
+(:mod:`billiard.kernels.state`); the warm starts, the flight's step proposal and the
+rk4 locator's memory stay with the ``Simulation``'s objects (``sim.warm``,
+``sim.flight``, ``sim.locator``), which the geometry queries outside the event loop
+share, and are copied into ``ctx`` before and out of it after every call. A fixed-step
+search that needs the curve's global nearest point (``E_FOOT``) is answered here and
+runs again (:func:`billiard.fixed_step.answer_foot`).
 
 A run calls :func:`billiard.kernels.loop.run_chunk` chunk by chunk (64 impacts first,
 doubling to 4096 while a chunk takes under 0.05 s) and hands the rows out as today's loop

@@ -2,10 +2,11 @@
 impact law, record it, keep the clock and the collapse window (a mixin of
 :class:`billiard.engine.Simulation`, working on its state).
 
-The impact-only engine normally runs :func:`billiard.kernels.loop.step` on the kernels
-(:mod:`billiard.engine_kernels`), the same operations in the same order; this step runs
-when the kernels cannot: the paper's rk4 scheme, contact phases, trajectory samples, or
-an impact law replaced after construction.
+A run normally makes its impacts with :func:`billiard.kernels.loop.step` on the kernels
+(:mod:`billiard.engine_kernels`; under contact phases the flights between them,
+:mod:`billiard.engine_flights`), the same operations in the same order; this step runs
+when the kernels cannot (trajectory samples, an impact law replaced after construction),
+for :meth:`Simulation.step` under contact phases, and after a contact phase's impact.
 """
 
 from __future__ import annotations

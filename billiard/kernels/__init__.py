@@ -10,6 +10,7 @@ One concept per module:
 * :mod:`~billiard.kernels.surfaces`: gaps, rates and bounds of the offset walls, lid
   and escape level; the wall functions arrive as first-class function values;
 * :mod:`~billiard.kernels.locate`: the event locator (bound, root refinement);
+* :mod:`~billiard.kernels.fixed_step`: the paper's fixed-step detection (method ``rk4``);
 * :mod:`~billiard.kernels.impact`: Kane and Levinson's law with the low-velocity rule;
 * :mod:`~billiard.kernels.contact_equations`: the generated contact equations;
 * :mod:`~billiard.kernels.contact_forces`: a contact phase's forces, rates and
@@ -19,7 +20,7 @@ One concept per module:
 * :mod:`~billiard.kernels.vertex`: a hold by two walls (the ball in a vertex), resumable
   at sample times;
 * :mod:`~billiard.kernels.loop`: one impact, and ``run_chunk`` (up to N impacts into a
-  preallocated array).
+  preallocated array; ``run_chunk_fixed`` for method ``rk4``).
 
 :mod:`billiard.engine_kernels` builds the state vector from a scene and runs the chunks.
 :mod:`billiard.kernels_python` loads these files again as plain Python
