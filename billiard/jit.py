@@ -22,6 +22,8 @@ kernels (they are passed by address), so each is stamped by its own module.
 
 from __future__ import annotations
 
+import atexit
+import gc
 import hashlib
 import importlib.util
 import os
@@ -82,10 +84,48 @@ def _disabled() -> bool:
     return os.environ.get("NUMBA_DISABLE_JIT", "0").strip() not in ("", "0")
 
 
+def _import_numba() -> Any:
+    """``import numba``, without the two modules its import reads and a run never uses:
+    scipy, imported only to check its version (pyproject.toml requires a later one than
+    numba does), and yaml, which reads ``.numba_config.yaml`` in the working directory
+    (hidden only when there is none; numba looks for it once more, then, on each compile,
+    so it gets yaml back, loaded on first use). Either already imported stays."""
+    hidden = ["scipy"]
+    if not os.path.isfile(".numba_config.yaml"):
+        hidden.append("yaml")
+    hidden = [name for name in hidden if name not in sys.modules]
+    for name in hidden:
+        sys.modules[name] = None  # type: ignore[assignment]  (an ImportError)
+    try:
+        import numba
+    finally:
+        for name in hidden:
+            if name in sys.modules and sys.modules[name] is None:
+                del sys.modules[name]
+    yaml = _lazy_module("yaml") if "yaml" in hidden else None
+    if yaml is not None:
+        from numba.core import config
+
+        config.yaml, config._HAVE_YAML = yaml, True
+    return numba
+
+
+def _lazy_module(name: str) -> Any:
+    """Module ``name``, executed on its first attribute access (None if not installed)."""
+    spec = importlib.util.find_spec(name)
+    if spec is None or spec.loader is None:
+        return None
+    spec.loader = importlib.util.LazyLoader(spec.loader)
+    module = importlib.util.module_from_spec(spec)
+    sys.modules[name] = module
+    spec.loader.exec_module(module)
+    return module
+
+
 try:
     if _disabled():
         raise ImportError("NUMBA_DISABLE_JIT is set")
-    import numba
+    numba = _import_numba()
     from numba.core.errors import NumbaExperimentalFeatureWarning
 except ImportError as exc:  # no numba on this platform, or the JIT disabled
     numba = None
@@ -138,6 +178,33 @@ else:
             pass
 
     _event.register("numba:compile", _CompileNotice())
+
+    import numpy as _np
+    from numba.core import types as _types
+    from numba.core.typing.typeof import typeof_impl as _typeof_impl
+    from numba.np import numpy_support as _numpy_support
+
+    _typeof_array = _typeof_impl.dispatch(_np.ndarray)
+
+    @_typeof_impl.register(_np.ndarray)
+    def _typeof_ndarray(val, c):
+        """numba's type of an array, without importing numpy.ma (a twentieth of a
+        second) to rule out a masked array: none exists before numpy.ma is imported."""
+        if "numpy.ma" in sys.modules:
+            return _typeof_array(val, c)
+        try:
+            dtype = _numpy_support.from_dtype(val.dtype)
+        except numba.core.errors.NumbaNotImplementedError:
+            return _typeof_array(val, c)  # numba's error
+        layout = _numpy_support.map_layout(val)
+        return _types.Array(dtype, val.ndim, layout, readonly=not val.flags.writeable)
+
+    # numba's and LLVM's objects (types, compiled libraries, their LLVM handles) live
+    # until the interpreter exits, which then frees them one by one in its last
+    # collections: a tenth to a quarter of a second after the program's end. Frozen at
+    # the exit they are left to the operating system; atexit handlers still run, and
+    # files were closed by the code that opened them.
+    atexit.register(gc.freeze)
 
 #: True when the kernels are compiled by numba, False when they run interpreted.
 ENABLED = numba is not None
