@@ -23,6 +23,7 @@ kernels (they are passed by address), so each is stamped by its own module.
 from __future__ import annotations
 
 import atexit
+import functools
 import gc
 import hashlib
 import importlib.util
@@ -135,27 +136,50 @@ else:
     warnings.filterwarnings("ignore", category=NumbaExperimentalFeatureWarning)
     from numba.core import caching as _caching
 
-    class _KernelStamp:
+    #: cache folders found writable in this process
+    _writable: set[str] = set()
+
+    class _CheckedOnce:
+        """A cache locator of billiard's functions that checks its folder once per
+        process: numba's check creates and deletes a temporary file in the folder for
+        every function (some fifty of them, most never called from Python)."""
+
+        @classmethod
+        def from_function(cls, py_func, py_file):
+            if not getattr(py_func, "__module__", "").startswith("billiard."):
+                return None
+            return super().from_function(py_func, py_file)
+
+        def ensure_cache_path(self):
+            path = self.get_cache_path()
+            if path not in _writable:
+                super().ensure_cache_path()
+                _writable.add(path)
+
+    @functools.cache
+    def _in_kernels(py_file: str) -> bool:
+        return Path(py_file).resolve().parent == _KERNELS
+
+    class _KernelStamp(_CheckedOnce):
         """A cache locator for the functions defined in billiard/kernels/: stamped with
         :func:`kernel_source_hash` instead of their own file's hash."""
 
         @classmethod
         def from_function(cls, py_func, py_file):
-            if Path(py_file).resolve().parent != _KERNELS:
+            if not _in_kernels(py_file):
                 return None
             return super().from_function(py_func, py_file)
 
         def get_source_stamp(self):
             return kernel_source_hash()
 
-    _locators = [
-        type(f"Kernel{base.__name__}", (_KernelStamp, base), {})
-        for base in (
-            _caching.UserProvidedCacheLocator,
-            _caching.InTreeCacheLocator,
-            _caching.UserWideCacheLocator,
-        )
-    ]
+    _bases = (
+        _caching.UserProvidedCacheLocator,
+        _caching.InTreeCacheLocator,
+        _caching.UserWideCacheLocator,
+    )
+    _locators = [type(f"Kernel{base.__name__}", (_KernelStamp, base), {}) for base in _bases]
+    _locators += [type(f"Billiard{base.__name__}", (_CheckedOnce, base), {}) for base in _bases]
     _caching.CacheImpl._locator_classes[:0] = _locators
 
     from numba.core import event as _event
