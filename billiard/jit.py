@@ -23,6 +23,7 @@ kernels (they are passed by address), so each is stamped by its own module.
 from __future__ import annotations
 
 import atexit
+import contextlib
 import functools
 import gc
 import hashlib
@@ -30,7 +31,7 @@ import importlib.util
 import os
 import sys
 import warnings
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 from pathlib import Path
 from typing import Any, TypeVar
 
@@ -249,6 +250,26 @@ def notice() -> None:
     print(f"billiard: numba unavailable ({_problem}); the engine runs interpreted", file=sys.stderr)
 
 
+@contextlib.contextmanager
+def _llvm_lock_unobserved() -> Iterator[None]:
+    """llvmlite's calls without numba's "numba:llvm_lock" events: numba has every call
+    into LLVM (some 3,000 while cached code is loaded, to list the symbols it defines)
+    signal two events, which only the timers of a compilation read. A compilation, on a
+    cache miss, runs outside (after) this, with them."""
+    from llvmlite.binding import ffi
+
+    callbacks = getattr(getattr(ffi.lib, "_lock", None), "_cblist", None)
+    if not isinstance(callbacks, list) or not callbacks:
+        yield
+        return
+    saved = callbacks[:]
+    callbacks.clear()
+    try:
+        yield
+    finally:
+        callbacks[:0] = saved
+
+
 def _load_lightly(dispatcher: Any) -> None:
     """Load ``dispatcher``'s cached machine code without numba's full registries.
 
@@ -263,9 +284,10 @@ def _load_lightly(dispatcher: Any) -> None:
     def load_overload(sig: Any, target_context: Any) -> Any:
         from numba.core.runtime import rtsys
 
-        rtsys.initialize(target_context)
-        with cache._guard_against_spurious_io_errors():
-            return cache._load_overload(sig, target_context)
+        with _llvm_lock_unobserved():
+            rtsys.initialize(target_context)
+            with cache._guard_against_spurious_io_errors():
+                return cache._load_overload(sig, target_context)
 
     cache.load_overload = load_overload
 
