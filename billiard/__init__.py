@@ -18,22 +18,38 @@ modules are imported later. Plotting, curves and run files are imported on first
 
 from __future__ import annotations
 
+import gc
 import importlib
 from typing import Any
 
-from .calibrate import calibrate
-from .engine import Simulation
-from .scene import (
-    Scene,
-    SceneError,
-    builtin_scenes,
-    load_scene,
-    scene_from_dict,
-    scene_to_toml,
-    with_values,
-)
-from .simulate import Result, simulate
-from .status import Status
+# The imports below (numpy, numba and its compiler, the engine) create some 90,000
+# objects that live as long as the process (modules, classes, functions, numba's types):
+# the cyclic garbage collector, run over them again and again while they are created, and
+# once more over all of them when it is enabled again, would find next to nothing to free
+# (a tenth of the start-up). It is paused while they are imported and they are then
+# frozen (gc.freeze: left out of every later collection, and of the last ones at the
+# exit; gc.unfreeze undoes it). See also billiard/jit.py for the exit.
+_collecting = gc.isenabled()
+gc.disable()
+try:
+    from .calibrate import calibrate
+    from .engine import Simulation
+    from .scene import (
+        Scene,
+        SceneError,
+        builtin_scenes,
+        load_scene,
+        scene_from_dict,
+        scene_to_toml,
+        with_values,
+    )
+    from .simulate import Result, simulate
+    from .status import Status
+
+    gc.freeze()
+finally:
+    if _collecting:
+        gc.enable()
 
 __version__ = "0.1.0"
 

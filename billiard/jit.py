@@ -22,12 +22,16 @@ kernels (they are passed by address), so each is stamped by its own module.
 
 from __future__ import annotations
 
+import atexit
+import contextlib
+import functools
+import gc
 import hashlib
 import importlib.util
 import os
 import sys
 import warnings
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 from pathlib import Path
 from typing import Any, TypeVar
 
@@ -82,10 +86,48 @@ def _disabled() -> bool:
     return os.environ.get("NUMBA_DISABLE_JIT", "0").strip() not in ("", "0")
 
 
+def _import_numba() -> Any:
+    """``import numba``, without the two modules its import reads and a run never uses:
+    scipy, imported only to check its version (pyproject.toml requires a later one than
+    numba does), and yaml, which reads ``.numba_config.yaml`` in the working directory
+    (hidden only when there is none; numba looks for it once more, then, on each compile,
+    so it gets yaml back, loaded on first use). Either already imported stays."""
+    hidden = ["scipy"]
+    if not os.path.isfile(".numba_config.yaml"):
+        hidden.append("yaml")
+    hidden = [name for name in hidden if name not in sys.modules]
+    for name in hidden:
+        sys.modules[name] = None  # type: ignore[assignment]  (an ImportError)
+    try:
+        import numba
+    finally:
+        for name in hidden:
+            if name in sys.modules and sys.modules[name] is None:
+                del sys.modules[name]
+    yaml = _lazy_module("yaml") if "yaml" in hidden else None
+    if yaml is not None:
+        from numba.core import config
+
+        config.yaml, config._HAVE_YAML = yaml, True
+    return numba
+
+
+def _lazy_module(name: str) -> Any:
+    """Module ``name``, executed on its first attribute access (None if not installed)."""
+    spec = importlib.util.find_spec(name)
+    if spec is None or spec.loader is None:
+        return None
+    spec.loader = importlib.util.LazyLoader(spec.loader)
+    module = importlib.util.module_from_spec(spec)
+    sys.modules[name] = module
+    spec.loader.exec_module(module)
+    return module
+
+
 try:
     if _disabled():
         raise ImportError("NUMBA_DISABLE_JIT is set")
-    import numba
+    numba = _import_numba()
     from numba.core.errors import NumbaExperimentalFeatureWarning
 except ImportError as exc:  # no numba on this platform, or the JIT disabled
     numba = None
@@ -95,27 +137,50 @@ else:
     warnings.filterwarnings("ignore", category=NumbaExperimentalFeatureWarning)
     from numba.core import caching as _caching
 
-    class _KernelStamp:
+    #: cache folders found writable in this process
+    _writable: set[str] = set()
+
+    class _CheckedOnce:
+        """A cache locator of billiard's functions that checks its folder once per
+        process: numba's check creates and deletes a temporary file in the folder for
+        every function (some fifty of them, most never called from Python)."""
+
+        @classmethod
+        def from_function(cls, py_func, py_file):
+            if not getattr(py_func, "__module__", "").startswith("billiard."):
+                return None
+            return super().from_function(py_func, py_file)
+
+        def ensure_cache_path(self):
+            path = self.get_cache_path()
+            if path not in _writable:
+                super().ensure_cache_path()
+                _writable.add(path)
+
+    @functools.cache
+    def _in_kernels(py_file: str) -> bool:
+        return Path(py_file).resolve().parent == _KERNELS
+
+    class _KernelStamp(_CheckedOnce):
         """A cache locator for the functions defined in billiard/kernels/: stamped with
         :func:`kernel_source_hash` instead of their own file's hash."""
 
         @classmethod
         def from_function(cls, py_func, py_file):
-            if Path(py_file).resolve().parent != _KERNELS:
+            if not _in_kernels(py_file):
                 return None
             return super().from_function(py_func, py_file)
 
         def get_source_stamp(self):
             return kernel_source_hash()
 
-    _locators = [
-        type(f"Kernel{base.__name__}", (_KernelStamp, base), {})
-        for base in (
-            _caching.UserProvidedCacheLocator,
-            _caching.InTreeCacheLocator,
-            _caching.UserWideCacheLocator,
-        )
-    ]
+    _bases = (
+        _caching.UserProvidedCacheLocator,
+        _caching.InTreeCacheLocator,
+        _caching.UserWideCacheLocator,
+    )
+    _locators = [type(f"Kernel{base.__name__}", (_KernelStamp, base), {}) for base in _bases]
+    _locators += [type(f"Billiard{base.__name__}", (_CheckedOnce, base), {}) for base in _bases]
     _caching.CacheImpl._locator_classes[:0] = _locators
 
     from numba.core import event as _event
@@ -139,6 +204,33 @@ else:
 
     _event.register("numba:compile", _CompileNotice())
 
+    import numpy as _np
+    from numba.core import types as _types
+    from numba.core.typing.typeof import typeof_impl as _typeof_impl
+    from numba.np import numpy_support as _numpy_support
+
+    _typeof_array = _typeof_impl.dispatch(_np.ndarray)
+
+    @_typeof_impl.register(_np.ndarray)
+    def _typeof_ndarray(val, c):
+        """numba's type of an array, without importing numpy.ma (a twentieth of a
+        second) to rule out a masked array: none exists before numpy.ma is imported."""
+        if "numpy.ma" in sys.modules:
+            return _typeof_array(val, c)
+        try:
+            dtype = _numpy_support.from_dtype(val.dtype)
+        except numba.core.errors.NumbaNotImplementedError:
+            return _typeof_array(val, c)  # numba's error
+        layout = _numpy_support.map_layout(val)
+        return _types.Array(dtype, val.ndim, layout, readonly=not val.flags.writeable)
+
+    # numba's and LLVM's objects (types, compiled libraries, their LLVM handles) live
+    # until the interpreter exits, which then frees them one by one in its last
+    # collections: a tenth to a quarter of a second after the program's end. Frozen at
+    # the exit they are left to the operating system; atexit handlers still run, and
+    # files were closed by the code that opened them.
+    atexit.register(gc.freeze)
+
 #: True when the kernels are compiled by numba, False when they run interpreted.
 ENABLED = numba is not None
 
@@ -158,6 +250,26 @@ def notice() -> None:
     print(f"billiard: numba unavailable ({_problem}); the engine runs interpreted", file=sys.stderr)
 
 
+@contextlib.contextmanager
+def _llvm_lock_unobserved() -> Iterator[None]:
+    """llvmlite's calls without numba's "numba:llvm_lock" events: numba has every call
+    into LLVM (some 3,000 while cached code is loaded, to list the symbols it defines)
+    signal two events, which only the timers of a compilation read. A compilation, on a
+    cache miss, runs outside (after) this, with them."""
+    from llvmlite.binding import ffi
+
+    callbacks = getattr(getattr(ffi.lib, "_lock", None), "_cblist", None)
+    if not isinstance(callbacks, list) or not callbacks:
+        yield
+        return
+    saved = callbacks[:]
+    callbacks.clear()
+    try:
+        yield
+    finally:
+        callbacks[:0] = saved
+
+
 def _load_lightly(dispatcher: Any) -> None:
     """Load ``dispatcher``'s cached machine code without numba's full registries.
 
@@ -172,9 +284,10 @@ def _load_lightly(dispatcher: Any) -> None:
     def load_overload(sig: Any, target_context: Any) -> Any:
         from numba.core.runtime import rtsys
 
-        rtsys.initialize(target_context)
-        with cache._guard_against_spurious_io_errors():
-            return cache._load_overload(sig, target_context)
+        with _llvm_lock_unobserved():
+            rtsys.initialize(target_context)
+            with cache._guard_against_spurious_io_errors():
+                return cache._load_overload(sig, target_context)
 
     cache.load_overload = load_overload
 
