@@ -24,11 +24,10 @@ from typing import Any
 
 # The imports below (numpy, numba and its compiler, the engine) create some 90,000
 # objects that live as long as the process (modules, classes, functions, numba's types):
-# the cyclic garbage collector, run over them again and again while they are created, and
-# once more over all of them when it is enabled again, would find next to nothing to free
-# (a tenth of the start-up). It is paused while they are imported and they are then
-# frozen (gc.freeze: left out of every later collection, and of the last ones at the
-# exit; gc.unfreeze undoes it). See also billiard/jit.py for the exit.
+# the cyclic garbage collector, run over them again and again while they are created,
+# would find next to nothing to free (a tenth of the import). It is paused while they are
+# imported. (The command line also leaves them to the operating system at its exit:
+# billiard.cli.main.)
 _collecting = gc.isenabled()
 gc.disable()
 try:
@@ -45,8 +44,6 @@ try:
     )
     from .simulate import Result, simulate
     from .status import Status
-
-    gc.freeze()
 finally:
     if _collecting:
         gc.enable()

@@ -22,10 +22,8 @@ kernels (they are passed by address), so each is stamped by its own module.
 
 from __future__ import annotations
 
-import atexit
 import contextlib
 import functools
-import gc
 import hashlib
 import importlib.util
 import os
@@ -224,12 +222,6 @@ else:
         layout = _numpy_support.map_layout(val)
         return _types.Array(dtype, val.ndim, layout, readonly=not val.flags.writeable)
 
-    # numba's and LLVM's objects (types, compiled libraries, their LLVM handles) live
-    # until the interpreter exits, which then frees them one by one in its last
-    # collections: a tenth to a quarter of a second after the program's end. Frozen at
-    # the exit they are left to the operating system; atexit handlers still run, and
-    # files were closed by the code that opened them.
-    atexit.register(gc.freeze)
 
 #: True when the kernels are compiled by numba, False when they run interpreted.
 ENABLED = numba is not None
