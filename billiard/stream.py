@@ -6,6 +6,12 @@ with one system call per flush, then synced to disk. A process killed in the mid
 that call can leave an unterminated last line; readers skip it, and resuming the run
 (:func:`billiard.persist.resume`) cuts the file back to the checkpoint's row or checks
 the rows after it against a recomputation.
+
+Rows handed over as arrays (:meth:`CsvRecorder.append_rows`, a compiled run's chunks)
+are formatted and spilled on a thread of the recorder's own
+(:class:`billiard.handoff.Handoff`) while the engine computes the next chunk; every call
+that flushes, closes or reads the recorder waits for it first, and an error of that
+thread is raised by the next call on the recorder. The bytes are the same.
 """
 
 from __future__ import annotations
@@ -34,6 +40,7 @@ from billiard.csvfile import (
     _ShortWrite,
     _write_all,
 )
+from billiard.handoff import Handoff
 from billiard.record import (
     _LINE_ENDS,
     COLUMNS,
@@ -52,6 +59,12 @@ FLUSH_INTERVAL = 1.0
 #: whatever the time since the last flush: a compiled run makes hundreds of thousands
 #: of rows a second, which would otherwise all wait in memory for the next flush.
 SPILL_BYTES = 1 << 22
+#: Format and write the blocks of :meth:`CsvRecorder.append_rows` on a thread of their
+#: own, while the engine computes the next rows (False: in the caller's thread).
+BACKGROUND = True
+#: Blocks handed to that thread and not yet taken up, at most: beyond them
+#: ``append_rows`` waits, so that memory stays bounded when writing falls behind.
+QUEUE_BLOCKS = 4
 
 
 class CsvRecorder:
@@ -108,6 +121,8 @@ class CsvRecorder:
         self._check: BinaryIO | None = None
         self._check_end = 0
         self._check_rows = 0
+        # the writer thread of append_rows
+        self._writer_thread = Handoff(self, "_take", QUEUE_BLOCKS, f"writer {self.path.name}")
         if _open is None:
             self._fd: int | None = _open_locked(self.path)
             os.ftruncate(self._fd, 0)
@@ -223,9 +238,11 @@ class CsvRecorder:
     def rows_on_disk(self) -> int:
         """Whole rows in the file: the flushed (or checked) ones, plus rows still to be
         checked."""
+        self._drain()
         return self._mark.rows + self._check_rows
 
     def append(self, row: Sequence[Any]) -> None:
+        self._settle()
         self._writer.writerow([_format(v) for v in row])
         self._pending += self._row_text.getvalue().encode("utf-8")
         self._row_text.seek(0)
@@ -249,6 +266,13 @@ class CsvRecorder:
             for row in block.tolist():
                 self.append(record_of(row))
             return
+        self._writer_thread.raise_error()
+        if BACKGROUND and self.failed is None:
+            self._hand_over(block)
+            if self.autoflush and time.monotonic() - self._last_flush >= FLUSH_INTERVAL:
+                self.flush()
+            return
+        self._drain()
         self._pending += format_rows_bytes(block, self.line_end)
         self._pending_rows += len(block)
         if self.autoflush and time.monotonic() - self._last_flush >= FLUSH_INTERVAL:
@@ -257,6 +281,37 @@ class CsvRecorder:
             # written, not synced: the next flush syncs them with the rest; a checkpoint
             # comes only after a flush, and rows on disk past it are checked on resume
             self._write(sync=False)
+
+    def _hand_over(self, block: np.ndarray) -> None:
+        """Give a block to the writer thread or, while :data:`QUEUE_BLOCKS` blocks are
+        waiting, its bytes formatted here (the thread writes them in turn)."""
+        if self._writer_thread.full():
+            item: Any = format_rows_bytes(block, self.line_end), len(block)
+        else:
+            item = np.array(block, dtype=np.float64)  # a copy: the caller reuses its array
+        self._writer_thread.put(item)
+
+    def _take(self, block: np.ndarray | tuple[bytes, int]) -> None:
+        """(writer thread) Format ``block`` into the pending rows and spill them when
+        :data:`SPILL_BYTES` are pending, as ``append_rows`` does in the caller's thread."""
+        if self.failed is not None:
+            return
+        if isinstance(block, tuple):
+            data, rows = block
+        else:
+            data, rows = format_rows_bytes(block, self.line_end), len(block)
+        self._pending += data
+        self._pending_rows += rows
+        if len(self._pending) >= SPILL_BYTES:
+            self._write(sync=False)  # written, not synced, as in append_rows
+
+    def _drain(self) -> None:
+        self._writer_thread.drain()
+
+    def _settle(self) -> None:
+        """Wait for the writer thread, then raise its error if it had one."""
+        self._writer_thread.drain()
+        self._writer_thread.raise_error()
 
     def _check_row(self) -> None:
         """Compare the one pending row with the next row in the file."""
@@ -307,6 +362,7 @@ class CsvRecorder:
                 ends with the whole rows that reached it (:attr:`mark`), and nothing
                 more is written.
         """
+        self._settle()
         self._last_flush = time.monotonic()
         return self._write(sync=self.durable)
 
@@ -363,9 +419,11 @@ class CsvRecorder:
     @property
     def mark(self) -> CsvMark:
         """The end of what has been flushed to the file."""
+        self._drain()
         return self._mark
 
     def __len__(self) -> int:
+        self._drain()
         return self._mark.rows + self._pending_rows
 
     @property
@@ -374,23 +432,36 @@ class CsvRecorder:
 
     def close(self) -> None:
         """Flush the remaining rows and close the file (idempotent). After a failed
-        write, or while rows are still being checked, it only closes the file."""
+        write, or while rows are still being checked, it only closes the file.
+
+        Raises:
+            the writer thread's error if no call has raised it yet (after flushing the
+            rows before it, when it was not a failed write).
+        """
         if self._fd is None:
             return
+        error: BaseException | None = None
         try:
+            self._drain()
+            error = self._writer_thread.take_error()
             if self.failed is None and self._check is None:
                 self.flush()
         finally:
+            self._writer_thread.stop()
             self._close_check()
             os.close(self._fd)
             self._fd = None
+        if error is not None:
+            raise error
 
     def columns(self) -> dict[str, np.ndarray]:
+        self._settle()
         if self._fd is not None and self.failed is None:
             self.flush()
         return read_collisions(self.path)
 
     def write_csv(self, path: str | os.PathLike[str]) -> None:
+        self._settle()
         if self._fd is not None and self.failed is None:
             self.flush()
         if Path(path).resolve() != self.path.resolve():
