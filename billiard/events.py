@@ -59,6 +59,7 @@ from typing import Protocol
 
 from billiard.boundary import Boundary
 from billiard.flight import FlightModel
+from billiard.kernel_walls import plain_wall_functions
 from billiard.kernels_python import layout as _L
 from billiard.kernels_python import locate as _locate
 from billiard.kernels_python import stop as _stop
@@ -179,11 +180,7 @@ class EventLocator:
         self.ctx = ctx
         walls = boundary.walls
         self._p = walls[0].p
-        self._walls = (
-            tuple(w.f for w in walls),
-            tuple(w.df for w in walls),
-            tuple(w.d2f for w in walls),
-        )
+        self._walls = plain_wall_functions(walls)
 
     @property
     def h_bracket(self) -> float:

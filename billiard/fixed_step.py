@@ -24,6 +24,7 @@ from collections.abc import Mapping
 from billiard.boundary import Boundary
 from billiard.events import Event
 from billiard.flight import RK4Flight
+from billiard.kernel_walls import plain_wall_functions
 from billiard.kernels_python import fixed_step as _fixed_step
 from billiard.kernels_python import layout as _L
 from billiard.kernels_python import stop as _stop
@@ -113,11 +114,7 @@ class FixedStepLocator:
         self.ctx = ctx
         walls = boundary.walls
         self._p = walls[0].p
-        self._walls = (
-            tuple(w.f for w in walls),
-            tuple(w.df for w in walls),
-            tuple(w.d2f for w in walls),
-        )
+        self._walls = plain_wall_functions(walls)
         self._nears = (tuple(w.near for w in walls), tuple(w.dnear for w in walls))
 
     @property

@@ -94,6 +94,18 @@ class _KernelFlight(FlightModel):
         self.ctx = [0.0] * _L.SIZE
         self.ctx[_L.G] = self.g
 
+    def _air(self, kind: float, mass: float, c_lin: float, c_quad: float, c_magnus: float) -> None:
+        """A model with air forces: its kind, mass (kg), Fowles drag coefficients (N s/m,
+        N s^2/m^2) and Magnus coefficient (kg), kept as attributes and in ``ctx``."""
+        self.m = float(mass)
+        self.c_lin, self.c_quad, self.c_magnus = float(c_lin), float(c_quad), float(c_magnus)
+        ctx = self.ctx
+        ctx[_L.FL_KIND] = kind
+        ctx[_L.FL_M] = self.m
+        ctx[_L.FL_CLIN] = self.c_lin
+        ctx[_L.FL_CQUAD] = self.c_quad
+        ctx[_L.FL_CMAG] = self.c_magnus
+
     def begin(self, q1: float, q2: float, u1: float, u2: float, u3: float) -> None:
         _flight.begin(self.ctx, q1, q2, u1, u2, u3)
 
@@ -139,15 +151,9 @@ class AdaptiveFlight(_KernelFlight):
         rtol: float = 1e-10,
     ):
         super().__init__(gravity)
-        self.m = float(mass)
-        self.c_lin, self.c_quad, self.c_magnus = float(c_lin), float(c_quad), float(c_magnus)
+        self._air(_L.FLIGHT_ADAPTIVE, mass, c_lin, c_quad, c_magnus)
         self.rtol = float(rtol)
         ctx = self.ctx
-        ctx[_L.FL_KIND] = _L.FLIGHT_ADAPTIVE
-        ctx[_L.FL_M] = self.m
-        ctx[_L.FL_CLIN] = self.c_lin
-        ctx[_L.FL_CQUAD] = self.c_quad
-        ctx[_L.FL_CMAG] = self.c_magnus
         ctx[_L.FL_RTOL] = self.rtol
         ctx[_L.FL_H] = 1e-3
 
@@ -200,15 +206,8 @@ class RK4Flight(_KernelFlight):
         step: float = 1e-4,
     ):
         super().__init__(gravity)
-        self.m = float(mass)
-        self.c_lin, self.c_quad, self.c_magnus = float(c_lin), float(c_quad), float(c_magnus)
+        self._air(_L.FLIGHT_RK4, mass, c_lin, c_quad, c_magnus)
         self.max_step = float(step)
-        ctx = self.ctx
-        ctx[_L.FL_KIND] = _L.FLIGHT_RK4
-        ctx[_L.FL_M] = self.m
-        ctx[_L.FL_CLIN] = self.c_lin
-        ctx[_L.FL_CQUAD] = self.c_quad
-        ctx[_L.FL_CMAG] = self.c_magnus
         self.begin(0.0, 0.0, 0.0, 0.0, 0.0)
 
     def begin(self, q1: float, q2: float, u1: float, u2: float, u3: float) -> None:

@@ -11,7 +11,7 @@ from typing import Any
 
 from billiard import jit as _jit
 
-__all__ = ["WallFunction", "near_functions", "wall_functions"]
+__all__ = ["WallFunction", "near_functions", "plain_wall_functions", "wall_functions"]
 
 _SIGNATURES: dict[int, Any] = {}
 _compiled_walls: dict[Any, Any] = {}
@@ -88,4 +88,14 @@ def near_functions(sim: Any) -> tuple[tuple[Any, ...], ...]:
     return (
         tuple(WallFunction(w.near, 3) for w in walls),
         tuple(WallFunction(w.dnear, 3) for w in walls),
+    )
+
+
+def plain_wall_functions(walls: Any) -> tuple[tuple[Any, ...], ...]:
+    """(f, df, d2f) of ``walls`` as the interpreted kernels take them: the generated
+    functions themselves."""
+    return (
+        tuple(w.f for w in walls),
+        tuple(w.df for w in walls),
+        tuple(w.d2f for w in walls),
     )

@@ -9,7 +9,6 @@ their walls in ``WALLS``; :func:`billiard.curves.load_curve` binds the parameter
 
 from __future__ import annotations
 
-import math
 from collections.abc import Callable
 from dataclasses import dataclass
 
@@ -59,22 +58,17 @@ def nearest_newton(
     wall: Wall, s: float, px: float, py: float, iterations: int = 50
 ) -> tuple[float | None, bool]:
     """Newton's method on a wall's nearest-point condition
-    g(s) = (s - px) + (f(s) - py) f'(s) = 0 from the start s (m): the one place it is
-    written (the global nearest point and the fixed-step locator both use it).
+    g(s) = (s - px) + (f(s) - py) f'(s) = 0 from the start s (m), for the global nearest
+    point: the kernel :func:`billiard.kernels.fixed_step.nearest_newton`, which the
+    fixed-step locator runs, interpreted.
 
     Returns ``(s, True)`` when a step fell below 1e-15 relative, ``(s, False)`` when the
     iterations ran out first, and ``(None, False)`` when it met g'(s) <= 0 (a maximum of
     the distance nearby) or a non-finite s.
     """
-    near, dnear, p = wall.near, wall.dnear, wall.p
-    for _ in range(iterations):
-        d = dnear(s, px, py, p)
-        if not d > 0.0:
-            return None, False
-        step = near(s, px, py, p) / d
-        s -= step
-        if not math.isfinite(s):
-            return None, False
-        if abs(step) <= 1e-15 * (1.0 + abs(s)):
-            return s, True
-    return s, False
+    from billiard.kernels_python import fixed_step
+
+    s, how = fixed_step.nearest_newton(wall.near, wall.dnear, wall.p, s, px, py, iterations)
+    if how == fixed_step.NEWTON_FAILED:
+        return None, False
+    return s, how == fixed_step.NEWTON_CONVERGED

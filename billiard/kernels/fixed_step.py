@@ -78,22 +78,29 @@ def rk4_step(ctx, q1, q2, u1, u2, h):
     )
 
 
+#: how :func:`nearest_newton` ended
+NEWTON_FAILED = 0  # it met g'(s) <= 0 (a maximum of the distance nearby) or a non-finite s
+NEWTON_CONVERGED = 1  # a step fell below 1e-15 relative
+NEWTON_RAN_OUT = 2  # the iterations ran out first
+
+
 @inline
-def nearest_newton(near, dnear, p, s, px, py):
-    """Newton's method on the nearest-point condition from s (``walls.nearest_newton``
-    with 30 iterations): (s, usable); not usable where it met g'(s) <= 0 or a
-    non-finite s."""
-    for _ in range(NEWTON_ITERATIONS):
+def nearest_newton(near, dnear, p, s, px, py, iterations):
+    """Newton's method on a wall's nearest-point condition
+    g(s) = (s - px) + (f(s) - py) f'(s) = 0 from the start s (m), ``near`` and ``dnear``
+    being g and dg/ds: (s, how it ended), the one place it is written
+    (:func:`billiard.walls.nearest_newton` runs it interpreted)."""
+    for _ in range(iterations):
         d = dnear(s, px, py, p)
         if not d > 0.0:
-            return s, False
+            return s, NEWTON_FAILED
         step = near(s, px, py, p) / d
         s -= step
         if not math.isfinite(s):
-            return s, False
+            return s, NEWTON_FAILED
         if abs(step) <= 1e-15 * (1.0 + abs(s)):
-            return s, True
-    return s, True
+            return s, NEWTON_CONVERGED
+    return s, NEWTON_RAN_OUT
 
 
 @inline
@@ -131,8 +138,10 @@ def wall_distance(ctx, p, walls, nears, i, px, py):
     best_d = math.inf
     start = ctx[RK_FEET + i]
     for k in range(2):
-        s, usable = nearest_newton(nears[0][i], nears[1][i], p, start if k == 0 else px, px, py)
-        if usable:
+        s, how = nearest_newton(
+            nears[0][i], nears[1][i], p, start if k == 0 else px, px, py, NEWTON_ITERATIONS
+        )
+        if how != NEWTON_FAILED:
             s = clamp(s, lo, hi)
             dx, dy = px - s, py - f(s, p)
             dist = math.sqrt(dx * dx + dy * dy)
