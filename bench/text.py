@@ -38,23 +38,30 @@ machine is shared, so a ratio near 30x can fall on either side of it from one ru
 the next (the interpreted medians move by a third between runs).
 
 The method speed-up targets compare the CPU time at which each method reaches an
-impact-time error of 1e-9 s after 50 impacts (section 1, "Cost at equal accuracy"), the
-default method's kernels interpreted as the other methods are, so that the ratio is of
-methods, not interpreters. Where only the default method reaches that accuracy (the
-other one fails or stalls above it in every setting of its ladder) there is no ratio;
-the verdict counts the cases where both reach it.
+impact-time error of 1e-9 s after 50 impacts (section 1, "Cost at equal accuracy"),
+like for like: rk4 runs on the compiled kernels as the default method does, so that
+ratio is of two compiled methods; the solve_ivp peer is scipy's integrator, interpreted,
+so it is compared with the default method's kernels interpreted too. Where only the
+default method reaches that accuracy (the other one fails or stalls above it in every
+setting of its ladder) there is no ratio; the verdict counts the cases where both reach
+it.
 
 What limits the speed now: compiled, an impact costs 0.7-5 us of arithmetic (section 5:
 libm's sine and cosine of the drive angle in the wedge, the square-root and division
 chains of the offset-curve foot and of the drag stages in the curved scenes). A run of
-25,000 impacts is bound by start-up (importing numpy and numba, about 0.45 s, then
-loading the cached kernels, about 0.1 s); a streamed run of many impacts by writing its
-rows (about 1 us per row formatted compiled, then the file's write); a run kept in
-memory makes 10^6 wedge impacts in about 1 s. Between methods, both
-interpreted, the default method stays 3-40x cheaper than rk4 at equal accuracy: rk4 is
-exact for drag-free arcs at any step, so with drag off its cheapest accurate step is
-only a few times dearer; its real advantage is in section 2: it is the only method
-without failures.
+25,000 impacts is bound by start-up: importing numpy and numba (0.3-0.45 s; numba's
+table of type conversions alone is about a tenth of a second), billiard's own modules
+(this machine sets `PYTHONDONTWRITEBYTECODE`, so they are compiled to bytecode at every
+start), loading the cached kernels, and the command line's files; the impacts
+themselves take under 0.1 s. A streamed run of many impacts formats its rows (about
+1 us per row, compiled) on a thread of its own while the engine makes the next ones, so
+on two free cores it costs little more than the impacts; a run kept in memory makes
+10^6 wedge impacts in about 1 s and holds them as 144 MB of rows, next to the 130-150
+MB a process with numba's LLVM takes before its first impact (section 4, "Memory").
+Between methods, both compiled, the default method is 2-14x cheaper than rk4 at equal
+accuracy: rk4's coarsest step in the ladder (3 ms) already reaches 1e-9 s after 50
+impacts in most cases, so its cost there is a floor, not an interpolation; its real
+advantage is in section 2: it is the only method without failures.
 """
 
 WORKPRECISION = """## 1. Work against precision
@@ -280,12 +287,14 @@ stops for another reason (an inelastic collapse, the impact cap) is measured ove
 time it reached and not compared.
 """
 
-CONTACT_AFTER = """Why the ratios are what they are. Both models run on compiled pieces where the
-engine has them: the impact model's whole loop is compiled (`run_chunk`), while under
-"phases" a rolling or sliding phase is compiled (`kernels/contact.py`, one call per
-phase and sample) but the flights between phases, the landing and lift-off logic and
-the holds in a vertex run interpreted on the classes (`docs/compiled-engine.md`, "What
-remains").
+CONTACT_AFTER = """Why the ratios are what they are. Both models make their impacts on the
+compiled loop (`run_chunk`); under "phases" the loop ends a chunk at every impact that
+settles on a wall, and each rolling or sliding phase and each hold in a vertex is a
+compiled call of its own (`kernels/contact.py`, `kernels/vertex.py`, once per phase and
+per sample). What runs between those calls is Python: landing and lift-off, the
+phase's start and end, handing the state to the kernels and back
+(`billiard/engine_flights.py`, `docs/compiled-engine.md`, "What remains"): about 0.3 ms
+a phase.
 
 * **A ball at rest** (bowl at rest, the floor after the drop, the vertex): the impact
   model relaunches it about 490 times per simulated second, each hop a located flight.
@@ -301,20 +310,20 @@ remains").
 * **The shaken table** (Gamma = 0.9): a step is at most 1/20 of the drive period, so that
   the end conditions, which the drive moves, cannot change sign twice unseen within a
   step; at rest relative to the table whole drive periods are skipped.
-* **The paper scenes**: most of the CPU goes to the long flights between contacts, which
-  "phases" locates on the interpreted classes and the impact model on the compiled
-  loop: the ratio measures that difference (tens of times), not the phases. Interpreted
-  both (before the engine was compiled) the two models cost about the same here: the
-  impacts the phases drop save about what the phases cost. In the chaotic scenes the two
+* **The paper scenes**: the ball is in contact a few per cent of the time. Where it
+  hardly lands (parabola-5.4hz, hyperbola-4.5hz: a handful of phases in 600 s) the two
+  models now cost the same, both flying on the compiled loop. In the wedge and
+  hyperbola-5.8hz the ball lands about 1,500 times in 600 s; each phase costs about
+  0.3 ms of Python around its compiled call, where the fifteen or so hops it replaces
+  cost 1-4 us each: there "phases" is 2-10 times dearer. In the chaotic scenes the two
   models follow different trajectories after the first contact, so their ratio compares
   two samples of the same attractor and moves by tens of per cent from one measurement
   to the next.
 
 The target of 10x therefore holds where a contact phase replaces hops of a ball that
 lies still, slides or is held on a wall, and not where the phase itself must be
-integrated finely (rolling oscillations, a long slide) or where the flights around the
-phases, still interpreted, are most of the work (the paper scenes). Compiling the
-engine's phase loop (flights, landing and holds on the kernels) is what would move the
-paper scenes; a looser error tolerance for contact phases than for flights would cut the
-step counts; neither is measured here.
+integrated finely (rolling oscillations, a long slide) or where phases are many and
+short (the paper scenes). A compiled phase loop (landing, lift-off and holds in `ctx`)
+is what would move the paper scenes; a looser error tolerance for contact phases than
+for flights would cut the step counts; neither is measured here.
 """
