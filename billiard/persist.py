@@ -30,7 +30,6 @@ cuts an unterminated last line off. A failed write (a full disk) raises
 from __future__ import annotations
 
 import contextlib
-import errno
 import hashlib
 import math
 import os
@@ -56,6 +55,7 @@ from billiard.sidecsv import CONTACTS_NAME, TRAJECTORY_NAME, SideCsv
 from billiard.state import EngineState
 from billiard.status import Status
 from billiard.stream import CsvMark, CsvRecorder, RowMismatchError, RunBusyError, Truncation
+from billiard.write_error import RunWriteError
 
 __all__ = [
     "CHECKPOINT_NAME",
@@ -424,7 +424,10 @@ def _run_streamed(
             save(sim.state, "complete" if reason is None else "stopped", reason)
     except OSError as exc:
         stream.close()
-        raise RunWriteError.after(exc, out, stream.rows_on_disk, saved[0]) from exc
+        raise RunWriteError.after(
+            exc, out, stream.rows_on_disk, saved[0],
+            csv=out / CSV_NAME, resumable=(out / CHECKPOINT_NAME).is_file(),
+        ) from exc  # fmt: skip
     finally:
         stream.close()
         for side in sides.values():
@@ -448,54 +451,6 @@ def _run_streamed(
         contacts=out / CONTACTS_NAME if "contacts" in sides else None,
         trajectory=out / TRAJECTORY_NAME if "trajectory" in sides else None,
     )
-
-
-class RunWriteError(OSError):
-    """A streamed run could not write its files (the disk is full, a quota, an I/O
-    error). The CSV file ends with the ``rows`` whole rows that reached it, and
-    :func:`resume` keeps them all (rows after the last checkpoint are recomputed and
-    checked, not rewritten). ``strerror`` is the one-line message: what failed, how many
-    impacts are kept, and how to continue.
-
-    Attributes:
-        rows: whole rows in the CSV file.
-        checkpoint_rows: rows the checkpoint describes (a resume recomputes the rest).
-        out_dir: the run directory.
-    """
-
-    def __init__(self, errno_: int, message: str, rows: int, checkpoint_rows: int, out: Path):
-        super().__init__(errno_, message)
-        self.rows = rows
-        self.checkpoint_rows = checkpoint_rows
-        self.out_dir = out
-
-    @classmethod
-    def after(cls, exc: OSError, out: Path, rows: int, checkpoint_rows: int) -> RunWriteError:
-        code = exc.errno or errno.EIO
-        if code in _DISK_FULL:
-            what = f"the disk is full ({os.strerror(code)})"
-        else:
-            where = f" {exc.filename}" if exc.filename else ""
-            what = f"a write failed{where} ({exc.strerror or exc})"
-        if (out / CHECKPOINT_NAME).is_file():
-            again = (
-                f"free some space, then continue with "
-                f"`billiard run --resume {shlex.quote(str(out))}`"
-                if code in _DISK_FULL
-                else f"continue with `billiard run --resume {shlex.quote(str(out))}`"
-            )
-        else:  # not even the first checkpoint was written: nothing to continue from
-            again = "nothing to continue from: run it again"
-        return cls(
-            code,
-            f"{what}: {rows} impacts kept in {out / CSV_NAME}; {again}",
-            rows,
-            checkpoint_rows,
-            out,
-        )
-
-
-_DISK_FULL = frozenset({errno.ENOSPC, getattr(errno, "EDQUOT", errno.ENOSPC)})
 
 
 def _all_finite(data: Any) -> bool:
