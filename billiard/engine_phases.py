@@ -12,6 +12,7 @@ from typing import Any
 from billiard.errors import BallAtRest, SimulationError
 from billiard.generated import ball as _ball
 from billiard.impact import Contact
+from billiard.kernels_python import impact as _impact
 from billiard.record import ContactRecord, ImpactRecord
 from billiard.state import BallState
 from billiard.status import Status
@@ -78,10 +79,10 @@ class ContactPhases:
         whose rebound speed e |wn| is at most the landing speed ``contact.elastic_below``
         (or the low-velocity rule applied)? The one criterion for landing on a wall and
         for being held by two."""
-        e = self.contact_model.e
-        if e >= 1.0:
-            return False
-        return e * abs(res.wn) <= self.scene.contact.elastic_below or res.regime == "elastic"
+        return _impact.rebound_settles(
+            self.contact_model.e, self.scene.contact.elastic_below, res.wn,
+            res.regime == "elastic",
+        )  # fmt: skip
 
     def _land(self, index: int, s: float, theta: float, res: Any, t: float) -> None:
         """After an impact: enter contact when the rebound speed e |wn| is below the

@@ -80,3 +80,14 @@ def kane_levinson(ctx, u1, u2, u3, z, vb1, vb2, pressing):
         rt = m * (c * du1 + s * du2)
         rn = m * (c * du2 - s * du1)
     return n1, n2, n3, rt, rn, regime, resting
+
+
+@inline
+def rebound_settles(e, below, wn, elastic):
+    """Does the chattering an impact starts settle: an inelastic contact (e < 1) whose
+    rebound speed e |wn| (m/s) is at most the landing speed ``below``
+    (``contact.elastic_below``), or the low-velocity rule applied (``elastic``)? The one
+    criterion for landing on a wall and for being held by two."""
+    if e >= 1.0:
+        return False
+    return e * abs(wn) <= below or elastic

@@ -20,7 +20,7 @@ from billiard.engine_phases import (
 from . import fixed_step, flight
 from .ball import contact_velocity, energy, frame_velocity
 from .borrow import borrow, inline, jit
-from .impact import kane_levinson
+from .impact import kane_levinson, rebound_settles
 from .layout import (
     AMP,
     COLLAPSE,
@@ -234,9 +234,8 @@ def settles(ctx, j, kind, s, u1, u2, u3, z, vb1, vb2, regime):
     ctx[EN_LAST_WN] = wn
     ctx[EN_LAST_REGIME] = regime
     ctx[EN_SETTLES] = 0.0
-    if kind != LID and e < 1.0:
-        if e * abs(wn) <= ctx[EN_LAND_BELOW] or regime == ELASTIC:
-            ctx[EN_SETTLES] = 1.0
+    if kind != LID and rebound_settles(e, ctx[EN_LAND_BELOW], wn, regime == ELASTIC):
+        ctx[EN_SETTLES] = 1.0
 
 
 @jit
