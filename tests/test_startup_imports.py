@@ -105,3 +105,37 @@ def test_numba_config_file_is_still_read(tmp_path):
     (tmp_path / ".numba_config.yaml").unlink()
     out = _run(CONFIG, cwd=tmp_path)
     assert out == {"quiet": 0, "yaml": True}
+
+
+COLLECTOR = """
+import gc, json, sys
+mine = [[i] for i in range(1000)]
+frozen_before = {frozen}
+if frozen_before:
+    gc.freeze()
+count = gc.get_freeze_count()
+import billiard
+modules = list(sys.modules)
+print(json.dumps({{
+    "enabled": gc.isenabled(),
+    "frozen": gc.get_freeze_count(),
+    "frozen_before": count,
+    "numba_first": modules.index("numba") < modules.index("billiard.scene"),
+}}))
+"""
+
+
+@pytest.mark.parametrize("frozen", [False, True], ids=["plain", "user-froze"])
+def test_import_leaves_the_collector_as_it_was(frozen):
+    """``import billiard`` exempts nothing from collection (its objects go to the
+    oldest generation, not the permanent one), leaves a program's own frozen objects
+    frozen, and re-enables the collector."""
+    out = _once(COLLECTOR.format(frozen=frozen))
+    assert out["enabled"] is True
+    # (frozen objects freed by their reference counts meanwhile leave the count)
+    assert out["frozen"] <= out["frozen_before"]
+    assert (out["frozen"] > 0) is frozen
+    if jit.ENABLED:
+        # numba imported before billiard's modules: its casting-rule set-up was ten
+        # times slower after them (billiard/__init__.py)
+        assert out["numba_first"]

@@ -60,12 +60,14 @@ def build_parser() -> argparse.ArgumentParser:
 
 def main(argv: Sequence[str] | None = None) -> int:
     if argv is None:
-        # The command's own process: numba's and LLVM's objects (types, compiled
-        # libraries, their LLVM handles) live until the interpreter exits, which then
-        # frees them one by one in its last collections, a tenth to a quarter of a second
-        # after the command's end. Frozen at the exit, they are left to the operating
-        # system (atexit handlers still run; every file the command writes is closed
-        # before it returns).
+        # The command's own process. The objects its imports made (numba's and LLVM's
+        # types and compiled libraries among them) live until the interpreter exits:
+        # frozen now, the collector never walks them again during the command; frozen
+        # again at the exit, they and what the command made are left to the operating
+        # system instead of being freed one by one in the interpreter's last collections
+        # (a tenth to a quarter of a second; atexit handlers still run, and every file
+        # the command writes is closed before it returns).
+        gc.freeze()
         atexit.register(gc.freeze)
     parser = build_parser()
     args = parser.parse_args(argv)
