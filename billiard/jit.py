@@ -268,20 +268,71 @@ def _load_lightly(dispatcher: Any) -> None:
     numba's cache refreshes the target context before every load: it imports the
     implementations of everything numba can compile (numpy's linear algebra, random,
     typed containers, ...), about 0.35 s and 20 MB, which machine code loaded from the
-    cache never uses: it needs only numba's runtime (NRT) linked in. A cache miss
-    compiles, and the compiler refreshes the contexts itself.
+    cache never uses: it needs only numba's runtime (NRT) linked in, which is loaded
+    from the cache too (:func:`_initialize_runtime`). A cache miss compiles, and the
+    compiler refreshes the contexts itself.
     """
     cache = dispatcher._cache
 
     def load_overload(sig: Any, target_context: Any) -> Any:
-        from numba.core.runtime import rtsys
-
         with _llvm_lock_unobserved():
-            rtsys.initialize(target_context)
+            _initialize_runtime(target_context, cache._cache_path)
             with cache._guard_against_spurious_io_errors():
                 return cache._load_overload(sig, target_context)
 
     cache.load_overload = load_overload
+
+
+def _initialize_runtime(target_context: Any, folder: str) -> None:
+    """numba's runtime (NRT) initialized with its machine code read from ``folder``.
+
+    numba compiles the runtime's few LLVM functions (reference counts, atomic
+    operations) in every process, 25-30 ms of a warm start. The compiled object is kept
+    in ``folder`` (the cache folder of the first function loaded: a curve's or the
+    kernels'), named by what numba itself checks before reusing cached machine code:
+    its version, llvmlite's, and the target (triple, CPU, CPU features). Unreadable or
+    absent, it is compiled, then written (atomically).
+    """
+    from numba.core.runtime import nrtdynmod, rtsys
+
+    if rtsys._init:
+        return
+    compile_nrt = nrtdynmod.compile_nrt_functions
+    nrtdynmod.compile_nrt_functions = functools.partial(_runtime_library, folder=folder)
+    try:
+        rtsys.initialize(target_context)
+    finally:
+        nrtdynmod.compile_nrt_functions = compile_nrt
+
+
+def _runtime_library(ctx: Any, folder: str) -> Any:
+    """The runtime's library for ``ctx``: read from ``folder``, or compiled (as
+    ``nrtdynmod.compile_nrt_functions`` does) and written there."""
+    import pickle
+
+    import llvmlite
+    from numba.core.runtime import nrtdynmod
+
+    codegen = ctx.codegen()
+    key = repr((numba.__version__, llvmlite.__version__, codegen.magic_tuple()))
+    path = Path(folder) / f"nrt-{hashlib.sha256(key.encode()).hexdigest()[:16]}.nbo"
+    try:
+        state = pickle.loads(path.read_bytes())
+        return codegen.unserialize_library(state)
+    except Exception:  # absent, unreadable or not numba's: compiled below
+        pass
+    ir_module, library = nrtdynmod.create_nrt_module(ctx)
+    library.enable_object_caching()
+    library.add_ir_module(ir_module)
+    library.finalize()
+    part = path.with_name(f"{path.name}.{os.getpid()}.part")
+    try:
+        part.write_bytes(pickle.dumps(library.serialize_using_object_code()))
+        os.replace(part, path)
+    except OSError:  # a read-only cache: compiled in each process, as numba does
+        with contextlib.suppress(OSError):
+            part.unlink(missing_ok=True)
+    return library
 
 
 def jit(fn: F) -> F:
