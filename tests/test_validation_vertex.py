@@ -84,6 +84,38 @@ def test_spin_in_the_vertex_stops_at_the_friction_time():
     assert spins[1.2] == 0.0 and spins[0.98] == pytest.approx(0.02 * w0, rel=1e-9)
 
 
+FRICTIONLESS = {"mu_static": 0.0, "mu_kinetic": 0.0}
+
+
+def test_frictionless_spin_in_the_vertex_of_a_still_wedge_is_kept_at_rest():
+    # no friction, no torque: the spin never stops, and the ball held in a still wedge
+    # is at rest (as without spin) from the start, with its spin unchanged
+    sim = Simulation(wedge(FRICTIONLESS, {"omega": 80.0}))
+    assert sim.mode == "held"
+    result = simulate(wedge(FRICTIONLESS, {"omega": 80.0}), collisions=100)
+    assert len(result) == 0 and result.status is Status.AT_REST, result.message
+    assert sim.step(until=10.0) is None  # a time limit: held to it
+    assert sim.state.ball.u3 == 80.0
+
+
+@pytest.mark.parametrize("gamma", [1.5, 3.0])
+def test_frictionless_spin_in_a_shaken_wedge_stays_as_it_was(gamma):
+    f = 5.0
+    w = 2 * math.pi * f
+    amplitude = gamma * G * B / w**2
+    drive = {"amplitude": amplitude, "frequency": f, "direction": "horizontal"}
+    sim = Simulation(wedge(FRICTIONLESS, {"v1": amplitude * w, "omega": -30.0}, drive))
+    rows = []
+    sim.sample_dt = 1e-3
+    sim.on_sample = lambda *row: rows.append(row)
+    record = sim.step()
+    # released where the frictionless walls cannot hold the ball, spin or not
+    assert isinstance(record, ContactRecord) and record.end == "release"
+    assert record.t_end == pytest.approx(math.asin(1 / gamma) / w, abs=1e-11)
+    assert record.omega_start == record.omega_end == -30.0
+    assert rows and {row[5] for row in rows} == {-30.0}  # (t, q1, q2, u1, u2, u3, ...)
+
+
 @pytest.mark.parametrize("gamma", [1.5, 3.0])
 def test_a_shaken_wedge_releases_the_ball_where_the_walls_cannot_hold_it(gamma):
     f = 5.0

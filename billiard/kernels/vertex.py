@@ -115,6 +115,13 @@ def spin_rate(ctx, n_a, n_b, sigma):
 
 
 @inline
+def spin_decays(ctx, sigma):
+    """Does kinetic friction slow the spin (a spin, and walls with friction)? Without
+    friction the walls exert no torque: the spin stays as it is."""
+    return sigma != 0.0 and ctx[PH_MUK] != 0.0
+
+
+@inline
 def normal(ctx, tau, sigma):
     """(N_a, N_b) of the hold tau seconds after its start."""
     return forces(ctx, ctx[VX_ZA], ctx[VX_ZB], ctx[VX_THETA0] + ctx[OMEGA] * tau, sigma)
@@ -176,7 +183,9 @@ def begin(ctx):
     ctx[VX_SIGMA] = sigma
     ctx[VX_H] = math.inf if static else 2.0 * math.pi / abs(omega) / 64.0
     ctx[VX_TAU] = 0.0
-    ctx[VX_RSINCE] = 0.0 if sigma == 0.0 else math.inf
+    # at rest from the start without a spin, or with one that frictionless walls leave
+    # as it is (no torque: it never stops, and nothing else changes)
+    ctx[VX_RSINCE] = math.inf if spin_decays(ctx, sigma) else 0.0
     ctx[VX_RSPAN] = 0.0 if static else 2.0 * math.pi / abs(omega)
     ctx[VX_STAGE] = STAGE_STEP
 
@@ -189,7 +198,7 @@ def step(ctx):
     tau, w, sigma, limit = ctx[VX_TAU], ctx[VX_W], ctx[VX_SIGMA], ctx[VX_LIMIT]
     t_b = pmin(tau + ctx[VX_H], limit)
     stops = math.inf
-    if sigma != 0.0 and (ctx[AMP] == 0.0 or ctx[OMEGA] == 0.0):
+    if spin_decays(ctx, sigma) and (ctx[AMP] == 0.0 or ctx[OMEGA] == 0.0):
         # static boundary: constant forces, the spin stops at a known time
         stops = tau + abs(w / rate(ctx, tau, sigma))
         t_b = pmin(stops, limit)
@@ -279,7 +288,8 @@ def advance(ctx):
         elif stage == STAGE_SKIP:
             ts = ctx[VX_NEXT]
             if ts <= ctx[VX_TAU]:
-                return hand_out(ctx, ts, 0.0)
+                # the spin while at rest: none, or a frictionless hold's, unchanged
+                return hand_out(ctx, ts, 0.0 if ctx[VX_SIGMA] == 0.0 else ctx[VX_W])
             ctx[VX_RSINCE] = ctx[VX_TAU]
             step(ctx)
         else:
