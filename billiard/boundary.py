@@ -17,8 +17,14 @@ from typing import Any
 
 import numpy as np
 
+from billiard import jit as _jit
 from billiard.drive import Drive
 from billiard.errors import GeometryError
+from billiard.kernel_walls import plain_wall_functions
+from billiard.kernels_python import kernel_errors
+from billiard.kernels_python import layout as _L
+from billiard.kernels_python import rest as _rest
+from billiard.kernels_python import stop as _stop
 from billiard.surfaces import (
     EscapeLevel,
     FlatLid,
@@ -269,7 +275,7 @@ class Boundary:
         warm = self.initial_warm() if warm is None else warm
         xl, xr = self.x_range
         xs = np.linspace(xl, xr, _SAMPLES)
-        hs = [self.offset_height(float(x), warm) for x in xs]
+        hs = self._offset_heights(xs, warm)
         k = int(np.argmin(hs))
         a = float(xs[max(k - 1, 0)])
         b = float(xs[min(k + 1, len(xs) - 1)])
@@ -308,6 +314,50 @@ class Boundary:
                     candidates.append(x)
         best = min(candidates, key=lambda x: self.offset_height(x, warm))
         return best, self.offset_height(best, warm)
+
+    def _offset_heights(self, xs: np.ndarray, warm: list[WarmStart]) -> Sequence[float]:
+        """:meth:`offset_height` at each abscissa of ``xs`` in turn, the warm starts
+        carried from one to the next and left where the last one put them: the scan of
+        :func:`billiard.kernels.rest.offset_heights`, compiled when the kernels are."""
+        surf, stride = _L.SURF, _L.SURF_STRIDE
+        ctx = [0.0] * (surf + len(self.offsets) * stride)
+        for j, offset in enumerate(self.offsets):
+            # each surface's own block (its surface 0), as block j
+            base = surf + j * stride
+            ctx[base : base + stride] = offset.ctx[surf : surf + stride]
+            ctx[base + _L.S_WALL] = float(j)
+            ctx[base + _L.S_WS] = warm[j][0]
+        ps = [offset.p for offset in self.offsets]
+        compiled = _jit.ENABLED and all(p == ps[0] for p in ps)
+        try:
+            if compiled:
+                from billiard.kernel_walls import WallFunction
+                from billiard.kernels.rest import offset_heights
+
+                walls = tuple(
+                    tuple(WallFunction(getattr(w, name)) for w in self.walls)
+                    for name in ("f", "df", "d2f")
+                )
+                state = np.array(ctx, dtype=np.float64)
+                out = np.empty(len(xs), dtype=np.float64)
+                p = np.array(ps[0], dtype=np.float64)
+                try:
+                    offset_heights(state, p, walls, len(self.offsets), xs, out)
+                finally:
+                    ctx = state.tolist()
+                heights: Sequence[float] = out
+            else:
+                heights = [0.0] * len(xs)
+                walls = plain_wall_functions(self.walls)
+                _rest.offset_heights(ctx, ps[0], walls, len(self.offsets), xs.tolist(), heights)
+        except kernel_errors() as exc:
+            raise _stop(exc, ctx) from None
+        for j, offset in enumerate(self.offsets):
+            if isinstance(offset, OffsetLine):
+                continue
+            # where the surface's own calls would have left its warm start
+            warm[j][0] = offset.ctx[surf + _L.S_WS] = ctx[surf + j * stride + _L.S_WS]
+        return heights
 
     # ------------------------------------------------------------------ nearest point
 

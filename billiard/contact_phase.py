@@ -43,6 +43,7 @@ from billiard.errors import BallAtRest, SimulationError
 from billiard.kernels_python import contact as _k
 from billiard.kernels_python import contact_equations as _c
 from billiard.kernels_python import contact_forces as _f
+from billiard.kernels_python import kernel_errors
 from billiard.kernels_python import layout as _L
 from billiard.kernels_python import stop as _stop
 from billiard.status import Status
@@ -62,17 +63,7 @@ Vec = tuple[float, ...]
 Watched = tuple[Any, list]
 
 
-def _kernel_errors() -> tuple[type, ...]:
-    """The KernelError of the twin, and of the compiled kernels when there are any (a
-    class of their own: the same file loaded as another package)."""
-    if not _jit.ENABLED:
-        return (_L.KernelError,)
-    from billiard.kernels.layout import KernelError
-
-    return (_L.KernelError, KernelError)
-
-
-_KERNEL_ERRORS = _kernel_errors()
+_KERNEL_ERRORS = kernel_errors()
 #: phases run by the compiled kernels (else by the twin, interpreted: the same bits)
 COMPILED = _jit.ENABLED
 #: the compiled phase's entry point, by the number of walls it is given

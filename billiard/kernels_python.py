@@ -25,6 +25,7 @@ import sys
 from pathlib import Path
 from types import ModuleType
 
+from billiard import jit as _jit
 from billiard.errors import SimulationError
 
 __all__ = [
@@ -34,9 +35,11 @@ __all__ = [
     "contact_equations",
     "contact_forces",
     "flight",
+    "kernel_errors",
     "impact",
     "layout",
     "locate",
+    "rest",
     "stop",
     "surfaces",
     "vertex",
@@ -83,6 +86,7 @@ contact_equations = _load("contact_equations")
 contact_forces = _load("contact_forces")
 contact = _load("contact")
 vertex = _load("vertex")
+rest = _load("rest")
 
 #: the documented stops of the kernels the classes call, worded as the engine words them
 _TEXTS = {
@@ -90,6 +94,16 @@ _TEXTS = {
     layout.E_ROOT: "the impact time did not converge",
     layout.E_EXTREMUM: "the gap's extremum did not converge",
 }
+
+
+def kernel_errors() -> tuple[type[Exception], ...]:
+    """The KernelError of the twin, and of the compiled kernels when there are any (a
+    class of their own: the same file loaded as another package)."""
+    if not _jit.ENABLED:
+        return (layout.KernelError,)
+    from billiard.kernels.layout import KernelError
+
+    return (layout.KernelError, KernelError)
 
 
 def stop_text(code: int, value: float) -> str:
