@@ -81,13 +81,17 @@ class Surface:
     def _new_ctx(self, kind: float) -> list[float]:
         ctx = [0.0] * (_L.SURF + _L.SURF_STRIDE)
         ctx[_BASE + _L.S_KIND] = kind
+        ctx[_BASE + _L.S_SLOPE_AT] = math.nan  # no slope memo
         self.ctx = ctx
         return ctx
 
     def block(self) -> list[float]:
         """The constants of this surface's block of the kernels' state vector (the
-        slots before the warm start)."""
-        return self.ctx[_BASE:_WS]
+        slots before the warm start), without a slope memo: the memo's value stays in
+        this ctx (and a block may be given to another surface's slot)."""
+        values = self.ctx[_BASE:_WS]
+        values[_L.S_SLOPE_AT] = math.nan
+        return values
 
     def initial_warm(self) -> WarmStart:
         """A fresh warm start ``[s, slope]`` for this surface."""
@@ -185,7 +189,7 @@ class OffsetWall(Surface):
         """Abscissa s of the wall point whose offset point has abscissa x (Newton on
         X(s) = x from the start s, dX/ds = 1 - r f''/(1 + f'^2)^(3/2) > 0)."""
         try:
-            return _surfaces.foot(self.ctx, self._p, self._walls, _BASE, x, s)
+            return _surfaces.foot(self.ctx, self._p, self._walls, _BASE, x, s, math.nan)
         except _KernelError as exc:
             raise _stop(exc, self.ctx) from None
 

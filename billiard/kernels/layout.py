@@ -98,6 +98,10 @@ S_B = 3  # curved: bend_bound; line: intercept
 S_C = 4  # curved: bend_abs;   line: shift
 S_D = 5  # line: z
 S_E = 6  # line: cos z
+# curved: the slope memo, f'(s) at s = S_SLOPE_AT as S_SLOPE (nan: none), so that an
+# inversion starting where the last one ended does not call f' there again; a block copied
+# from a surface (Surface.block) carries no memo
+S_SLOPE_AT = 7
 S_WS = 8  # warm start: s
 S_WSLOPE = 9  # warm start: slope
 S_GA = 10  # G, dG/dtau at the substep's start
@@ -105,6 +109,7 @@ S_DGA = 11
 S_GB = 12  # G, dG/dtau at its end
 S_DGB = 13
 S_LEAVING = 14  # 1.0: the ball is separating from it
+S_SLOPE = 15
 
 CURVED = 0.0
 LINE = 1.0

@@ -23,6 +23,8 @@ from .layout import (
     S_C,
     S_D,
     S_KIND,
+    S_SLOPE,
+    S_SLOPE_AT,
     S_WALL,
     S_WS,
     S_WSLOPE,
@@ -52,22 +54,44 @@ def offset_curvature(fp, f2, r):
 
 
 @inline
-def foot(ctx, p, walls, base, x, s):
-    """Abscissa s of the wall point whose offset point has abscissa x (Newton)."""
+def foot(ctx, p, walls, base, x, s, fp):
+    """Abscissa s of the wall point whose offset point has abscissa x (Newton from s;
+    ``fp``: f'(s) when known, else nan)."""
     w = int(ctx[base + S_WALL])
     df = walls[1][w]
     d2f = walls[2][w]
     r = ctx[base + S_A]
     for _ in range(60):
-        fp = df(s, p)
+        if math.isnan(fp):
+            fp = df(s, p)
         q = 1.0 + fp * fp
         wr = r / math.sqrt(q)
         ds = (s - fp * wr - x) / (1.0 - d2f(s, p) * wr / q)
         s -= ds
         if abs(ds) < FOOT_STEP_TOL:
             return s
+        fp = math.nan  # not known at the new s
     ctx[EN_ERR_VALUE] = x
     raise KernelError(E_INVERSION)
+
+
+@inline
+def known_slope(ctx, base):
+    """f'(s) at the warm start s of a curved surface's block when the slope memo holds
+    it, else nan. f' is a pure function of s and of the block's wall (fixed while the
+    block is in a ctx), so the memo is the value the call would return, bit for bit; not
+    at s = 0, where +0 and -0 compare equal but may give slopes of opposite signs."""
+    s = ctx[base + S_WS]
+    if s == ctx[base + S_SLOPE_AT] and s != 0.0:
+        return ctx[base + S_SLOPE]
+    return math.nan
+
+
+@inline
+def remember_slope(ctx, base, s, fp):
+    """The slope memo: fp = f'(s)."""
+    ctx[base + S_SLOPE_AT] = s
+    ctx[base + S_SLOPE] = fp
 
 
 @inline
@@ -78,7 +102,7 @@ def offset_height(ctx, p, walls, j, x):
     py - f(s) - r/sqrt(1 + f'^2) rounds differently."""
     base = SURF + j * SURF_STRIDE
     if ctx[base + S_KIND] == CURVED:
-        s = foot(ctx, p, walls, base, x, ctx[base + S_WS])
+        s = foot(ctx, p, walls, base, x, ctx[base + S_WS], math.nan)
         ctx[base + S_WS] = s
         w = int(ctx[base + S_WALL])
         fp = walls[1][w](s, p)
@@ -92,11 +116,12 @@ def gap_rate(ctx, p, walls, j, px, py, vx, vy):
     base = SURF + j * SURF_STRIDE
     kind = ctx[base + S_KIND]
     if kind == CURVED:
-        s = foot(ctx, p, walls, base, px, ctx[base + S_WS])
+        s = foot(ctx, p, walls, base, px, ctx[base + S_WS], known_slope(ctx, base))
         w = int(ctx[base + S_WALL])
         fp = walls[1][w](s, p)
         ctx[base + S_WS] = s
         ctx[base + S_WSLOPE] = fp
+        remember_slope(ctx, base, s, fp)
         return py - walls[0][w](s, p) - ctx[base + S_A] / math.sqrt(1.0 + fp * fp), vy - fp * vx
     if kind == LINE:
         b = ctx[base + S_A]
@@ -110,12 +135,13 @@ def gap_accel(ctx, p, walls, j, px, py, vx, vy, ax, ay):
     base = SURF + j * SURF_STRIDE
     kind = ctx[base + S_KIND]
     if kind == CURVED:
-        s = foot(ctx, p, walls, base, px, ctx[base + S_WS])
+        s = foot(ctx, p, walls, base, px, ctx[base + S_WS], known_slope(ctx, base))
         ctx[base + S_WS] = s
         w = int(ctx[base + S_WALL])
         fp = walls[1][w](s, p)
+        remember_slope(ctx, base, s, fp)
         curvature = offset_curvature(fp, walls[2][w](s, p), ctx[base + S_A])
-        return ay - walls[1][w](s, p) * ax - curvature * vx * vx
+        return ay - fp * ax - curvature * vx * vx
     if kind == LINE:
         return ay - ctx[base + S_A] * ax
     return -ay
@@ -127,9 +153,11 @@ def contact(ctx, p, walls, j, px):
     base = SURF + j * SURF_STRIDE
     kind = ctx[base + S_KIND]
     if kind == CURVED:
-        s = foot(ctx, p, walls, base, px, ctx[base + S_WS])
+        s = foot(ctx, p, walls, base, px, ctx[base + S_WS], known_slope(ctx, base))
         ctx[base + S_WS] = s
-        return s, math.atan(walls[1][int(ctx[base + S_WALL])](s, p))
+        fp = walls[1][int(ctx[base + S_WALL])](s, p)
+        remember_slope(ctx, base, s, fp)
+        return s, math.atan(fp)
     if kind == LINE:
         return px + ctx[base + S_C], ctx[base + S_D]
     return px, math.pi
