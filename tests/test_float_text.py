@@ -309,3 +309,14 @@ def test_the_twin_loads_the_formatter_as_plain_python():
     for x in values.tolist():
         end = plain.write_float(x, out, 0)
         assert out[:end].tobytes().decode("ascii") == repr(x)
+
+
+def test_ryu_log10_tables_are_the_digit_counts():
+    """The floor(log10) tables of billiard/kernels/ryu.py, stepped past powers of ten,
+    equal the plain definition: the number of decimal digits of 2**e and 5**e, less one."""
+    from billiard.kernels import ryu
+
+    digits = lambda n: len(str(n)) - 1  # noqa: E731
+    assert ryu._LOG10_POW2.tolist() == [digits(1 << e) for e in range(ryu._LOG10_POW2.size)]
+    assert ryu._LOG10_POW5.tolist() == [digits(5**e) for e in range(ryu._LOG10_POW5.size)]
+    assert ryu._LOG10_POW2.size > 900 and ryu._LOG10_POW5.size > 1000

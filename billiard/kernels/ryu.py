@@ -55,19 +55,18 @@ _EXPONENT_MASK = np.uint64(0x7FF)
 _ZERO_CHAR = np.uint64(ord("0"))
 
 
-def _floor_log10(n: int) -> int:
-    """floor(log10(n)) of a positive integer, exactly."""
-    return len(str(n)) - 1
-
-
-def _q_positive(e2: int) -> int:
-    """Ryu's q for e2 >= 0: max(0, floor(log10(2**e2)) - 1)."""
-    return _floor_log10(1 << e2) - (1 if e2 > 3 else 0)
-
-
-def _q_negative(e2: int) -> int:
-    """Ryu's q for e2 < 0: max(0, floor(log10(5**-e2)) - 1)."""
-    return _floor_log10(5**-e2) - (1 if -e2 > 1 else 0)
+def _floor_log10_powers(base: int, count: int) -> list[int]:
+    """floor(log10(base**e)) for e = 0 .. count - 1, exactly: the powers of ten are
+    stepped past as the powers grow (the digits of each power's decimal string, the
+    plain definition, cost some 10 ms of every start-up)."""
+    logs, power, ten, digits = [], 1, 10, 0
+    for _ in range(count):
+        while power >= ten:
+            ten *= 10
+            digits += 1
+        logs.append(digits)
+        power *= base
+    return logs
 
 
 def _split(value: int) -> tuple[int, int]:
@@ -80,8 +79,17 @@ def _tables() -> dict[str, np.ndarray]:
     """The exact tables, sized by the exponents of the finite doubles (e2 from
     1 - _E2_OFFSET for the subnormals to _MAX_EXPONENT - _E2_OFFSET)."""
     e2_low, e2_high = 1 - _E2_OFFSET, _MAX_EXPONENT - _E2_OFFSET
-    q_max = _q_positive(e2_high)
-    i_max = max(-e2 - _q_negative(e2) for e2 in range(e2_low, 0))
+    log10_pow2 = _floor_log10_powers(2, e2_high + 1)
+    log10_pow5 = _floor_log10_powers(5, -e2_low + 1)
+
+    def q_positive(e2: int) -> int:  # Ryu's q for e2 >= 0
+        return log10_pow2[e2] - (1 if e2 > 3 else 0)
+
+    def q_negative(e2: int) -> int:  # Ryu's q for e2 < 0
+        return log10_pow5[-e2] - (1 if -e2 > 1 else 0)
+
+    q_max = q_positive(e2_high)
+    i_max = max(-e2 - q_negative(e2) for e2 in range(e2_low, 0))
     inverse = [
         _split((1 << ((5**q).bit_length() - 1 + _POW5_BITCOUNT)) // 5**q + 1)
         for q in range(q_max + 1)
@@ -98,18 +106,18 @@ def _tables() -> dict[str, np.ndarray]:
         "pow5_bits": np.array(
             [(5**e).bit_length() for e in range(max(q_max, i_max) + 1)], dtype=np.int64
         ),
-        "log10_pow2": np.array([_floor_log10(1 << e) for e in range(e2_high + 1)], dtype=np.int64),
-        "log10_pow5": np.array([_floor_log10(5**e) for e in range(-e2_low + 1)], dtype=np.int64),
+        "log10_pow2": np.array(log10_pow2, dtype=np.int64),
+        "log10_pow5": np.array(log10_pow5, dtype=np.int64),
         "pow10": np.array([10**k for k in range(20)], dtype=np.uint64),
     }
     # Ryu shifts a 128-bit product right by 64 + a distance in (0, 64); check it for
     # every exponent here, so that the kernel needs no case for 0 or 64 and more
     for e2 in range(e2_low, e2_high + 1):
         if e2 >= 0:
-            q = _q_positive(e2)
+            q = q_positive(e2)
             j = -e2 + q + _POW5_BITCOUNT + int(tables["pow5_bits"][q]) - 1
         else:
-            q = _q_negative(e2)
+            q = q_negative(e2)
             j = q - (int(tables["pow5_bits"][-e2 - q]) - _POW5_BITCOUNT)
         assert 64 < j < 128, (e2, j)
     return tables
