@@ -175,6 +175,16 @@ def section_throughput(t: dict, command: str) -> str:
     parts.append(
         "Whole runs of a fresh process, start-up included (wall seconds, median of the runs):\n"
     )
+    code = t.get("bytecode")
+    if code:
+        unset = "set" if code["dont_write"] else "not set"
+        parts.append(
+            f"billiard's bytecode was current for {code['current']} of its {code['modules']} "
+            f"modules (`PYTHONDONTWRITEBYTECODE` {unset}); a module without it is compiled "
+            "from source at every start, about 0.1 s for all of them, as in a fresh "
+            "checkout run with `PYTHONDONTWRITEBYTECODE` set (`python -m compileall "
+            "billiard` writes it once; an installed package has it).\n"
+        )
     rows = [
         [
             run["scene"],

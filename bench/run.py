@@ -56,6 +56,7 @@ def measure(section: str, cfg: Config, starts: Starts) -> dict:
         return {
             "engine": throughput.engine_info(),
             "rates": rates,
+            "bytecode": throughput.bytecode_state(),
             "runs": throughput.whole_runs(cfg.scenes, 25000, cfg.startup_repeats),
             "million": throughput.million("wedge-6.6hz", cfg.million_impacts),
             "compiled_startup": throughput.compiled_startup("wedge-6.6hz", cfg.startup_repeats),

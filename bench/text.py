@@ -46,18 +46,34 @@ default method reaches that accuracy (the other one fails or stalls above it in 
 setting of its ladder) there is no ratio; the verdict counts the cases where both reach
 it.
 
-What limits the speed now: compiled, an impact costs 0.7-5 us of arithmetic (section 5:
-libm's sine and cosine of the drive angle in the wedge, the square-root and division
-chains of the offset-curve foot and of the drag stages in the curved scenes). A run of
-25,000 impacts is bound by start-up: importing numpy and numba (0.3-0.45 s; numba's
-table of type conversions alone is about a tenth of a second), billiard's own modules
-(this machine sets `PYTHONDONTWRITEBYTECODE`, so they are compiled to bytecode at every
-start), loading the cached kernels, and the command line's files; the impacts
-themselves take under 0.1 s. A streamed run of many impacts formats its rows (about
-1 us per row, compiled) on a thread of its own while the engine makes the next ones, so
-on two free cores it costs little more than the impacts; a run kept in memory makes
-10^6 wedge impacts in about 1 s and holds them as 144 MB of rows, next to the 130-150
-MB a process with numba's LLVM takes before its first impact (section 4, "Memory").
+What limits the speed now: compiled, an impact costs 0.8-4 us of arithmetic (section 5:
+libm's sine and cosine of the drive angle in the wedge; in the curved scenes the
+square-root and division chains of the offset-curve foot's Newton iterations and, with
+drag, of the Dormand-Prince stages). The curved scenes with drag off are nearly all
+foot iterations, each calling the curve's f' and f'' through function pointers (one
+compiled engine for every curve, so LLVM cannot share the square root the two have in
+common); there the ratio to the interpreted kernels is lowest (26-36x over four bench
+runs). A run of 25,000 impacts takes 0.45-0.67 s of wall time over those runs (this
+machine's speed moves by a fifth from one half hour to the next), about two thirds of
+it start-up: Python and numpy, numba and llvmlite (together about 0.3 s), billiard's
+own modules, loading the cached kernels, and the command line's files; the impacts
+take under 0.1 s. The parabola with drag costs 2.8-3.6 us per impact from one fresh
+process to the next, on either side of its 3 us bound. Start-up was 0.8-0.95 s until
+five changes, each measured alone: numba is imported before
+billiard's own modules (after them, numba's set-up of its casting rules took 0.11-0.17
+s instead of 0.01 s: the same code, in another order), the objects of the imports go to
+the collector's oldest generation without a pass over them (`billiard/__init__.py`),
+numba's runtime is read from the cache instead of being compiled in every process (25
+ms, `billiard/jit.py`), the scan for the resting position runs compiled (10-20 ms,
+`billiard/kernels/rest.py`), and Ryu's tables for writing floats are built without
+decimal strings of 2,000 powers (10 ms, `billiard/kernels/ryu.py`). A streamed run of
+many impacts formats its rows (about 1 us per row, compiled) on a thread of its own
+while the engine makes the next ones, so on two free cores it costs little more than
+the impacts. A run kept in memory makes
+10^6 wedge impacts in under a second and holds them as 144 MB of rows (18 float64 per
+impact), next to the 125-150 MB a process with numba's LLVM takes before its first
+impact: the 200 MB bound holds for the streamed run, as `billiard run` runs (section 4,
+"Memory").
 Between methods, both compiled, the default method is 2-14x cheaper than rk4 at equal
 accuracy: rk4's coarsest step in the ladder (3 ms) already reaches 1e-9 s after 50
 impacts in most cases, so its cost there is a floor, not an interpolation; its real
@@ -232,20 +248,22 @@ PROFILE_AFTER = """Where the time goes now, and what would make it shorter:
    66 evaluations of the drag per impact, each with a square root). Carrying the drive's
    sine and cosine and the last slope from one kernel to the next would save a few per
    cent; fewer foot iterations (a better warm start) is the larger gain left.
-2. **Start-up** dominates a short run: importing numpy and numba takes about 0.45 s of
-   the 0.5-0.7 s before the first impact, then loading the cached kernels and the
-   curve's wall functions about 0.1 s. numba's cache would first load its typing and
-   target registries (every implementation it can compile, 0.35 s and 20 MB more); the
-   kernels' caches load only numba's runtime (`billiard/jit.py`), as the machine code
-   needs nothing else. A run of 25,000 impacts still spends more time starting than
-   simulating (section 4).
+2. **Start-up** is most of a short run: a fresh process reaches its first impact in
+   about 0.35 s, most of it importing numpy and numba, then loading the cached kernels
+   and the curve's wall functions (a few milliseconds each, the run loop's about 30 ms:
+   numba reads its 0.5 MB cache file and parses the kernel's LLVM bitcode, kept for
+   linking). numba's cache would first load its typing and target registries (every
+   implementation it can compile, 0.35 s and 20 MB more); the kernels' caches load only
+   numba's runtime, itself read from the cache (`billiard/jit.py`), as the machine code
+   needs nothing else.
 3. **Writing rows**: a streamed run formats its rows compiled (`kernels/ryu.py`,
    Ryu's shortest digits laid out as `repr` lays them out, byte for byte), about 1 us
    per row against 12-16 us for `repr`: about as long as the compiled wedge takes to
    compute the impact; then the file's write.
-4. **Building the simulation** (`Boundary`: offset-curve bounds sampled at start-up,
-   radius validation): milliseconds, once per run; it matters only for runs of a few
-   hundred impacts, such as the work-precision settings of section 1.
+4. **Building the simulation** (`Boundary`: the radius check and the offset-curve bounds
+   sampled interpreted, the resting position's scan compiled): 2-17 ms, once per run;
+   it matters only for runs of a few hundred impacts, such as the work-precision
+   settings of section 1.
 """
 
 CONTACT = """## 6. Contact phases against the hops they replace
