@@ -319,6 +319,10 @@ class Boundary:
         """:meth:`offset_height` at each abscissa of ``xs`` in turn, the warm starts
         carried from one to the next and left where the last one put them: the scan of
         :func:`billiard.kernels.rest.offset_heights`, compiled when the kernels are."""
+        ps = [offset.p for offset in self.offsets]
+        if any(p != ps[0] for p in ps):
+            # the kernels take one parameter array for all walls (a curve's walls share it)
+            return [self.offset_height(float(x), warm) for x in xs]
         surf, stride = _L.SURF, _L.SURF_STRIDE
         ctx = [0.0] * (surf + len(self.offsets) * stride)
         for j, offset in enumerate(self.offsets):
@@ -327,10 +331,8 @@ class Boundary:
             ctx[base : base + stride] = offset.ctx[surf : surf + stride]
             ctx[base + _L.S_WALL] = float(j)
             ctx[base + _L.S_WS] = warm[j][0]
-        ps = [offset.p for offset in self.offsets]
-        compiled = _jit.ENABLED and all(p == ps[0] for p in ps)
         try:
-            if compiled:
+            if _jit.ENABLED:
                 from billiard.kernel_walls import WallFunction
                 from billiard.kernels.rest import offset_heights
 
