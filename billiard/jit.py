@@ -293,16 +293,20 @@ def _initialize_runtime(target_context: Any, folder: str) -> None:
     its version, llvmlite's, and the target (triple, CPU, CPU features). Unreadable or
     absent, it is compiled, then written (atomically).
     """
+    from numba.core.compiler_lock import global_compiler_lock
     from numba.core.runtime import nrtdynmod, rtsys
 
-    if rtsys._init:
-        return
-    compile_nrt = nrtdynmod.compile_nrt_functions
-    nrtdynmod.compile_nrt_functions = functools.partial(_runtime_library, folder=folder)
-    try:
-        rtsys.initialize(target_context)
-    finally:
-        nrtdynmod.compile_nrt_functions = compile_nrt
+    # numba's own lock (re-entrant, taken by initialize too): no other thread sees the
+    # swapped function, or initializes the runtime meanwhile
+    with global_compiler_lock:
+        if rtsys._init:
+            return
+        compile_nrt = nrtdynmod.compile_nrt_functions
+        nrtdynmod.compile_nrt_functions = functools.partial(_runtime_library, folder=folder)
+        try:
+            rtsys.initialize(target_context)
+        finally:
+            nrtdynmod.compile_nrt_functions = compile_nrt
 
 
 def _runtime_library(ctx: Any, folder: str) -> Any:
