@@ -115,6 +115,9 @@ LIMITS: dict[str, Limit] = {
     "run.gravity": Limit(0.0, 100.0, "m/s^2", low_open=True),
     # simulated time: up to about 30 years
     "run.duration": Limit(0.0, 1e9, "s", low_open=True),
+    # time without an impact after which a run that asked for impacts ends (the ball
+    # rolls, slides or is held): from a millisecond to a day
+    "run.contact_span": Limit(1e-3, 86400.0, "s"),
 }
 
 

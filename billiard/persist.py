@@ -450,6 +450,7 @@ def _run_streamed(
         mode_times=sim.mode_times() if sim.phases or sim.sample_dt else None,
         contacts=out / CONTACTS_NAME if "contacts" in sides else None,
         trajectory=out / TRAJECTORY_NAME if "trajectory" in sides else None,
+        final_mode=sim.mode,
     )
 
 

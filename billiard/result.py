@@ -59,6 +59,8 @@ class Result:
             (None for a fresh run).
         truncation: for a resumed run, what was cut off the CSV file's end.
         already_finished: the resume found the run complete (or stopped) and did nothing.
+        final_mode: the ball's motion state when the run ended: ``flight``, ``roll``,
+            ``slide`` or ``held`` (None when not known, e.g. a finished run found again).
     """
 
     def __init__(
@@ -78,6 +80,7 @@ class Result:
         mode_times: dict[str, float] | None = None,
         contacts: Any = None,
         trajectory: Any = None,
+        final_mode: str | None = None,
     ):
         self.scene = scene
         self.status = Status(status)
@@ -95,6 +98,7 @@ class Result:
         self.mode_times = mode_times
         self._contacts = contacts
         self._trajectory = trajectory
+        self.final_mode = final_mode
 
     @property
     def contacts(self) -> dict[str, np.ndarray] | None:
@@ -119,6 +123,8 @@ class Result:
                 "the ball rests on the boundary, moving with it, "
                 f"from t = {self.final_time:.6g} s: nothing more happens"
             )
+        if self.status is Status.IN_CONTACT:
+            return _in_contact_message(self.scene, self.final_mode)
         return "all impacts simulated"
 
     @property
@@ -171,9 +177,24 @@ class Result:
             text += "; reached run.duration"
         if self.status is Status.AT_REST:
             text += "; at rest on the boundary (moving with it): nothing more happens"
+        if self.status is Status.IN_CONTACT:
+            text += "; " + _in_contact_message(self.scene, self.final_mode)
         if self.stop_reason:
             text += f"; stopped: {self.stop_reason}"
         return text
+
+
+_MODE_WORDS = {"roll": "rolling", "slide": "sliding", "held": "held by two walls"}
+
+
+def _in_contact_message(scene: Any, mode: str | None) -> str:
+    """Why a run ended with status IN_CONTACT, and how to follow the ball further."""
+    span = getattr(getattr(scene, "run", None), "contact_span", None)
+    how = _MODE_WORDS.get(mode or "", "in contact")
+    return (
+        f"no impact for run.contact_span = {span:g} s of simulated time, the ball "
+        f"{how} on the boundary: ended; --duration SECONDS (run.duration) follows it further"
+    )
 
 
 def _side_columns(source: Any) -> dict[str, np.ndarray] | None:

@@ -130,4 +130,5 @@ def simulate(
         mode_times=sim.mode_times() if sim.phases or sim.sample_dt else None,
         contacts=contacts,
         trajectory=trajectory,
+        final_mode=sim.mode,
     )

@@ -376,6 +376,9 @@ class RunSpec:
         gravity: gravitational acceleration g (m/s^2).
         duration: simulated time (s) after which the run stops, or None for no limit;
             the run ends at whichever of ``collisions`` and ``duration`` comes first.
+        contact_span: without ``duration``, simulated time (s) the ball may stay in
+            contact with the boundary (rolling, sliding or held) without an impact before
+            the run ends (status ``IN_CONTACT``): a run that asks for impacts always ends.
     """
 
     collisions: int = 25000
@@ -384,6 +387,7 @@ class RunSpec:
     step: float = 1e-4
     gravity: float = 9.81
     duration: float | None = None
+    contact_span: float = 10.0
 
     def __post_init__(self) -> None:
         collisions = self.collisions
@@ -401,6 +405,7 @@ class RunSpec:
         _set(self, "step", limited("run.step", self.step))
         _set(self, "gravity", limited("run.gravity", self.gravity))
         _set(self, "duration", check_optional_number("run.duration", self.duration))
+        _set(self, "contact_span", limited("run.contact_span", self.contact_span))
 
 
 #: Section name -> its dataclass, in file order.

@@ -34,9 +34,14 @@ class Status(IntEnum):
     #: the ball rests on the boundary, moving with it, through a whole drive period (or
     #: on a static boundary): nothing more happens, so the run ends early but complete
     AT_REST = 7
+    #: a run that asked for impacts (no ``run.duration``) and whose ball stayed in contact
+    #: with the boundary (rolling, sliding or held) without an impact for
+    #: ``run.contact_span`` seconds of simulated time: it ends early but complete; a
+    #: ``run.duration`` (``--duration``) follows the contact motion further
+    IN_CONTACT = 8
 
     @property
     def finished(self) -> bool:
         """True when the run did all it was asked for, or all that can happen (no early
         stop by a fault of the model or the numerics)."""
-        return self in (Status.COMPLETE, Status.TIME_LIMIT, Status.AT_REST)
+        return self in (Status.COMPLETE, Status.TIME_LIMIT, Status.AT_REST, Status.IN_CONTACT)
