@@ -682,8 +682,11 @@ def audit_contact_rows(
                     f"{columns['end'][i]}, t = {t!r} s)"
                 ),
             )
+    # the phase in progress when the run ended is written too, as cut: no finished phase
+    cut = int(sum(1 for end in columns["end"] if str(end) == "cut"))
     return {
-        "contact_rows": rows,
+        "contact_rows": rows - cut,
+        "contact_cut_rows": cut,
         "contact_penetrations": tally.penetrations,
         "contact_detached": tally.detached,
         "contact_non_finite_rows": int((~finite).sum()),

@@ -31,7 +31,7 @@ before.
 from __future__ import annotations
 
 import math
-from collections.abc import Callable, Iterable, Iterator, Sequence
+from collections.abc import Callable, Iterable, Sequence
 from dataclasses import dataclass
 from typing import Any
 
@@ -69,6 +69,10 @@ COMPILED = _jit.ENABLED
 #: the compiled phase's entry point, by the number of walls it is given
 _ENTRIES: dict[int, Any] = {}
 
+#: accepted steps between two pauses of a phase (a stop request is looked at, progress
+#: reported): some milliseconds compiled, a tenth of a second interpreted
+PAUSE_STEPS = 1000.0
+
 #: why a phase ends, by the kernels' condition index (3: friction; 4 and up: impact)
 _REASONS = ("lift-off", "wall-end", "wall-end")
 
@@ -77,13 +81,15 @@ _REASONS = ("lift-off", "wall-end", "wall-end")
 class PhaseEnd:
     """How a contact phase ended: after ``tau`` seconds, for ``reason`` (one of
     ``lift-off``, ``slip``, ``roll``, ``wall-end``, ``impact``, or ``None`` when the
-    time limit came first), with the contact state ``y`` = (s, s_dot[, u3]) then; for
-    ``impact`` the other wall's index in ``other``."""
+    time limit came first or the caller stopped it, ``cut``), with the contact state
+    ``y`` = (s, s_dot[, u3]) then; for ``impact`` the other wall's index in ``other``."""
 
     tau: float
     reason: str | None
     y: Vec
     other: int = -1
+    #: stopped where it was by the caller (a pause's answer, or ``stop_at``)
+    cut: bool = False
 
 
 class ContactModel:
@@ -129,6 +135,7 @@ class ContactModel:
         constants = (self.m, self.r, self.k, self.g, self.c_lin, self.c_quad, self.mu_s,
                      self.mu_k, self.rtol)  # fmt: skip
         ctx[_L.PH_M : _L.PH_RTOL + 1] = constants
+        ctx[_L.PH_PAUSE] = ctx[_L.PH_PAUSE_T] = math.inf
         return ctx
 
     def wall_functions(self, wall: Any, others: Sequence[Watched] = ()) -> tuple:
@@ -227,6 +234,8 @@ class ContactModel:
         others: Sequence[Watched] = (),
         samples: Iterable[float] = (),
         on_sample: Callable[[float, Vec], None] | None = None,
+        pause: Callable[[float], bool] | None = None,
+        stop_at: float = math.inf,
     ) -> PhaseEnd:
         """Integrate one contact phase from y0 at drive angle theta0 for at most
         ``limit`` seconds (:func:`billiard.kernels.contact.advance`).
@@ -240,6 +249,13 @@ class ContactModel:
             samples: increasing times (s, from the phase's start; an iterable, read as
                 far as the phase goes) at which to report the state to
                 ``on_sample(tau, y)``.
+            pause: called as ``pause(tau)`` between two steps every
+                :data:`PAUSE_STEPS` steps (tau: s from the phase's start); when it
+                returns True the phase stops there (a ``cut`` end: reason None,
+                ``cut`` True). The pauses leave the integration as it is: the phase's
+                steps and end are those of a phase run without them.
+            stop_at: the phase stops (a ``cut`` end) at the first step boundary at or
+                after this time (s from the phase's start), without changing a step.
         """
         ctx = self.ctx
         walls = self.wall_functions(wall, others)
@@ -265,24 +281,46 @@ class ContactModel:
         samples = iter(samples)
         ctx[_L.PH_NEXT] = next(samples, math.inf) if on_sample is not None else math.inf
         ctx[_L.PH_STEPS] = 0.0
+        ctx[_L.PH_PAUSE] = PAUSE_STEPS if pause is not None else math.inf
+        ctx[_L.PH_PAUSE_T] = stop_at
         p = wall.p
+        cut = False
         try:
             if COMPILED:
-                status = self._run_compiled(wall, others, samples, on_sample)
+                state, call = self._compiled_entry(wall, others)
             else:
-                _k.begin(ctx, p, walls)
-                status = _k.advance(ctx, p, walls)
-                while status == _L.PHASE_SAMPLE:
-                    y = tuple(ctx[_L.PH_SAMPLE_Y : _L.PH_SAMPLE_Y + n_y])
-                    on_sample(ctx[_L.PH_SAMPLE_T], y)  # type: ignore[misc]
-                    ctx[_L.PH_NEXT] = next(samples, math.inf)
-                    status = _k.advance(ctx, p, walls)
+                state = ctx
+
+                def call(start: bool) -> int:
+                    if start:
+                        _k.begin(ctx, p, walls)
+                    return _k.advance(ctx, p, walls)
+
+            try:
+                status = call(True)
+                while status == _L.PHASE_SAMPLE or status == _L.PHASE_PAUSE:
+                    if status == _L.PHASE_SAMPLE:
+                        y = tuple(float(v) for v in state[_L.PH_SAMPLE_Y : _L.PH_SAMPLE_Y + n_y])
+                        on_sample(float(state[_L.PH_SAMPLE_T]), y)  # type: ignore[misc]
+                        state[_L.PH_NEXT] = next(samples, math.inf)
+                    else:
+                        tau = float(state[_L.PH_TAU])
+                        if tau >= stop_at or (pause is not None and pause(tau)):
+                            cut = True
+                            break
+                        state[_L.PH_PAUSE] = state[_L.PH_STEPS] + PAUSE_STEPS
+                    status = call(False)
+            finally:
+                if state is not ctx:
+                    ctx[:] = state.tolist()
         except _KERNEL_ERRORS as exc:
             raise self._stop(exc) from None
         finally:
             for base, warm in curved:
                 warm[0] = ctx[base + _L.S_WS]
             self.steps += int(ctx[_L.PH_STEPS])
+        if cut:
+            return PhaseEnd(ctx[_L.PH_TAU], None, tuple(ctx[_L.PH_Y : _L.PH_Y + n_y]), cut=True)
         if status == _L.PHASE_LIMIT:
             return PhaseEnd(limit, None, tuple(ctx[_L.PH_Y : _L.PH_Y + n_y]))
         i = int(ctx[_L.PH_END_I])
@@ -295,31 +333,21 @@ class ContactModel:
         end_y = tuple(ctx[_L.PH_END_Y : _L.PH_END_Y + n_y])
         return PhaseEnd(ctx[_L.PH_END_T], reason, end_y, i - 4 if i >= 4 else -1)
 
-    def _run_compiled(
-        self,
-        wall: Any,
-        others: Sequence[Watched],
-        samples: Iterator[float],
-        on_sample: Callable[[float, Vec], None] | None,
-    ) -> int:
-        """The phase set up in ``self.ctx``, run by the compiled kernels
-        (:func:`billiard.kernels.contact.run_phase`) on a float64 copy of it, copied
-        back (also after a stop) so that the rest reads Python floats as before."""
-        ctx = self.ctx
-        n_y = 2 if ctx[_L.PH_MODE] == _L.ROLL else 3
+    def _compiled_entry(
+        self, wall: Any, others: Sequence[Watched]
+    ) -> tuple[np.ndarray, Callable[[bool], int]]:
+        """The phase set up in ``self.ctx`` as a float64 copy, and the compiled kernels'
+        call on it (:func:`billiard.kernels.contact.run_phase`; ``call(start)``): the
+        caller copies the array back into ``self.ctx`` (also after a stop), so that the
+        rest reads Python floats as before."""
         walls, entry = self._compiled_walls(wall, others)
-        state = np.array(ctx, dtype=np.float64)
+        state = np.array(self.ctx, dtype=np.float64)
         p = np.array(wall.p, dtype=np.float64)
-        try:
-            status = entry(state, p, walls, True)
-            while status == _L.PHASE_SAMPLE:
-                y = tuple(state[_L.PH_SAMPLE_Y : _L.PH_SAMPLE_Y + n_y].tolist())
-                on_sample(float(state[_L.PH_SAMPLE_T]), y)  # type: ignore[misc]
-                state[_L.PH_NEXT] = next(samples, math.inf)
-                status = entry(state, p, walls, False)
-        finally:
-            ctx[:] = state.tolist()
-        return status
+
+        def call(start: bool) -> int:
+            return entry(state, p, walls, start)
+
+        return state, call
 
     def _compiled_walls(self, wall: Any, others: Sequence[Watched]) -> tuple[tuple, Any]:
         """The phase's wall functions as compiled function values, and the compiled

@@ -56,6 +56,14 @@ CHECKPOINT_INTERVAL = 1.0
 Progress = Callable[[int, int], None]
 
 
+def _report_time(progress: Any, t: float) -> None:
+    """Tell a progress object that has an ``at_time`` method the simulated time (s)
+    reached: while the ball rolls the impact count stands still, the time does not."""
+    at_time = getattr(progress, "at_time", None)
+    if at_time is not None and math.isfinite(t):
+        at_time(t)
+
+
 class Simulation(ContactPhases, EventStep):
     """Everything a run needs, built and validated from a scene, and the engine state.
 
@@ -122,6 +130,13 @@ class Simulation(ContactPhases, EventStep):
         self.vertex_hold = VertexHold(self.contact_model) if self.phases else None
         #: called with each finished contact phase's record (contacts.csv)
         self.on_contact: Callable[[ContactRecord], None] | None = None
+        #: called with the record of the phase in progress when a run ends inside it
+        #: (``end`` = ``cut``); the engine's state stays at that phase's start
+        self.on_contact_cut: Callable[[ContactRecord], None] | None = None
+        #: while :meth:`run` runs: its stop request, and the pause of long contact
+        #: phases (the stop request looked at, progress reported)
+        self._request: StopRequest | None = None
+        self._pause: Callable[[float], bool] | None = None
         #: sampling: every ``sample_dt`` seconds of simulated time from the start,
         #: ``on_sample(t, q1, q2, v1, v2, omega, energy, mode)`` (trajectory.csv)
         self.sample_dt: float | None = None
@@ -199,6 +214,7 @@ class Simulation(ContactPhases, EventStep):
         self._contact: tuple[float, ...] = ()
         self._samples = 0
         self._phase_time = {"roll": 0.0, "slide": 0.0, "held": 0.0}
+        self._last_impact = ball.t
         if self._kernel is not None:
             self._kernel.reset(ball)
         if self.phases:
@@ -251,6 +267,7 @@ class Simulation(ContactPhases, EventStep):
             "contact": self._contact,
             "samples": self._samples,
             "phase_time": dict(self._phase_time),
+            "last_impact": self._last_impact if self.phases else None,
         }
 
     def _python_state(self) -> EngineState:
@@ -302,6 +319,7 @@ class Simulation(ContactPhases, EventStep):
         self._contact = tuple(state.contact)
         self._samples = state.samples
         self._phase_time = {"roll": 0.0, "slide": 0.0, "held": 0.0, **state.phase_time}
+        self._last_impact = state.ball.t if state.last_impact is None else state.last_impact
         if self._kernel is not None:
             self._kernel.restore(state)
 
@@ -396,6 +414,8 @@ class Simulation(ContactPhases, EventStep):
         monotonic = time.monotonic
         next_save = monotonic() + CHECKPOINT_INTERVAL if checkpoint is not None else math.inf
         self.status = None
+        self._request = request
+        self._pause = self._pause_for(request, progress, collisions)
         reason: str | None = None
         status = Status.COMPLETE
         # the flights between contact phases run on the kernels, as long as nothing
@@ -442,7 +462,29 @@ class Simulation(ContactPhases, EventStep):
             # a ball at rest ends the run complete: a status, not a stop reason
             status, reason = exc.status, None if exc.status.finished else str(exc)
         finally:
+            self._request = self._pause = None
             if progress is not None:
+                _report_time(progress, self.final_time)
                 progress(self._impacts, collisions)
         self.status = status
         return reason
+
+    def _pause_for(
+        self, request: StopRequest, progress: Progress | None, collisions: int
+    ) -> Callable[[float], bool]:
+        """The pause of a long contact phase (every few thousand steps): True stops it
+        (a stop request arrived); progress is reported about ten times a second with
+        the simulated time reached (``tau`` after the phase's start)."""
+        monotonic = time.monotonic
+        last = [monotonic()]
+
+        def pause(tau: float) -> bool:
+            if request.signum:
+                return True
+            if progress is not None and monotonic() - last[0] >= 0.1:
+                last[0] = monotonic()
+                _report_time(progress, self._ball.t + tau)
+                progress(self._impacts, collisions)
+            return False
+
+        return pause

@@ -56,6 +56,7 @@ def fly(
     ctx[L.EN_SETTLES] = 0.0
     # while the kernels fly, the engine's state is theirs (hooks and checkpoints see it)
     sim._kernel = flights
+    impacts = sim._impacts
     try:
         status, reason = flights.run(
             collisions, recorder, progress, checkpoint, request, until, on_record,
@@ -67,6 +68,9 @@ def fly(
         fault, final_time = flights.pending_stop(), sim.final_time
         sim.restore(state)
         sim._fault, sim.final_time = fault, final_time
+        if sim._impacts > impacts:
+            # the kernels stop after an impact (or leave the state at the last one)
+            sim._last_impact = sim._ball.t
     if ctx[L.EN_SETTLES] != 0.0:
         ball = sim._ball
         settled = Settled(

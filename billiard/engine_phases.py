@@ -12,6 +12,7 @@ from typing import Any
 from billiard.errors import BallAtRest, SimulationError
 from billiard.generated import ball as _ball
 from billiard.impact import Contact
+from billiard.interrupt import RunInterrupted
 from billiard.kernels_python import impact as _impact
 from billiard.record import ContactRecord, ImpactRecord
 from billiard.state import BallState
@@ -21,6 +22,7 @@ from billiard.vertex import HELD
 __all__ = [
     "compensated_add",
     "COLLAPSE_COUNT",
+    "CUT",
     "COLLAPSE_SPAN",
     "LIFT_OFF_SPEED",
     "ZERO_FLIGHT_LIMIT",
@@ -31,6 +33,8 @@ __all__ = [
 COLLAPSE_COUNT = 200
 #: ... within this much simulated time (s) stop the run (see ``Simulation._collapse``).
 COLLAPSE_SPAN = 1e-6
+#: The ``end`` of a contact phase that the run's end cut (contacts.csv).
+CUT = "cut"
 #: So does this many consecutive impacts (or contact phases) of zero duration.
 ZERO_FLIGHT_LIMIT = 1_000
 #: Normal speed (m/s) a ball leaving a wall at lift-off is given, far below any speed
@@ -234,15 +238,36 @@ class ContactPhases:
             theta = theta0 + omega * tau
             self._report_sample(t0 + tau, *model.lab_state(wall, theta, y, mode), mode)
 
+        deadline = self._contact_deadline(until)
+        if t0 >= deadline:
+            raise self._in_contact(t0)
         end = self._phase_end(
             t0,
             lambda: model.run_phase(
                 wall, mode, sgn, theta0, (s, sd, ball.u3), until - t0, self._watched(index),
                 self._sample_times(t0, until) if self.on_sample is not None else (),
                 on_sample if self.on_sample is not None else None,
+                pause=self._pause, stop_at=deadline - t0,
             ),
         )  # fmt: skip
         if end.reason is None:
+            # the run ends inside the phase (its duration, the contact span, a stop
+            # request): the phase so far is reported as cut, the state stays at its start
+            t_cut = t0 + end.tau
+            theta = (theta0 + omega * end.tau) % (2.0 * math.pi)
+            self._report_cut(
+                ContactRecord(
+                    t_start,
+                    t_cut,
+                    surface.label,
+                    mode,
+                    CUT,
+                    settle,
+                    *model.lab_state(wall, theta0, (s, sd, ball.u3), mode),
+                    *model.lab_state(wall, theta, end.y, mode)[:5],
+                )  # fmt: skip
+            )
+            self._after_cut(t_cut, deadline)
             return None
         tau = end.tau
         total, error, t, theta = self._clock_after(theta0, tau)
@@ -323,6 +348,7 @@ class ContactPhases:
             energy, surface.label, res.Rt, res.Rn, s_o, q3,
         )  # fmt: skip
         self._impacts = n
+        self._last_impact = t
         self._ball = BallState(t, theta, ball.q1, ball.q2, res.u1, res.u2, res.u3, q3)
         self.counts[res.regime] = self.counts.get(res.regime, 0) + 1
         recent = self._recent
@@ -364,6 +390,39 @@ class ContactPhases:
         self._mode = HELD
         self._contact = (float(a), float(b), px, py, t, settle)
 
+    def _contact_deadline(self, until: float) -> float:
+        """The simulated time (s) at which a run without a time limit (``until`` = inf)
+        ends in contact: ``run.contact_span`` after the last impact; else inf."""
+        if math.isfinite(until):
+            return math.inf
+        return self._last_impact + self.scene.run.contact_span
+
+    def _in_contact(self, t: float) -> SimulationError:
+        """The end of a run whose ball stayed in contact without an impact for
+        ``run.contact_span`` seconds, at t (a finished run, not a fault)."""
+        self.final_time = t
+        return SimulationError(
+            f"no impact for run.contact_span = {self.scene.run.contact_span:g} s "
+            f"(t = {t:.9g} s): the ball stays in contact",
+            Status.IN_CONTACT,
+        )
+
+    def _report_cut(self, record: ContactRecord) -> None:
+        """Report a phase cut by the run's end (``end`` = ``cut``): it is no event of the
+        engine, whose state stays at the phase's start (a resumed run redoes the phase)."""
+        if self.on_contact_cut is not None:
+            self.on_contact_cut(record)
+
+    def _after_cut(self, t_cut: float, deadline: float) -> None:
+        """After a phase was cut at t_cut: the contact span's end, a stop request
+        (RunInterrupted), or the time limit (the caller returns None)."""
+        request = self._request
+        if request is not None and request.signum:
+            self.final_time = t_cut
+            raise RunInterrupted(request.signum)
+        if t_cut >= deadline:
+            raise self._in_contact(t_cut)
+
     def _phase_end(self, t0: float, run: Callable[[], Any]) -> Any:
         """The end of the phase or hold that ``run`` integrates from time ``t0``. A ball
         found at rest ends the run, complete: its clock stops where the rest began."""
@@ -400,6 +459,9 @@ class ContactPhases:
             self._report_sample(t0 + tau, *lab(theta0 + drive.omega * tau, u3), HELD)
 
         sampling = self.on_sample is not None
+        deadline = self._contact_deadline(until)
+        if t0 >= deadline:
+            raise self._in_contact(t0)
         end = self._phase_end(
             t0,
             lambda: hold.run_hold(
@@ -409,6 +471,20 @@ class ContactPhases:
             ),
         )  # fmt: skip
         if end.reason is None:
+            t_cut = t0 + end.tau
+            self._report_cut(
+                ContactRecord(
+                    t_start,
+                    t_cut,
+                    f"{offsets[a].label}+{offsets[b].label}",
+                    HELD,
+                    CUT,
+                    settle,
+                    *lab(theta0, ball.u3),
+                    *lab(theta0 + drive.omega * end.tau, end.u3),
+                )  # fmt: skip
+            )
+            self._after_cut(t_cut, deadline)
             return None
         tau = end.tau
         total, error, t, theta = self._clock_after(theta0, tau)

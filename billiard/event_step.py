@@ -112,6 +112,7 @@ class EventStep:
             check_finite(record)
         # commit: from here on nothing can fail, so the state always matches the records
         self._impacts = n + 1
+        self._last_impact = t
         self._ball = BallState(t, ev.theta, ev.q1, ev.q2, res.u1, res.u2, res.u3, q3)
         self._clock, self._clock_error = total, error
         counts = self._counts

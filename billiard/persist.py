@@ -347,11 +347,15 @@ def _run_streamed(
     fingerprint = _fingerprint(sim)
     saved = [start.impacts]
     sides: dict[str, SideCsv] = {}
+    cut_rows: list[Any] = []
     try:
         if sim.phases:
             size = None if side_sizes is None else side_sizes.get("contacts")
             sides["contacts"] = SideCsv(out / CONTACTS_NAME, CONTACT_COLUMNS, size)
             sim.on_contact = sides["contacts"].append
+            # a phase cut by the run's end is written after the last checkpoint, which
+            # does not count it: a resume cuts it off and redoes the phase whole
+            sim.on_contact_cut = cut_rows.append
         if sim.sample_dt is not None:
             size = None if side_sizes is None else side_sizes.get("trajectory")
             trajectory = SideCsv(out / TRAJECTORY_NAME, TRAJECTORY_COLUMNS, size)
@@ -393,6 +397,14 @@ def _run_streamed(
         )
         saved[0] = mark.rows
 
+    def write_cut() -> None:
+        """The phase the run's end cut, after the checkpoint that leaves it out."""
+        if cut_rows and "contacts" in sides:
+            for row in cut_rows:
+                sides["contacts"].append(row)
+            sides["contacts"].flush()
+        cut_rows.clear()
+
     request = StopRequest()
     began = time.perf_counter()
     try:
@@ -410,6 +422,7 @@ def _run_streamed(
                 )
             except RunInterrupted as exc:
                 save(sim.state, "interrupted")
+                write_cut()
                 stream.close()
                 exc.rows, exc.checkpoint_rows, exc.out_dir = stream.rows_on_disk, saved[0], out
                 raise
@@ -422,6 +435,7 @@ def _run_streamed(
             # held more than the run makes) are not part of it
             stream.end_check()
             save(sim.state, "complete" if reason is None else "stopped", reason)
+            write_cut()
     except OSError as exc:
         stream.close()
         raise RunWriteError.after(

@@ -110,7 +110,7 @@ def simulate(
     contacts = trajectory = None
     if sim.phases:
         contacts = MemoryRecorder(CONTACT_COLUMNS)
-        sim.on_contact = contacts.append
+        sim.on_contact = sim.on_contact_cut = contacts.append
     if sim.sample_dt is not None:
         trajectory = MemoryRecorder(TRAJECTORY_COLUMNS)
         sim.on_sample = lambda *row: trajectory.append(row)

@@ -64,6 +64,9 @@ class EngineState:
         samples: trajectory samples reported so far (``--sample``).
         phase_time: simulated time (s) spent in finished ``roll``, ``slide`` and ``held``
             phases.
+        last_impact: contact phases: the time (s) of the last impact, or of the start
+            (the contact-span rule, ``run.contact_span``, counts from it); None for the
+            impacts model and in checkpoints written before it was kept.
     """
 
     ball: BallState
@@ -80,6 +83,7 @@ class EngineState:
     contact: tuple[float, ...] = ()
     samples: int = 0
     phase_time: dict[str, float] = field(default_factory=dict)
+    last_impact: float | None = None
 
     def to_dict(self) -> dict[str, Any]:
         """Plain JSON-ready data (floats stay floats; :mod:`json` writes them with
@@ -99,6 +103,7 @@ class EngineState:
             "contact": list(self.contact),
             "samples": self.samples,
             "phase_time": dict(self.phase_time),
+            "last_impact": self.last_impact,
         }
 
     @classmethod
@@ -128,6 +133,7 @@ class EngineState:
                 contact=tuple(_finite(x) for x in data.get("contact", ())),
                 samples=_count(data.get("samples", 0)),
                 phase_time={str(k): _finite(v) for k, v in data.get("phase_time", {}).items()},
+                last_impact=_optional(data.get("last_impact")),
             )
         except CheckpointError:
             raise
@@ -147,6 +153,10 @@ def _finite(value: Any) -> float:
     if not math.isfinite(value):
         raise CheckpointError("its engine state holds a non-finite number")
     return value
+
+
+def _optional(value: Any) -> float | None:
+    return None if value is None else _finite(value)
 
 
 def _count(value: Any) -> int:

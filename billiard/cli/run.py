@@ -30,6 +30,13 @@ class ProgressBar:
         self.last = 0.0 if self.enabled else self.started
         self.first_done: int | None = None
         self.first_time = self.started
+        #: the simulated time (s) the engine last reported (see :meth:`at_time`)
+        self.simulated: float | None = None
+
+    def at_time(self, t: float) -> None:
+        """The engine's report of the simulated time reached (s): it advances while the
+        ball rolls, slides or is held, when the impact count stands still."""
+        self.simulated = t
 
     def __call__(self, done: int, total: int) -> None:
         now = time.perf_counter()
@@ -43,8 +50,11 @@ class ProgressBar:
             filled = int(self.width * frac)
             counted = done - self.first_done
             rate = f", {counted / max(now - self.first_time, 1e-9):,.0f}/s" if counted else ""
+            simulated = self._simulated()
+            clock = f", t = {simulated:.6g} s" if simulated is not None else ""
             self.stream.write(
-                f"\r[{'#' * filled}{'.' * (self.width - filled)}] {done}/{total} impacts{rate} "
+                f"\r[{'#' * filled}{'.' * (self.width - filled)}] {done}/{total} impacts"
+                f"{rate}{clock} "
             )
             if done >= total:
                 self.stream.write("\n")
@@ -59,10 +69,9 @@ class ProgressBar:
     def line(self, done: int, total: int, now: float) -> str:
         """The log line: impacts, simulated time, rate and estimated time left."""
         parts = [f"billiard: {done:,}/{total:,} impacts"]
-        if self.clock is not None:
-            simulated = self.clock()
-            if simulated is not None:
-                parts.append(f"t = {simulated:.6g} s simulated")
+        simulated = self._simulated()
+        if simulated is not None:
+            parts.append(f"t = {simulated:.6g} s simulated")
         counted = done - (self.first_done or 0)
         if counted > 0:
             # a rate needs two counts: the first one may come after a compile
@@ -70,6 +79,11 @@ class ProgressBar:
             parts.append(f"{rate:,.0f} impacts/s")
             parts.append(f"about {_duration((total - done) / rate)} left")
         return ", ".join(parts)
+
+    def _simulated(self) -> float | None:
+        """The latest simulated time known (s): the engine's report or the clock's."""
+        known = [t for t in (self.simulated, self.clock() if self.clock else None) if t is not None]
+        return max(known) if known else None
 
     def close(self) -> None:
         if self.enabled:

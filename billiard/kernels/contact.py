@@ -44,6 +44,8 @@ from .layout import (
     PH_KS,
     PH_LIMIT,
     PH_NEXT,
+    PH_PAUSE,
+    PH_PAUSE_T,
     PH_RSINCE,
     PH_RSPAN,
     PH_RTOL,
@@ -60,6 +62,7 @@ from .layout import (
     PH_YI,
     PHASE_END,
     PHASE_LIMIT,
+    PHASE_PAUSE,
     PHASE_SAMPLE,
     STAGE_EMIT,
     STAGE_SKIP,
@@ -316,8 +319,10 @@ def hand_out(ctx, t, y):
 @inline
 def advance(ctx, p, walls):
     """Run the phase begun by :func:`begin` to its end (``PHASE_END``), its time limit
-    (``PHASE_LIMIT``) or the next sample time PH_NEXT (``PHASE_SAMPLE``: the caller
-    reports it, sets PH_NEXT to the following one and calls again).
+    (``PHASE_LIMIT``), the next sample time PH_NEXT (``PHASE_SAMPLE``: the caller
+    reports it, sets PH_NEXT to the following one and calls again) or a pause between
+    two steps (``PHASE_PAUSE``, after PH_PAUSE steps or at PH_PAUSE_T: the caller moves
+    PH_PAUSE on and calls again, or ends the phase where it is, at PH_TAU with PH_Y).
 
     Raises:
         KernelError: ``E_PHASE_STEPS`` (60 rejected steps), ``E_AT_REST`` (no time
@@ -343,6 +348,9 @@ def advance(ctx, p, walls):
             ctx[PH_RSINCE] = ctx[PH_TAU]
             ctx[PH_STAGE] = STAGE_STEP
         elif ctx[PH_TAU] < ctx[PH_LIMIT]:
+            if ctx[PH_STEPS] >= ctx[PH_PAUSE] or ctx[PH_TAU] >= ctx[PH_PAUSE_T]:
+                # between two steps: nothing of the integration is touched
+                return PHASE_PAUSE
             step(ctx, p, walls)
         else:
             return PHASE_LIMIT

@@ -172,7 +172,12 @@ PH_NCOND = 20  # conditions: normal force, two wall ends, friction, one per othe
 PH_CPREV = PH + 71  # conditions at the step's start
 PH_CNEW = PH_CPREV + PH_NCOND  # ... at its end
 PH_CTMP = PH_CNEW + PH_NCOND  # ... at a root candidate
-PH_END = PH_CTMP + PH_NCOND
+# the phase pauses between two steps (PHASE_PAUSE), its state untouched, once it has
+# taken PH_PAUSE steps or reached the time PH_PAUSE_T: the caller looks at its stop
+# request and its progress, then goes on (or stops the phase where it is)
+PH_PAUSE = PH_CTMP + PH_NCOND  # accepted steps at which to pause
+PH_PAUSE_T = PH_PAUSE + 1  # time since the phase's start (s) at which to pause (inf: none)
+PH_END = PH_PAUSE_T + 1
 
 ROLL = 0.0
 SLIDE = 1.0
@@ -249,6 +254,7 @@ LAND = 4  # the last row's impact settles on a wall (EN_LAST_J, EN_LAST_S, EN_LA
 PHASE_END = 0  # a transition ends the phase: PH_END_T, PH_END_I, PH_END_Y
 PHASE_LIMIT = 1  # the time limit came first: the state is PH_Y at PH_LIMIT
 PHASE_SAMPLE = 2  # a sample at PH_SAMPLE_T: PH_SAMPLE_Y; set PH_NEXT and call again
+PHASE_PAUSE = 3  # between two steps (PH_PAUSE, PH_PAUSE_T): the state is PH_Y at PH_TAU
 # a hold (vertex.advance) returns the same three: PHASE_END a release (VX_END_T,
 # VX_KEEPS, VX_W_END), PHASE_LIMIT the time limit (VX_W_END), PHASE_SAMPLE a sample
 # (VX_SAMPLE_T, VX_SAMPLE_W; set VX_NEXT and call again)
