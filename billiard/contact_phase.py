@@ -236,6 +236,7 @@ class ContactModel:
         on_sample: Callable[[float, Vec], None] | None = None,
         pause: Callable[[float], bool] | None = None,
         stop_at: float = math.inf,
+        interval: tuple[float, float] | None = None,
     ) -> PhaseEnd:
         """Integrate one contact phase from y0 at drive angle theta0 for at most
         ``limit`` seconds (:func:`billiard.kernels.contact.advance`).
@@ -255,14 +256,18 @@ class ContactModel:
                 ``cut`` True). The pauses leave the integration as it is: the phase's
                 steps and end are those of a phase run without them.
             stop_at: the phase stops (a ``cut`` end) at the first step boundary at or
-                after this time (s from the phase's start), without changing a step.
+                after this time (s from the phase's start), without changing a step
+                (a ball then at rest relative to the boundary goes on until the kernel
+                finds it at rest for good, or moving again).
+            interval: the abscissas (m) where the phase ends with ``wall-end``
+                (default the wall's interval [lo, hi]).
         """
         ctx = self.ctx
         walls = self.wall_functions(wall, others)
         roll = mode == "roll"
         n_y = 2 if roll else 3
         ctx[_L.PH_WALL] = float(wall.index)
-        ctx[_L.PH_LO], ctx[_L.PH_HI] = wall.lo, wall.hi
+        ctx[_L.PH_LO], ctx[_L.PH_HI] = (wall.lo, wall.hi) if interval is None else interval
         ctx[_L.PH_MODE] = _L.ROLL if roll else _L.SLIDE
         ctx[_L.PH_SGN] = sgn
         ctx[_L.PH_THETA0] = theta0
@@ -305,10 +310,19 @@ class ContactModel:
                         state[_L.PH_NEXT] = next(samples, math.inf)
                     else:
                         tau = float(state[_L.PH_TAU])
-                        if tau >= stop_at or (pause is not None and pause(tau)):
+                        if pause is not None and pause(tau):
                             cut = True
                             break
-                        state[_L.PH_PAUSE] = state[_L.PH_STEPS] + PAUSE_STEPS
+                        if tau < stop_at:
+                            state[_L.PH_PAUSE] = state[_L.PH_STEPS] + PAUSE_STEPS
+                        elif state[_L.PH_RSINCE] == math.inf:
+                            cut = True  # moving at stop_at
+                            break
+                        else:
+                            # at rest relative to the boundary: on to the kernel's at-rest
+                            # stop (within a drive period), looked at after every step
+                            state[_L.PH_PAUSE_T] = math.inf
+                            state[_L.PH_PAUSE] = state[_L.PH_STEPS] + 1.0
                     status = call(False)
             finally:
                 if state is not ctx:

@@ -105,10 +105,31 @@ class ContactPhases:
         mode, sgn = model.mode_for(wall, theta, s, sd, res.u3)
         n_force = model.forces(wall, mode, sgn, theta, (s, sd, res.u3))[2]
         if not n_force > 0.0:
+            self._leave_wall(wall, s, theta)
             return
         settle = t + 2.0 * rebound / (n_force / model.m * (1.0 - e))
         self._mode = mode
         self._contact = (float(index), s, sd, sgn, t, settle)
+
+    def _leave_wall(self, wall: Any, s: float, theta: float) -> None:
+        """A settling impact where the wall does not press the ball (N <= 0): it flies
+        on. Leaving at a relative normal speed below LIFT_OFF_SPEED (after an impact with
+        e = 0, or a grazing one), rounding could make the flight touch the wall again at
+        once: an impact of zero duration, again and again at one instant. It leaves at
+        LIFT_OFF_SPEED along the wall's normal, as at a lift-off."""
+        fp = wall.df(s, wall.p)
+        c = 1.0 / math.sqrt(1.0 + fp * fp)
+        nx, ny = -fp * c, c
+        vb1, vb2 = self.drive.boundary_velocity(theta)
+        ball = self._ball
+        vn = (ball.u1 - vb1) * nx + (ball.u2 - vb2) * ny
+        if vn >= LIFT_OFF_SPEED:
+            return
+        dv = LIFT_OFF_SPEED - vn
+        self._ball = BallState(
+            ball.t, ball.theta, ball.q1, ball.q2, ball.u1 + dv * nx, ball.u2 + dv * ny,
+            ball.u3, ball.q3,
+        )  # fmt: skip
 
     def _start_in_contact(self) -> None:
         """A ball that starts lying on a wall (gap and relative normal speed zero to
@@ -247,7 +268,7 @@ class ContactPhases:
                 wall, mode, sgn, theta0, (s, sd, ball.u3), until - t0, self._watched(index),
                 self._sample_times(t0, until) if self.on_sample is not None else (),
                 on_sample if self.on_sample is not None else None,
-                pause=self._pause, stop_at=deadline - t0,
+                pause=self._pause, stop_at=deadline - t0, interval=self._phase_interval(wall),
             ),
         )  # fmt: skip
         if end.reason is None:
@@ -307,6 +328,8 @@ class ContactPhases:
                 self._contact = (float(index), s1, sd1, -sgn, t, t)
         if self.on_contact is not None:
             self.on_contact(record)
+        if reason == "wall-end":
+            self._check_in_container(wall, s1, t)
         if reason == "impact":
             self._mode, self._contact = "flight", ()
             return self._impact_from_contact(end.other, index, t, tau, theta, q3)
@@ -389,6 +412,26 @@ class ContactPhases:
         self._ball = BallState(ball.t, ball.theta, ball.q1, ball.q2, u1, u2, ball.u3, ball.q3)
         self._mode = HELD
         self._contact = (float(a), float(b), px, py, t, settle)
+
+    def _phase_interval(self, wall: Any) -> tuple[float, float]:
+        """Where a phase on ``wall`` ends with ``wall-end``: the wall's interval, within
+        the container's range of x (where the curve reaches the lid or the escape
+        height; +-1000 m where it never does, as a plane's low side)."""
+        xl, xr = self.boundary.x_range
+        return max(wall.lo, xl), min(wall.hi, xr)
+
+    def _check_in_container(self, wall: Any, s: float, t: float) -> None:
+        """A phase that ended at the container's end of x (not at its wall's end): the
+        ball leaves the container sideways, which ends the run (ESCAPED)."""
+        xl, xr = self.boundary.x_range
+        lo, hi = self._phase_interval(wall)
+        low_end = s <= 0.5 * (lo + hi)
+        if (low_end and lo > wall.lo) or (not low_end and hi < wall.hi):
+            raise SimulationError(
+                f"the ball left the container's range x in [{xl:.6g}, {xr:.6g}] m at "
+                f"x = {s:.6g} m, t = {t:.9g} s, after impact {self._impacts}",
+                Status.ESCAPED,
+            )
 
     def _contact_deadline(self, until: float) -> float:
         """The simulated time (s) at which a run without a time limit (``until`` = inf)

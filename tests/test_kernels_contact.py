@@ -294,13 +294,13 @@ def test_holds_are_the_same_interpreted_and_compiled(monkeypatch):
 
 @compiled
 def test_runs_with_holds_are_the_same_with_compiled_and_twin_holds(monkeypatch):
-    """Whole runs through the holds' compiled entry (``VertexHold._compiled_entry``) and
+    """Whole runs through the holds' compiled entry (``VertexHold._run_compiled``) and
     through the twin: the same impacts, contact phases and samples, bit for bit."""
     from billiard import vertex
     from billiard.simulate import simulate
 
     calls = []
-    compiled_run = vertex.VertexHold._compiled_entry
+    compiled_run = vertex.VertexHold._run_compiled
 
     def counted(self, *args):
         calls.append(1)
@@ -312,7 +312,7 @@ def test_runs_with_holds_are_the_same_with_compiled_and_twin_holds(monkeypatch):
         return [{k: np.asarray(v).tobytes() for k, v in t.items()} for t in tables]
 
     for scene, until, impacts, _, sample, _ in _hold_cases()[-2:]:
-        monkeypatch.setattr(vertex.VertexHold, "_compiled_entry", counted)
+        monkeypatch.setattr(vertex.VertexHold, "_run_compiled", counted)
         fast = outputs(scene, until, impacts, sample)
         assert calls, "no hold ran compiled"
         monkeypatch.setattr(contact_phase, "COMPILED", False)
