@@ -15,7 +15,7 @@ from dataclasses import dataclass
 __all__ = ["CURVE_FORMAT", "Wall"]
 
 #: The layout of generated curve modules this runtime reads (their ``FORMAT``).
-CURVE_FORMAT = 5
+CURVE_FORMAT = 6
 
 Params = tuple[float, ...]
 

@@ -264,7 +264,7 @@ def curve_from_text(name: str, text: str, parameters: dict[str, str]) -> curve.C
 
 
 #: Version of the generated curve modules' layout; the runtime refuses other layouts.
-CURVE_FORMAT = 5
+CURVE_FORMAT = 6
 #: Name of the parameter-array argument of every generated wall function (parameter
 #: names start with a letter, so it cannot clash with one).
 PARAMETER_ARRAY = "_p"

@@ -13,9 +13,10 @@ candidate nearest points (a cubic for the parabola, a quartic for the hyperbola)
 
 Curves with kinks, written with abs(), are split at the zeros of the arguments of abs
 into walls; each wall is a smooth function valid on an interval and extended smoothly
-beyond it. Only convex kinks (slope jumping up) are accepted: then the curve is the
-maximum of its walls, the inside of the container is the intersection of the regions
-above them, and a ball can never touch the kink itself.
+beyond it. A zero where the curve is C^2 (``abs(x)**3`` at 0) is no kink: the curve stays
+one wall there, whose functions keep abs(). Only convex kinks (slope jumping up) are
+accepted: then the curve is the maximum of its walls, the inside of the container is the
+intersection of the regions above them, and a ball can never touch the kink itself.
 """
 
 from __future__ import annotations
@@ -65,10 +66,16 @@ def _abs_arguments(expr: sm.Basic) -> list[sm.Basic]:
 
 
 def split_walls(expr: sm.Basic, defaults: dict) -> tuple[list[sm.Basic], list[tuple]]:
-    """Split f at the kinks of abs(): return breakpoints and (lo, hi, smooth f) pieces.
+    """Split f at the kinks of abs(): return the kinks and (lo, hi, smooth f) walls.
 
     Breakpoints are kept symbolic in the parameters; their order and the sign of each abs
     argument on each interval are decided with the parameters' default values.
+
+    A zero of an abs argument where the curve is C^2 for every value of the parameters
+    (``abs(x)**3`` at 0) is no kink: the pieces either side of it stay one wall, which
+    keeps abs() (:func:`_smooth_join`). Split there, a ball rolling through the join would
+    meet the other wall, and the engine would count an impact (with the low-velocity
+    rule's relaunch) where the curve has no corner.
     """
     args = _abs_arguments(expr)
     if not args:
@@ -84,11 +91,15 @@ def split_walls(expr: sm.Basic, defaults: dict) -> tuple[list[sm.Basic], list[tu
             if value.is_real:
                 points.append((float(value), root))
     points.sort(key=lambda p: p[0])
+    # one breakpoint per point (abs(x**2 - 1) and abs(x + 1) share x = -1): an interval
+    # of zero width is no wall
+    points = [p for i, p in enumerate(points) if i == 0 or p[0] != points[i - 1][0]]
     breakpoints = [p[1] for p in points]
     numeric = [p[0] for p in points]
     edges = [-sm.oo, *breakpoints, sm.oo]
     nedges = [-1e300, *numeric, 1e300]
     pieces = []
+    signs = []  # per interval: abs(a) -> a or -a, as a's sign there
     for i in range(len(edges) - 1):
         lo, hi = nedges[i], nedges[i + 1]
         if lo == -1e300:
@@ -101,6 +112,7 @@ def split_walls(expr: sm.Basic, defaults: dict) -> tuple[list[sm.Basic], list[tu
         for a in args:
             sign = sm.sign(a.subs(defaults).subs(x, mid))
             repl[sm.Abs(a)] = a if sign >= 0 else -a
+        signs.append(repl)
         pieces.append((edges[i], edges[i + 1], expr.xreplace(repl)))
     # Convex kinks only: slope must not drop across a breakpoint.
     for i, b in enumerate(numeric):
@@ -116,7 +128,85 @@ def split_walls(expr: sm.Basic, defaults: dict) -> tuple[list[sm.Basic], list[tu
                 f"concave kink at x = {b:g} m (slope {left:g} -> {right:g}): "
                 "the ball could touch the corner point, which the contact model excludes"
             )
-    return breakpoints, pieces
+    walls = []
+    kinks = []
+    for first, last, wall in _wall_runs(expr, breakpoints, signs, defaults):
+        if first > 0:
+            kinks.append(breakpoints[first - 1])
+        walls.append((edges[first], edges[last + 1], wall))
+    return kinks, walls
+
+
+def _smooth_join(left: sm.Basic, right: sm.Basic, at: sm.Basic, defaults: dict) -> bool:
+    """Is the curve C^2 at the zero ``at`` of an abs argument, for every value of the
+    parameters (the pieces either side of it have the same height, slope and f'' there),
+    with a finite f''' on both sides? Decided exactly in sympy; a join that sympy cannot
+    show to be C^2 stays a breakpoint.
+
+    Why C^2 and not C^1: a ball in contact moves its centre along the wall's offset curve
+    at the speed (L - r z_s) ds/dt, and the contact equations keep ds/dt continuous. Where
+    f'' jumps, z_s jumps, and so would the centre's speed: one wall through
+    ``10*x*abs(x) + 20*x**2`` (C^1 at 0) changed a rolling ball's energy by 13 % at every
+    pass. Such a join stays two walls. A finite f''' too: ``abs(x)**2.5`` is C^2 at 0,
+    but its f''' is infinite there (it stays split, and the shape check refuses it)."""
+    jump = right - left
+    for order in (0, 1, 2):
+        value = sm.diff(jump, x, order).subs(x, at)
+        if value.has(sm.nan, sm.zoo, sm.oo, -sm.oo) or sm.simplify(value) != 0:
+            return False
+    where = at.subs(defaults)
+    for piece in (left, right):
+        value = sm.diff(piece, x, 3).subs(defaults).subs(x, where)
+        if not (value.is_real and value.is_finite):
+            return False
+    return True
+
+
+def _wall_runs(
+    expr: sm.Basic, breakpoints: list[sm.Basic], signs: list[dict], defaults: dict
+) -> list[tuple[int, int, sm.Basic]]:
+    """The walls: runs (first, last) of intervals whose joins are smooth, each with its
+    expression (abs(a) replaced by a or -a where a keeps one sign all along the run).
+
+    A wall is continued past its ends (for the container's geometry) by its expression,
+    which must stay smooth there: where an argument whose abs the wall keeps also changes
+    sign at one of its ends, the continuation must join smoothly too, or the joins inside
+    the wall where that argument changes sign are split after all.
+    """
+    n = len(breakpoints)
+    pieces = [expr.xreplace(sign) for sign in signs]
+    smooth = [
+        _smooth_join(pieces[j], pieces[j + 1], b, defaults) for j, b in enumerate(breakpoints)
+    ]
+    while True:
+        runs = []
+        first = 0
+        for j, joined in enumerate(smooth):
+            if not joined:
+                runs.append((first, j))
+                first = j + 1
+        runs.append((first, n))
+        walls = []
+        changed = False
+        for first, last in runs:
+            run = range(first, last + 1)
+            kept = [k for k in signs[first] if any(signs[i][k] != signs[first][k] for i in run)]
+            wall = expr.xreplace({k: signs[first][k] for k in signs[first] if k not in kept})
+            walls.append((first, last, wall))
+            for j in (first - 1, last):  # the joins at the wall's ends
+                ends = [k for k in kept if 0 <= j < n and signs[j][k] != signs[j + 1][k]]
+                if ends and not _smooth_join(
+                    wall.xreplace({k: signs[j][k] for k in ends}),
+                    wall.xreplace({k: signs[j + 1][k] for k in ends}),
+                    breakpoints[j],
+                    defaults,
+                ):
+                    for i in range(first, last):
+                        if any(signs[i][k] != signs[i + 1][k] for k in ends):
+                            smooth[i] = False
+                    changed = True
+        if not changed:
+            return walls
 
 
 def _slope(piece: sm.Basic, defaults: dict, at: float, side: str) -> float | None:
@@ -132,6 +222,14 @@ def _slope(piece: sm.Basic, defaults: dict, at: float, side: str) -> float | Non
     if not (value.is_real and value.is_finite):
         return None
     return float(value)
+
+
+def _classical(derivative: sm.Basic) -> sm.Basic:
+    """A derivative of a wall that keeps abs() as a plain function: without sympy's
+    DiracDelta terms. They vanish away from the zeros of abs's argument, and at them too,
+    since such a wall is C^2 there (:func:`_smooth_join`): each comes with a factor that
+    vanishes with the argument (``abs(x)**3``: 2 x**2 DiracDelta(x) in f'')."""
+    return derivative.replace(sm.DiracDelta, lambda *args: sm.S.Zero)
 
 
 def nearest_polynomial(near: sm.Basic) -> list[sm.Basic] | None:
@@ -171,11 +269,11 @@ def derive_curve(
     walls = []
     for lo, hi, f in pieces:
         fs = f.subs(x, s)
-        df = sm.diff(fs, s)
-        d2f = sm.diff(df, s)
-        d3f = sm.diff(d2f, s)
+        df = _classical(sm.diff(fs, s))
+        d2f = _classical(sm.diff(df, s))
+        d3f = _classical(sm.diff(d2f, s))
         near = (s - px) + (fs - py) * df
-        dnear = sm.diff(near, s)
+        dnear = _classical(sm.diff(near, s))
         walls.append(Wall(lo, hi, fs, df, d2f, d3f, near, dnear, nearest_polynomial(near)))
     return CurveDerivation(
         name, text, expression, parameters, parameter_symbols, breakpoints, walls

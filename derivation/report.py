@@ -52,7 +52,8 @@ def derivation_markdown(
         "denominators and square roots turns g into a polynomial whose real roots are the "
         "candidates. The tangent angle at the contact is z = atan f'(s), and the ball's "
         "single-point contact requires r below the radius of curvature "
-        "(1 + f'^2)^{3/2} / |f''|. Curves with abs() are split at their kinks into walls.",
+        "(1 + f'^2)^{3/2} / |f''|. Curves with abs() are split at their kinks into walls; "
+        "where abs() leaves the curve C^2 (abs(x)**3 at 0) the curve stays one wall.",
         "",
     ]
     for cd in curves:

@@ -4,7 +4,7 @@
 # Curve 'hyperbola': f(x) = sqrt(alpha*(1 + beta*x**2)) - delta
 # Parameters: alpha = 0.00403, beta = 800, delta = 0.0445
 # Walls: 1; nearest-point polynomial degree: 4
-# content sha256: b44da0db395f971867a811535db8bd1d00e65e09a14870784d7edfec07f73ece
+# content sha256: a4c74154c525ecfde4e9ddc0dfa63f8f7b0dd3fdc28e4ef7f63f3b1099c6043d
 """Boundary curve 'hyperbola': f(x) = sqrt(alpha*(1 + beta*x**2)) - delta (x and f in metres).
 
 Every function takes the curve's parameters as its last argument, an array in the
@@ -14,7 +14,7 @@ nearest-point condition is not a polynomial."""
 
 import math
 
-FORMAT = 5
+FORMAT = 6
 NAME = 'hyperbola'
 EXPRESSION = 'sqrt(alpha*(1 + beta*x**2)) - delta'
 PARAMETER_NAMES = ('alpha', 'beta', 'delta')

@@ -4,7 +4,7 @@
 # Curve 'parabola': f(x) = a*x**2 + c
 # Parameters: a = 26, c = 0.0063
 # Walls: 1; nearest-point polynomial degree: 3
-# content sha256: 91b9dae918f1ac38c270fa737e6692cf16306d81cdc0ce6df0ac1699d12e8fbe
+# content sha256: 3f138ab39e6fb04c67a6d69b4db2d2c3c27cb911015aff718178c7d918445370
 """Boundary curve 'parabola': f(x) = a*x**2 + c (x and f in metres).
 
 Every function takes the curve's parameters as its last argument, an array in the
@@ -14,7 +14,7 @@ nearest-point condition is not a polynomial."""
 
 import math
 
-FORMAT = 5
+FORMAT = 6
 NAME = 'parabola'
 EXPRESSION = 'a*x**2 + c'
 PARAMETER_NAMES = ('a', 'c')

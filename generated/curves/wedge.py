@@ -4,7 +4,7 @@
 # Curve 'wedge': f(x) = b*abs(x) + c
 # Parameters: b = 1.85, c = 0.0063
 # Walls: 2; nearest-point polynomial degree: 1, 1
-# content sha256: 86916ab95ae33ed63d4ddc18f474a9a2e383ec757185207dd9e88e8b599d146c
+# content sha256: 4a6201c774e8207340fee6f806841b8a25d85e970ec854d01f32b70eb90b2340
 """Boundary curve 'wedge': f(x) = b*abs(x) + c (x and f in metres).
 
 Every function takes the curve's parameters as its last argument, an array in the
@@ -14,7 +14,7 @@ nearest-point condition is not a polynomial."""
 
 import math
 
-FORMAT = 5
+FORMAT = 6
 NAME = 'wedge'
 EXPRESSION = 'b*abs(x) + c'
 PARAMETER_NAMES = ('b', 'c')
