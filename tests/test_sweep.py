@@ -129,10 +129,10 @@ def test_interrupted_sweep_resumes_to_the_same_bytes_without_recomputing(referen
         progress=_quiet(sweep),
     )
     assert sorted(first + second) == list(range(sweep.size))
-    assert resumed.computed == second
+    assert list(resumed.computed) == second
     assert resumed.result.read_bytes() == outcome.result.read_bytes()
     again = run_sweep(None, directory, resume=True, progress=_quiet(sweep))
-    assert again.computed == []
+    assert list(again.computed) == []
 
 
 def test_dask_local_cluster_gives_the_same_bytes(reference, tmp_path):

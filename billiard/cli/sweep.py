@@ -48,8 +48,9 @@ def cmd_sweep(args: argparse.Namespace) -> int:
                     "sweep: give a SCENE and --vary KEY=START:STOP:N, a sweep file, or --resume DIR"
                 )
             axes = [parse_vary(text) for text in args.vary]
+            changes = list(args.set)
             if args.file or is_sweep_file(source):
-                scene, file_axes, file_settings, _ = read_sweep_file(source, args.set)
+                scene, file_axes, file_settings, changes = read_sweep_file(source, args.set)
                 axes = [*file_axes, *axes]
                 settings = {**file_settings, **settings}
             else:
@@ -59,7 +60,7 @@ def cmd_sweep(args: argparse.Namespace) -> int:
             if not axes:
                 raise UserError("sweep: nothing to vary; give --vary KEY=START:STOP:N")
             check_keys(scene, axes)
-            sweep = Sweep(scene, tuple(axes), **settings)
+            sweep = Sweep(scene, tuple(axes), **settings, changes=tuple(changes))
             directory = Path(args.out) if args.out else Path("runs") / f"sweep-{scene.name}"
         outcome = run_sweep(
             sweep,
@@ -68,6 +69,7 @@ def cmd_sweep(args: argparse.Namespace) -> int:
             dask=args.dask,
             resume=args.resume is not None,
             plots=not args.no_plot,
+            yes=args.yes,
         )
     except SweepError as exc:
         raise UserError(str(exc)) from None
@@ -82,23 +84,30 @@ def cmd_sweep(args: argparse.Namespace) -> int:
     except OSError as exc:
         where = f": {exc.filename}" if exc.filename else ""
         raise UserError(f"cannot write the sweep: {exc.strerror or exc}{where}") from None
-    from collections import Counter
-
-    classes = Counter(r["attractor"] for r in outcome.records)
-    kinds = ", ".join(f"{n} {name}" for name, n in sorted(classes.items()))
+    total = sum(outcome.statuses.values())
+    kinds = ", ".join(f"{n} {name}" for name, n in sorted(outcome.classes.items()))
     print(
-        f"sweep: {len(outcome.records)} points ({len(outcome.computed)} computed now on "
-        f"{outcome.where}): {kinds}"
+        f"sweep: {total} points ({len(outcome.computed)} computed now on {outcome.where}): {kinds}"
     )
     print(
         f"wrote {outcome.result} (open with xarray.open_dataset or scipy.io.netcdf_file)"
         + (f"; plots: {', '.join(p.name for p in outcome.plots)}" if outcome.plots else "")
     )
-    failed = [r for r in outcome.records if r["status"] == "failed"]
-    for record in failed[:5]:
+    failed = outcome.statuses.get("failed", 0)
+    for record in outcome.failed_examples:
         print(f"billiard: point {record['index']} failed: {record['reason']}", file=sys.stderr)
-    if len(failed) > 5:
-        print(f"billiard: ... {len(failed) - 5} more failed (see status, reason)", file=sys.stderr)
+    if failed > len(outcome.failed_examples):
+        more = failed - len(outcome.failed_examples)
+        print(f"billiard: ... {more} more failed (see status, reason)", file=sys.stderr)
+    if not outcome.measured:
+        # nothing was measured: not a result to pass on as a success
+        counts = " and ".join(f"{n} {name}" for name, n in sorted(outcome.statuses.items()))
+        print(
+            f"billiard: error: no point of the sweep was measured ({counts}); the reasons "
+            f"are in {outcome.result} (status, reason)",
+            file=sys.stderr,
+        )
+        return 3
     return 0
 
 
@@ -132,7 +141,11 @@ def _add_sweep_parser(sub: argparse._SubParsersAction) -> None:
     )
     p.add_argument("--transient", type=int, help="impacts simulated first, not measured (500)")
     p.add_argument(
-        "--duration", type=float, metavar="S", help="simulated time per point at most (s)"
+        "--duration",
+        type=float,
+        metavar="S",
+        help="simulated time per point at most (s, up to 1e9; default: none, or the "
+        "scene's run.duration)",
     )
     p.add_argument(
         "--keep", type=int, metavar="K", help="last K impact heights and times stored (100)"
@@ -159,4 +172,10 @@ def _add_sweep_parser(sub: argparse._SubParsersAction) -> None:
         "invalid instead of refusing the sweep (kept for --resume)",
     )
     p.add_argument("--no-plot", action="store_true", help="do not draw the plots")
+    p.add_argument(
+        "--yes",
+        action="store_true",
+        help="run a sweep beyond 100,000 points or about 1 GB of output files (refused "
+        "without it, naming the estimate)",
+    )
     p.set_defaults(func=cmd_sweep)

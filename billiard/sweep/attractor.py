@@ -24,9 +24,16 @@ Classes, decided in this order:
 ``failed``
     the run stopped early (``Result.stop_reason``).
 ``resting``
-    the ball never rises more than ``rest_band`` (default 1 cm, about three ball
-    diameters) above its resting height and at least half its impacts are under the
-    low-velocity rule: it chatters at the bottom.
+    the run ended because the ball rests on the boundary, moving with it
+    (``Status.AT_REST``, under ``contact.model = "phases"``); or the ball never rises
+    more than ``rest_band`` (default 1 cm, about three ball diameters) above its resting
+    height and at least half its impacts are under the low-velocity rule: it chatters at
+    the bottom (the impacts model's relaunches of a resting ball).
+``rolling`` / ``sliding`` / ``held``
+    under ``contact.model = "phases"``: the ball stays in contact with the boundary
+    without impacts, rolling, sliding or held by two walls (the wedge's vertex): the run
+    ended so (``Status.IN_CONTACT``), or reached its duration in that contact motion with
+    no impact after the transient (``Result.final_mode``).
 ``periodic``
     a period k was found.
 ``chaotic`` / ``quasi-periodic``
@@ -41,13 +48,28 @@ from __future__ import annotations
 
 import math
 from collections.abc import Mapping
+from typing import Any
 
 import numpy as np
 
-__all__ = ["CLASSES", "classify", "find_period"]
+__all__ = ["CLASSES", "CONTACT_CLASSES", "classify", "contact_class", "find_period"]
 
-#: Attractor classes, in the order of their codes in the result file.
-CLASSES = ("failed", "resting", "periodic", "quasi-periodic", "chaotic", "aperiodic", "invalid")
+#: Attractor classes, in the order of their codes in the result file (new ones are added
+#: at the end, so that a class keeps its code).
+CLASSES = (
+    "failed",
+    "resting",
+    "periodic",
+    "quasi-periodic",
+    "chaotic",
+    "aperiodic",
+    "invalid",
+    "rolling",
+    "sliding",
+    "held",
+)
+#: ``Result.final_mode`` of a ball in contact -> its class.
+CONTACT_CLASSES = {"roll": "rolling", "slide": "sliding", "held": "held"}
 
 _L = 0.01  # m
 
@@ -102,6 +124,31 @@ def find_period(
                 continue
         return k
     return 0
+
+
+def contact_class(status: Any, final_mode: str | None, measured: int) -> str | None:
+    """The class of a run that ended with the ball on the boundary instead of in an
+    impact sequence, or None for a run to classify by its impacts (:func:`classify`).
+
+    Args:
+        status: the run's :class:`~billiard.status.Status`.
+        final_mode: ``Result.final_mode`` (``flight``, ``roll``, ``slide``, ``held``).
+        measured: impacts after the transient.
+    """
+    from billiard.status import Status
+
+    if status == Status.AT_REST:
+        return "resting"
+    contact = CONTACT_CLASSES.get(final_mode or "")
+    if status == Status.IN_CONTACT:
+        # no impact for run.contact_span: the contact motion is where the ball ended up
+        return contact or "rolling"
+    if status == Status.TIME_LIMIT and measured == 0 and contact is not None:
+        # the duration came while the ball was in contact, and no impact since the
+        # transient: it has stayed on the boundary; a run with impacts after the
+        # transient is classified by them (an orbit may contain contact phases)
+        return contact
+    return None
 
 
 def classify(

@@ -14,6 +14,7 @@ A sweep is written to (and read back from) a sweep file, TOML::
     keep = 100                      # last impact heights and times of flight stored
     lyapunov = false                # largest Lyapunov exponent per point (costs more)
     # duration = 60.0               # s of simulated time per point at most (optional)
+    # changes = ["..."]             # written by the sweep: the `set` already in scene.toml
 
     [vary]
     "drive.frequency" = "4:7:31"    # a range START:STOP:N
@@ -22,10 +23,11 @@ A sweep is written to (and read back from) a sweep file, TOML::
 
 from __future__ import annotations
 
-import itertools
 import math
+import os
+import stat
 import tomllib
-from collections.abc import Mapping, Sequence
+from collections.abc import Iterator, Mapping, Sequence
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
@@ -34,6 +36,7 @@ from billiard.scene import Scene, SceneError, load_scene
 
 __all__ = [
     "Axis",
+    "LinearValues",
     "Sweep",
     "SweepError",
     "parse_vary",
@@ -55,7 +58,16 @@ DEFAULTS: dict[str, Any] = {
     "skip_invalid": False,
 }
 _SETTINGS = tuple(DEFAULTS)
-_FILE_KEYS = ("scene", "set", "vary", *_SETTINGS)
+_FILE_KEYS = ("scene", "set", "changes", "vary", *_SETTINGS)
+
+#: Most points a sweep may have at all: the result file numbers them with 32-bit integers,
+#: and a billion points of even a millisecond each is eleven days of one core.
+MAX_POINTS = 10**9
+#: Largest sweep file read (bytes): a list of 100,000 values is about 2 MB.
+MAX_FILE_BYTES = 64 * 2**20
+#: The period test looks at the last 256 impacts (attractor.find_period's window), so a
+#: period can be at most half of that.
+MAX_PERIOD = 128
 
 
 class SweepError(ValueError):
@@ -77,6 +89,8 @@ class Axis:
 
     @property
     def numeric(self) -> bool:
+        if isinstance(self.values, LinearValues):
+            return True
         return all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in self.values)
 
 
@@ -101,6 +115,8 @@ class Sweep:
             impact) is chaotic, otherwise quasi-periodic.
         skip_invalid: record points whose scene is invalid as ``invalid`` instead of
             refusing the sweep (kept in the sweep file, so a resumed sweep does the same).
+        changes: the ``--set`` overrides already applied to ``scene`` (``"KEY=VALUE"``),
+            kept to name them in plot titles and the sweep file.
     """
 
     scene: Scene
@@ -115,29 +131,52 @@ class Sweep:
     max_period: int = DEFAULTS["max_period"]
     chaos_threshold: float = DEFAULTS["chaos_threshold"]
     skip_invalid: bool = DEFAULTS["skip_invalid"]
+    changes: tuple[str, ...] = field(default=(), compare=False)
     settings_order: tuple[str, ...] = field(default=_SETTINGS, repr=False, compare=False)
 
     def __post_init__(self) -> None:
-        _check_int("impacts", self.impacts, 1)
-        _check_int("transient", self.transient, 0)
-        _check_int("keep", self.keep, 1)
-        _check_int("max_period", self.max_period, 1)
+        from billiard.spec import MAX_COLLISIONS
+
+        # every number is checked here, before any point runs: a value no point can run
+        # with (a duration of 1e300 s) would otherwise fail every point one by one
+        _check_int("impacts", self.impacts, 1, MAX_COLLISIONS, "impacts")
+        _check_int("transient", self.transient, 0, MAX_COLLISIONS, "impacts")
+        if self.impacts + self.transient > MAX_COLLISIONS:
+            raise SweepError(
+                f"sweep settings 'impacts' + 'transient' = {self.impacts + self.transient} "
+                f"impacts per point is out of range [1, {MAX_COLLISIONS}] impacts"
+            )
+        _check_int("keep", self.keep, 1, MAX_COLLISIONS, "impacts")
+        _check_int("max_period", self.max_period, 1, MAX_PERIOD, "impacts")
         for name in ("lyapunov", "skip_invalid"):
             if not isinstance(getattr(self, name), bool):
                 raise SweepError(
                     f"sweep setting '{name}' must be true or false, got {getattr(self, name)!r}"
                 )
         if self.duration is not None:
-            _check_positive("duration", self.duration)
-        _check_positive("tolerance", self.tolerance)
-        _check_positive("rest_band", self.rest_band)
-        _check_number("chaos_threshold", self.chaos_threshold)
+            from billiard.checks import LIMITS
+
+            limit = LIMITS["run.duration"]  # the scene's own limit on simulated time
+            _check_range("duration", self.duration, limit.low, limit.high, limit.unit)
+        _check_range("tolerance", self.tolerance, 0.0, 1.0, "m")
+        _check_range("rest_band", self.rest_band, 0.0, 10.0, "m")
+        _check_range("chaos_threshold", self.chaos_threshold, -100.0, 100.0, "1/impact", True)
+        if isinstance(self.changes, list):
+            object.__setattr__(self, "changes", tuple(self.changes))
+        if not isinstance(self.changes, tuple) or not all(isinstance(c, str) for c in self.changes):
+            raise SweepError(f"sweep 'changes' must be \"KEY=VALUE\" strings, got {self.changes!r}")
         if not self.axes:
             raise SweepError("a sweep needs at least one --vary KEY=START:STOP:N")
         keys = [axis.key for axis in self.axes]
         for key in keys:
             if keys.count(key) > 1:
                 raise SweepError(f"--vary {key}: the key is swept twice")
+        if self.size > MAX_POINTS:
+            sizes = " x ".join(f"{n:,}" for n in self.shape)
+            raise SweepError(
+                f"the sweep has {self.size:,} points ({sizes}); at most {MAX_POINTS:,} can be "
+                "swept (and far fewer in reasonable time): use fewer values per --vary"
+            )
 
     @property
     def shape(self) -> tuple[int, ...]:
@@ -155,10 +194,11 @@ class Sweep:
             values[axis.key] = axis.values[position]
         return {axis.key: values[axis.key] for axis in self.axes}
 
-    def points(self) -> list[dict[str, Any]]:
-        """All points' swept values, in index order."""
-        grid = itertools.product(*(axis.values for axis in self.axes))
-        return [dict(zip((a.key for a in self.axes), combo, strict=True)) for combo in grid]
+    def points(self) -> Iterator[dict[str, Any]]:
+        """All points' swept values, in index order, one at a time (a grid is never held
+        in memory whole)."""
+        for index in range(self.size):
+            yield self.point_values(index)
 
     def settings(self) -> dict[str, Any]:
         return {name: getattr(self, name) for name in _SETTINGS}
@@ -167,20 +207,82 @@ class Sweep:
         return replace(self, **{k: v for k, v in changes.items() if v is not None})
 
 
-def _check_number(name: str, value: Any) -> float:
+def _check_number(name: str, value: Any, unit: str) -> float:
     if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
-        raise SweepError(f"sweep setting '{name}' must be a finite number, got {value!r}")
+        raise SweepError(f"sweep setting '{name}' must be a finite number ({unit}), got {value!r}")
     return float(value)
 
 
-def _check_positive(name: str, value: Any) -> None:
-    if _check_number(name, value) <= 0.0:
-        raise SweepError(f"sweep setting '{name}' must be > 0, got {value!r}")
+def _check_range(
+    name: str, value: Any, low: float, high: float, unit: str, low_closed: bool = False
+) -> None:
+    """A finite number in (low, high] (or [low, high]) of ``unit``."""
+    number = _check_number(name, value, unit)
+    if (number < low if low_closed else number <= low) or number > high:
+        left = "[" if low_closed else "("
+        raise SweepError(
+            f"sweep setting '{name}' = {value!r} {unit} is out of range "
+            f"{left}{low:g}, {high:g}] {unit}"
+        )
 
 
-def _check_int(name: str, value: Any, low: int) -> None:
-    if isinstance(value, bool) or not isinstance(value, int) or value < low:
+def _check_int(name: str, value: Any, low: int, high: int, unit: str) -> None:
+    if isinstance(value, bool) or not isinstance(value, int):
         raise SweepError(f"sweep setting '{name}' must be an integer >= {low}, got {value!r}")
+    if value < low:
+        raise SweepError(f"sweep setting '{name}' must be an integer >= {low}, got {value!r}")
+    if value > high:
+        raise SweepError(
+            f"sweep setting '{name}' = {value} {unit} is out of range [{low}, {high:,}] {unit}"
+        )
+
+
+class LinearValues(Sequence[float]):
+    """The values of ``START:STOP:N`` computed when asked for, never all held: value i is
+    ``START + i * (STOP - START) / (N - 1)``, the last one STOP exactly (a million-point
+    axis costs nothing until its points run)."""
+
+    def __init__(self, start: float, stop: float, num: int):
+        self.start, self.stop, self.num = float(start), float(stop), int(num)
+        self._step = (self.stop - self.start) / (self.num - 1) if self.num > 1 else 0.0
+
+    def __len__(self) -> int:
+        return self.num
+
+    def _value(self, i: int) -> float:
+        return self.stop if i == self.num - 1 else self.start + i * self._step
+
+    def __getitem__(self, i: Any) -> Any:
+        if isinstance(i, slice):
+            return tuple(self._value(k) for k in range(*i.indices(self.num)))
+        i = int(i)
+        if i < 0:
+            i += self.num
+        if not 0 <= i < self.num:
+            raise IndexError("axis value index out of range")
+        return self._value(i)
+
+    def __array__(self, dtype: Any = None, copy: Any = None) -> Any:
+        import numpy as np
+
+        # the same float operations as _value, element by element
+        out = self.start + np.arange(self.num, dtype=float) * self._step
+        if self.num:
+            out[-1] = self.stop
+        return out if dtype is None else out.astype(dtype)
+
+    def __eq__(self, other: object) -> bool:
+        if isinstance(other, LinearValues):
+            return (self.start, self.stop, self.num) == (other.start, other.stop, other.num)
+        if isinstance(other, Sequence) and not isinstance(other, str):
+            return len(other) == self.num and all(a == b for a, b in zip(self, other, strict=True))
+        return NotImplemented
+
+    def __hash__(self) -> int:  # equal to the tuple it equals, so hashed as that tuple
+        return hash(tuple(self))
+
+    def __repr__(self) -> str:
+        return f"LinearValues({self.start!r}, {self.stop!r}, {self.num})"
 
 
 # ----------------------------------------------------------------------------------------
@@ -197,7 +299,7 @@ def _scalar(text: str) -> Any:
     return parsed["value"]
 
 
-def _range(key: str, spec: str) -> tuple[float, ...]:
+def _range(key: str, spec: str) -> tuple[float, ...] | LinearValues:
     start_text, stop_text, num_text = spec.split(":")
     where = f"--vary {key}={spec}"
     try:
@@ -212,18 +314,18 @@ def _range(key: str, spec: str) -> tuple[float, ...]:
         raise SweepError(f"{where}: START and STOP must be finite")
     if num < 1:
         raise SweepError(f"{where}: N = {num} points; it must be >= 1")
+    if num > MAX_POINTS:
+        raise SweepError(f"{where}: N = {num:,} points; at most {MAX_POINTS:,} can be swept")
     if num == 1:
         if start != stop:
             raise SweepError(f"{where}: one point cannot span {start:g} to {stop:g}; use N >= 2")
         return (start,)
     if start == stop:
         raise SweepError(f"{where}: empty range (START = STOP) with N = {num} repeats one value")
-    step = (stop - start) / (num - 1)
-    values = [start + i * step for i in range(num - 1)] + [stop]
-    return tuple(values)
+    return LinearValues(start, stop, num)
 
 
-def parse_values(key: str, spec: Any) -> tuple[Any, ...]:
+def parse_values(key: str, spec: Any) -> tuple[Any, ...] | LinearValues:
     """The values of an axis from ``START:STOP:N``, ``v1,v2,...`` or a TOML list."""
     if isinstance(spec, (list, tuple)):
         values = tuple(spec)
@@ -249,11 +351,11 @@ def parse_values(key: str, spec: Any) -> tuple[Any, ...]:
             raise SweepError(f"{where}: {value!r} is not a finite number")
         if not isinstance(value, (int, float, str)):
             raise SweepError(f"{where}: {value!r} is neither a number nor a string")
-    seen: list[Any] = []
+    seen: set[Any] = set()  # 4 and 4.0 are the same value here, as they compare equal
     for value in values:
         if value in seen:
             raise SweepError(f"{where}: the value {value!r} is given twice")
-        seen.append(value)
+        seen.add(value)
     return values
 
 
@@ -309,6 +411,11 @@ def sweep_to_toml(sweep: Sweep, scene_file: str = "scene.toml") -> str:
         "# `billiard sweep THIS_FILE --out OTHER` runs it again.",
         f"scene = {_toml_value(scene_file)}",
     ]
+    if sweep.changes:
+        lines += [
+            "# the --set changes of the base scene, already applied in the scene file",
+            f"changes = {_toml_value(list(sweep.changes))}",
+        ]
     for name, value in sweep.settings().items():
         if value is None:
             lines.append(f"# {name}: absent")
@@ -326,10 +433,25 @@ def is_sweep_file(path: str | Path) -> bool:
     if path.suffix != ".toml" or not path.is_file():
         return False
     try:
-        data = tomllib.loads(path.read_text(encoding="utf-8"))
-    except (tomllib.TOMLDecodeError, OSError, UnicodeDecodeError):
+        data = tomllib.loads(_read_text(path))
+    except (tomllib.TOMLDecodeError, OSError, UnicodeDecodeError, SweepError):
         return False
     return isinstance(data.get("vary"), Mapping)
+
+
+def _read_text(path: Path) -> str:
+    """A regular file's text, refused (SweepError) beyond MAX_FILE_BYTES: never read an
+    endless or huge file (``/dev/zero``, a FIFO) into memory."""
+    with open(path, "rb") as f:
+        info = os.fstat(f.fileno())
+        if not stat.S_ISREG(info.st_mode):
+            raise SweepError(f"sweep file '{path}' is not a regular file")
+        data = f.read(MAX_FILE_BYTES + 1)
+    if len(data) > MAX_FILE_BYTES:
+        raise SweepError(
+            f"sweep file '{path}' is larger than {MAX_FILE_BYTES // 2**20} MiB: not a sweep file"
+        )
+    return data.decode("utf-8")
 
 
 def read_sweep_file(
@@ -342,11 +464,13 @@ def read_sweep_file(
         extra_overrides: more ``"KEY=VALUE"`` overrides, applied after the file's.
 
     Returns:
-        ``(scene, axes, settings, overrides)``; the scene has the overrides applied.
+        ``(scene, axes, settings, overrides)``; the scene has the overrides applied;
+        ``overrides`` starts with the file's ``changes`` (overrides already applied to
+        its scene file, by the sweep that wrote it), which are not applied again.
     """
     path = Path(path)
     try:
-        data = tomllib.loads(path.read_text(encoding="utf-8"))
+        data = tomllib.loads(_read_text(path))
     except OSError as exc:
         raise SweepError(f"sweep file '{path}' cannot be read: {exc.strerror or exc}") from None
     except (tomllib.TOMLDecodeError, UnicodeDecodeError) as exc:
@@ -363,6 +487,9 @@ def read_sweep_file(
     overrides = data.get("set", [])
     if not isinstance(overrides, list) or not all(isinstance(o, str) for o in overrides):
         raise SweepError(f"sweep file '{path}': 'set' must be a list of \"KEY=VALUE\" strings")
+    changes = data.get("changes", [])
+    if not isinstance(changes, list) or not all(isinstance(o, str) for o in changes):
+        raise SweepError(f"sweep file '{path}': 'changes' must be a list of \"KEY=VALUE\" strings")
     overrides = [*overrides, *extra_overrides]
     scene = load_base_scene(data["scene"], overrides, relative_to=path.parent)
     vary = data.get("vary", {})
@@ -370,7 +497,7 @@ def read_sweep_file(
         raise SweepError(f"sweep file '{path}': 'vary' must be a table of KEY = values")
     axes = [Axis(key, parse_values(key, spec)) for key, spec in vary.items()]
     settings = {k: data[k] for k in _SETTINGS if k in data}
-    return scene, axes, settings, list(overrides)
+    return scene, axes, settings, [*changes, *overrides]
 
 
 def load_base_scene(name: str, overrides: Sequence[str], relative_to: Path | None = None) -> Scene:

@@ -13,7 +13,7 @@ from typing import Any
 
 import numpy as np
 
-from billiard.sweep.attractor import classify, find_period
+from billiard.sweep.attractor import classify, contact_class, find_period
 
 __all__ = ["PointTask", "measure_point"]
 
@@ -41,15 +41,20 @@ def _finite(value: float) -> float | None:
 
 
 def _rest_height(scene: Any) -> float:
-    """Centre height (m) of the ball at rest at the bottom of the point's container."""
-    from billiard import simulate, with_values
+    """Centre height (m) of the ball at rest at the bottom of the point's container.
+
+    The engine places a ball without a start position at rest on the bottom when it is
+    set up; nothing is simulated (a run from rest under ``contact.model = "phases"`` may
+    roll for ever, and the set-up gives the same height a one-impact run reports)."""
+    from billiard import with_values
+    from billiard.simulate import Simulation
 
     at_rest = with_values(
         scene,
         {"initial.q1": None, "initial.q2": None, "initial.v1": 0.0, "initial.v2": 0.0}
         | {"initial.omega": 0.0, "run.duration": None},
     )
-    return float(simulate(at_rest, collisions=1).scene.initial.q2)
+    return float(Simulation(at_rest).initial.q2)
 
 
 def _failed(task: PointTask, reason: str, total: int = 0) -> dict[str, Any]:
@@ -82,6 +87,8 @@ def empty_record(index: int, values: dict[str, Any], status: str, reason: str) -
         "lyapunov_per_second": None,
         "last_height": [],
         "last_tof": [],
+        "run_status": "",
+        "final_mode": "",
     }
 
 
@@ -102,18 +109,43 @@ def _measure(task: PointTask) -> dict[str, Any]:
     result = simulate(scene, collisions=transient + impacts, duration=s["duration"])
     cols = result.columns
     total = len(cols["n"])
+    ended = {"run_status": result.status.name.lower(), "final_mode": result.final_mode or ""}
     if result.stop_reason:
-        return _failed(task, result.stop_reason, total)
+        return _failed(task, result.stop_reason, total) | ended
     post = {name: np.asarray(col[transient:]) for name, col in cols.items()}
     n = len(post["n"])
-    if n == 0:
-        return _failed(
-            task, f"no impacts after the transient: the duration limit came after {total}", total
+    # under contact.model = "phases" a ball can end at rest, rolling, sliding or held
+    # in the vertex, with no impacts left to measure: that is its attractor
+    in_contact = contact_class(result.status, result.final_mode, n)
+    if n == 0 and in_contact is None:
+        return (
+            _failed(
+                task,
+                f"no impacts after the transient: {result.message} after {total} impacts",
+                total,
+            )
+            | ended
         )
+    rest = _rest_height(scene)
+    keep = int(s["keep"])
+    record = empty_record(task.index, task.values, "ok", "") | ended
+    if n == 0:
+        record.update(attractor=in_contact, total_impacts=total, rest_height=rest)
+        return record
     q2, tof = post["q2"].astype(float), post["tof"].astype(float)
     elastic_share = float(np.mean(post["regime"] == "elastic"))
     lid_share = float(np.mean(post["wall"] == "lid"))
-    rest = _rest_height(scene)
+    if in_contact is not None:  # impacts after the transient, then the ball stayed down
+        record.update(
+            attractor=in_contact,
+            impacts=n,
+            total_impacts=total,
+            rest_height=rest,
+            **_impact_statistics(q2, tof, keep),
+            elastic_share=elastic_share,
+            lid_share=lid_share,
+        )
+        return record
     period = find_period(
         post,
         frequency=scene.drive.frequency,
@@ -141,8 +173,6 @@ def _measure(task: PointTask) -> dict[str, Any]:
         lyapunov=lyap,
         chaos_threshold=s["chaos_threshold"],
     )
-    keep = int(s["keep"])
-    record = empty_record(task.index, task.values, "ok", "")
     record.update(
         attractor=attractor,
         period=int(period),
@@ -150,16 +180,23 @@ def _measure(task: PointTask) -> dict[str, Any]:
         impacts=n,
         total_impacts=total,
         rest_height=rest,
-        height_mean=float(np.mean(q2)),
-        height_std=float(np.std(q2)),
-        height_max=float(np.max(q2)),
-        tof_mean=float(np.mean(tof)),
-        tof_std=float(np.std(tof)),
+        **_impact_statistics(q2, tof, keep),
         elastic_share=elastic_share,
         lid_share=lid_share,
         lyapunov=lyap,
         lyapunov_per_second=lyap_s,
-        last_height=[float(x) for x in q2[-keep:]],
-        last_tof=[float(x) for x in tof[-keep:]],
     )
     return record
+
+
+def _impact_statistics(q2: np.ndarray, tof: np.ndarray, keep: int) -> dict[str, Any]:
+    """Heights and times of flight of the measured impacts (at least one)."""
+    return {
+        "height_mean": float(np.mean(q2)),
+        "height_std": float(np.std(q2)),
+        "height_max": float(np.max(q2)),
+        "tof_mean": float(np.mean(tof)),
+        "tof_std": float(np.std(tof)),
+        "last_height": [float(x) for x in q2[-keep:]],
+        "last_tof": [float(x) for x in tof[-keep:]],
+    }

@@ -17,7 +17,7 @@ not depend on the number of workers or the order in which they finished.
 from __future__ import annotations
 
 import os
-from collections.abc import Sequence
+from collections.abc import Iterable, Sequence
 from pathlib import Path
 from typing import Any
 
@@ -57,27 +57,78 @@ _SCALARS: tuple[tuple[str, str, str, str], ...] = (
 )
 
 
+class _Strings:
+    """Fixed-width UTF-8 strings, one per point, widened as longer ones arrive (bytes
+    the size of the result, not Python objects per point)."""
+
+    def __init__(self, size: int):
+        self.data = np.zeros(size, dtype="S1")
+
+    def __setitem__(self, index: int, text: str) -> None:
+        encoded = text.encode("utf-8")
+        if len(encoded) > self.data.dtype.itemsize:
+            self.data = self.data.astype(f"S{len(encoded)}")
+        self.data[index] = encoded
+
+    def chars(self, shape: tuple[int, ...]) -> tuple[np.ndarray, int]:
+        width = max(1, self.data.dtype.itemsize)
+        out = self.data.astype(f"S{width}").view("S1").reshape(*shape, width)
+        return out, width
+
+
 def _chars(strings: Sequence[str], shape: tuple[int, ...]) -> tuple[np.ndarray, int]:
-    encoded = [s.encode("utf-8") for s in strings]
-    width = max([1, *map(len, encoded)])
-    out = np.zeros((len(encoded), width), dtype="S1")
-    for i, text in enumerate(encoded):
-        out[i, : len(text)] = np.frombuffer(text, dtype="S1") if text else b""
-    return out.reshape(*shape, width), width
+    column = _Strings(len(strings))
+    for i, text in enumerate(strings):
+        column[i] = text
+    return column.chars(shape)
+
+
+#: Text variables: name -> long_name (the attractor's lists the classes).
+_TEXT = (
+    ("status", "ok, failed (the run stopped early: see reason) or invalid (skipped)"),
+    ("reason", "why a point failed or was skipped (empty when ok)"),
+    ("attractor", "attractor class: " + ", ".join(CLASSES)),
+    (
+        "run_status",
+        "how the point's run ended (billiard.Status, lower case: complete, time_limit, "
+        "at_rest, in_contact, or a stop)",
+    ),
+    ("final_mode", "the ball's motion when the run ended: flight, roll, slide or held"),
+)
 
 
 def write_result(
-    path: Path, sweep: Sweep, records: Sequence[dict[str, Any]], scene_toml: str
+    path: Path, sweep: Sweep, records: Iterable[dict[str, Any]], scene_toml: str
 ) -> Path:
-    """Write the result file from every point's record (any order: sorted here)."""
-    by_index = {int(r["index"]): r for r in records}
-    if sorted(by_index) != list(range(sweep.size)):
-        missing = sweep.size - len(by_index)
-        raise ValueError(f"the result needs every point; {missing} missing")
-    ordered = [by_index[i] for i in range(sweep.size)]
+    """Write the result file from every point's record (any order: placed by index; read
+    one at a time, so ``records`` may be a generator over points.jsonl)."""
+    size, keep = sweep.size, sweep.keep
+    seen = np.zeros(size, dtype=bool)
+    text = {name: _Strings(size) for name, _ in _TEXT}
+    scalars = {
+        name: np.zeros(size, dtype=np.int32) if dtype == "i4" else np.full(size, np.nan)
+        for name, dtype, _, _ in _SCALARS
+    }
+    tails = {name: np.full((size, keep), np.nan) for name in ("last_height", "last_tof")}
+    for r in records:
+        i = int(r["index"])
+        seen[i] = True
+        for name, _ in _TEXT:
+            text[name][i] = str(r.get(name, ""))
+        for name, dtype, _, _ in _SCALARS:
+            if dtype == "i4":
+                scalars[name][i] = int(r[name] or 0)
+            else:
+                scalars[name][i] = np.nan if r[name] is None else float(r[name])
+        for name, data in tails.items():
+            tail = r[name][-keep:]
+            data[i, :] = np.nan
+            if tail:
+                data[i, keep - len(tail) :] = tail
+    if not seen.all():
+        raise ValueError(f"the result needs every point; {int(size - seen.sum())} missing")
     shape = sweep.shape
     dims = tuple(variable_name(axis.key) for axis in sweep.axes)
-    keep = sweep.keep
     tmp = path.with_name(path.name + ".tmp")
     f = netcdf_file(tmp, "w", version=2)
     try:
@@ -87,12 +138,12 @@ def write_result(
         f.attractor_classes = " ".join(CLASSES)
         f.sweep_definition = sweep_to_toml(sweep)
         f.base_scene = scene_toml
-        f.points = sweep.size
+        f.points = size
         for axis, dim in zip(sweep.axes, dims, strict=True):
             f.createDimension(dim, len(axis.values))
             if axis.numeric:
                 var = f.createVariable(dim, "f8", (dim,))
-                var[:] = np.array(axis.values, dtype=float)
+                var[:] = np.asarray(axis.values, dtype=float)
             else:
                 chars, width = _chars([str(v) for v in axis.values], (len(axis.values),))
                 f.createDimension(f"{dim}_strlen", width)
@@ -109,42 +160,27 @@ def write_result(
         var.long_name = "impact counted back from the last one (-1: the last)"
 
         var = f.createVariable("point", "i4", dims)
-        var[:] = np.arange(sweep.size, dtype=np.int32).reshape(shape)
+        var[:] = np.arange(size, dtype=np.int32).reshape(shape)
         var.units = "1"
         var.long_name = "point index (C order of the swept keys; as in points.jsonl)"
-        for name, long_name in (
-            ("status", "ok, failed (the run stopped early: see reason) or invalid (skipped)"),
-            ("reason", "why a point failed or was skipped (empty when ok)"),
-            ("attractor", "attractor class: " + ", ".join(CLASSES)),
-        ):
-            chars, width = _chars([str(r[name]) for r in ordered], shape)
+        for name, long_name in _TEXT:
+            chars, width = text.pop(name).chars(shape)
             f.createDimension(f"{name}_strlen", width)
             var = f.createVariable(name, "c", (*dims, f"{name}_strlen"))
             var[:] = chars
             var._Encoding = "utf-8"
             var.long_name = long_name
         for name, dtype, units, long_name in _SCALARS:
-            if dtype == "i4":
-                data = np.array([int(r[name] or 0) for r in ordered], dtype=np.int32)
-            else:
-                data = np.array(
-                    [np.nan if r[name] is None else float(r[name]) for r in ordered], dtype=float
-                )
             var = f.createVariable(name, dtype, dims)
-            var[:] = data.reshape(shape)
+            var[:] = scalars.pop(name).reshape(shape)
             var.units = units
             var.long_name = long_name
         for name, units, long_name in (
             ("last_height", "m", "last impact heights q2 (NaN-padded at the front)"),
             ("last_tof", "s", "last times of flight (NaN-padded at the front)"),
         ):
-            data = np.full((sweep.size, keep), np.nan)
-            for i, r in enumerate(ordered):
-                tail = r[name][-keep:]
-                if tail:
-                    data[i, keep - len(tail) :] = tail
             var = f.createVariable(name, "f8", (*dims, "impact"))
-            var[:] = data.reshape(*shape, keep)
+            var[:] = tails.pop(name).reshape(*shape, keep)
             var.units = units
             var.long_name = long_name
     finally:

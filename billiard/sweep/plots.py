@@ -1,26 +1,36 @@
-"""Plots of a sweep (matplotlib, SI units on every axis).
+"""Plots of a sweep (matplotlib, SI units on every axis and colour bar).
 
 * one numeric axis: ``bifurcation.png``, the last K impact heights and times of flight
   against the swept key (and the Lyapunov exponent when computed);
-* two numeric axes (the first one horizontal): ``heatmaps.png``, period, mean impact
-  height and (when computed) the Lyapunov exponent; and when a swept key is a starting
-  state (``initial.*``), ``basins.png``, each start coloured by the attractor it reaches.
+* two numeric axes (the first one horizontal): ``heatmaps.png``, period (discrete
+  colours, one per whole number), mean impact height and (when computed) the Lyapunov
+  exponent; and when a swept key is a starting state (``initial.*``), ``basins.png``,
+  each start coloured by the attractor it reaches.
 
-Other sweeps (three or more axes, or text-valued keys) get no plots; the result file
-holds everything.
+A map whose values agree to rounding (relative spread at most 1e-9), or for heights
+within the sweep's ``tolerance`` (10 µm by default: states closer than that are the same
+state to the sweep), is drawn in one colour with its one value on the colour bar, not as
+noise stretched over the colour scale. Every colour bar names its quantity and unit;
+titles name the base scene and its ``--set`` changes.
+
+The plots are drawn from the result file's arrays (:func:`~billiard.sweep.read_result`),
+not from the points' records. Other sweeps (three or more axes, or text-valued keys) get
+no plots; the result file holds everything.
 """
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+import textwrap
+from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
+from billiard.sweep.attractor import CONTACT_CLASSES
 from billiard.sweep.basins import attractor_labels
 from billiard.sweep.definition import Sweep
-from billiard.sweep.units import axis_label
+from billiard.sweep.units import axis_label, variable_name
 
 __all__ = ["plot_sweep"]
 
@@ -30,11 +40,25 @@ _CLASS_COLOURS = {
     "chaotic": "tab:red",
     "quasi-periodic": "tab:purple",
     "aperiodic": "tab:orange",
+    "rolling": "tab:green",
+    "sliding": "tab:olive",
+    "held": "tab:brown",
 }
+#: Classes of a ball that stays on the boundary: without impacts they are drawn at the
+#: point's resting height.
+_DOWN = ("resting", *CONTACT_CLASSES.values())
+#: Relative spread under which a map's values are one value (rounding, not physics).
+_ROUNDING = 1e-9
 
 
-def plot_sweep(sweep: Sweep, records: Sequence[dict[str, Any]], directory: Path) -> list[Path]:
-    """Draw the plots that suit the sweep's axes into ``directory``; returns their paths."""
+def plot_sweep(sweep: Sweep, data: Mapping[str, Any], directory: Path) -> list[Path]:
+    """Draw the plots that suit the sweep's axes into ``directory``; returns their paths.
+
+    Args:
+        sweep: the sweep.
+        data: its result file's arrays, as :func:`~billiard.sweep.read_result` gives them.
+        directory: where the PNG files go.
+    """
     numeric = [a for a in sweep.axes if a.numeric]
     if len(numeric) != len(sweep.axes) or len(sweep.axes) > 2:
         return []
@@ -43,70 +67,94 @@ def plot_sweep(sweep: Sweep, records: Sequence[dict[str, Any]], directory: Path)
     matplotlib.use("Agg")
     paths = []
     if len(sweep.axes) == 1:
-        paths.append(bifurcation(sweep, records, directory / "bifurcation.png"))
+        paths.append(bifurcation(sweep, data, directory / "bifurcation.png"))
     else:
-        paths.append(heatmaps(sweep, records, directory / "heatmaps.png"))
+        paths.append(heatmaps(sweep, data, directory / "heatmaps.png"))
         if any(a.key.startswith("initial.") for a in sweep.axes):
-            paths.append(basins(sweep, records, directory / "basins.png"))
+            paths.append(basins(sweep, data, directory / "basins.png"))
     return paths
 
 
-def _title(sweep: Sweep) -> str:
-    return (
-        f"{sweep.scene.name}: {sweep.transient} impacts of transient, "
-        f"{sweep.impacts} measured per point"
-    )
+def _title(sweep: Sweep, width: int = 110) -> str:
+    """The base scene, its --set changes and the measurement, wrapped to ``width``."""
+    name = sweep.scene.name
+    if sweep.changes:
+        name += " with " + ", ".join(sweep.changes)
+    text = f"{name}: {sweep.transient} impacts of transient, {sweep.impacts} measured per point"
+    return "\n".join(textwrap.wrap(text, width))
 
 
-def bifurcation(sweep: Sweep, records: Sequence[dict[str, Any]], path: Path) -> Path:
-    """Last K impact heights and times of flight against the one swept key."""
+def _save(fig: Any, path: Path) -> Path:
     import matplotlib.pyplot as plt
 
-    axis = sweep.axes[0]
-    lyap = [r["lyapunov"] for r in records]
-    with_lyap = any(v is not None for v in lyap)
-    rows = 3 if with_lyap else 2
-    fig, axes = plt.subplots(rows, 1, sharex=True, figsize=(7.5, 2.4 * rows + 0.8), dpi=110)
-    seen: set[str] = set()
-    for record in records:
-        x = record["values"][axis.key]
-        colour = _CLASS_COLOURS.get(record["attractor"])
-        if colour is None:  # failed or invalid
-            continue
-        label = record["attractor"] if record["attractor"] not in seen else None
-        seen.add(record["attractor"])
-        heights, tofs = record["last_height"], record["last_tof"]
-        xs = np.full(len(heights), float(x))
-        axes[0].scatter(xs, heights, s=1.5, color=colour, label=label, linewidths=0)
-        axes[1].scatter(xs, tofs, s=1.5, color=colour, linewidths=0)
-    bad = [r for r in records if r["status"] != "ok"]
-    if bad:
-        axes[0].scatter(
-            [r["values"][axis.key] for r in bad],
-            np.zeros(len(bad)),
-            marker="x",
-            color="black",
-            label=f"failed or invalid ({len(bad)})",
-        )
-    axes[0].set_ylabel("impact height q2 (m)")
-    axes[1].set_ylabel("time of flight (s)")
-    axes[1].set_yscale("log")
-    if with_lyap:
-        xs = [r["values"][axis.key] for r in records]
-        ys = [np.nan if v is None else v for v in lyap]
-        axes[2].plot(xs, ys, "o-", ms=3, color="black")
-        axes[2].axhline(0.0, color="grey", lw=0.8)
-        axes[2].set_ylabel("Lyapunov exponent\n(1/impact)")
-    axes[-1].set_xlabel(axis_label(axis.key))
-    axes[0].legend(loc="best", fontsize=7, markerscale=4)
-    axes[0].set_title(f"{_title(sweep)}; last {sweep.keep} impacts", fontsize=9)
     fig.tight_layout()
     fig.savefig(path)
     plt.close(fig)
     return path
 
 
-def _edges(values: Sequence[float]) -> np.ndarray:
+def bifurcation(sweep: Sweep, data: Mapping[str, Any], path: Path) -> Path:
+    """Last K impact heights and times of flight against the one swept key."""
+    return _save(bifurcation_figure(sweep, data), path)
+
+
+def bifurcation_figure(sweep: Sweep, data: Mapping[str, Any]) -> Any:
+    import matplotlib.pyplot as plt
+
+    axis = sweep.axes[0]
+    x = np.asarray(data[variable_name(axis.key)], dtype=float)
+    attractor, status = np.asarray(data["attractor"]), np.asarray(data["status"])
+    heights, tofs = np.asarray(data["last_height"]), np.asarray(data["last_tof"])
+    lyap = np.asarray(data["lyapunov"], dtype=float)
+    with_lyap = bool(np.isfinite(lyap).any())
+    rows = 3 if with_lyap else 2
+    fig, axes = plt.subplots(rows, 1, sharex=True, figsize=(7.5, 2.4 * rows + 0.9), dpi=110)
+    for name, colour in _CLASS_COLOURS.items():
+        mask = attractor == name
+        if not mask.any():
+            continue
+        xs = np.repeat(x[mask], heights.shape[1])
+        hs, ts = heights[mask].ravel(), tofs[mask].ravel()
+        keep = np.isfinite(hs)
+        label = f"{name} ({int(mask.sum())})"
+        axes[0].scatter(xs[keep], hs[keep], s=1.5, color=colour, label=label, linewidths=0)
+        axes[1].scatter(xs[keep], ts[keep], s=1.5, color=colour, linewidths=0)
+        if name in _DOWN:  # no impacts at all: the ball lies, rolls or is held
+            still = mask & ~np.isfinite(heights).any(axis=1)
+            if still.any():
+                axes[0].scatter(
+                    x[still],
+                    np.asarray(data["rest_height"], dtype=float)[still],
+                    marker="^",
+                    s=8,
+                    color=colour,
+                    label=f"{name}, no impacts: at the resting height",
+                )
+    bad = status != "ok"
+    if bad.any():
+        axes[0].scatter(
+            x[bad],
+            np.zeros(int(bad.sum())),
+            marker="x",
+            color="black",
+            label=f"failed or invalid ({int(bad.sum())})",
+        )
+    axes[0].set_ylabel("impact height q2 (m)")
+    axes[1].set_ylabel("time of flight (s)")
+    if np.isfinite(tofs).any() and np.nanmin(tofs) > 0.0:
+        axes[1].set_yscale("log")
+    if with_lyap:
+        axes[2].plot(x, lyap, "o-", ms=3, color="black")
+        axes[2].axhline(0.0, color="grey", lw=0.8)
+        axes[2].set_ylabel("Lyapunov exponent\n(1/impact)")
+    axes[-1].set_xlabel(axis_label(axis.key))
+    if axes[0].get_legend_handles_labels()[0]:
+        axes[0].legend(loc="best", fontsize=7, markerscale=4)
+    axes[0].set_title(f"{_title(sweep, 80)}; last {sweep.keep} impacts", fontsize=9)
+    return fig
+
+
+def _edges(values: Any) -> np.ndarray:
     v = np.asarray(values, dtype=float)
     if len(v) == 1:
         return np.array([v[0] - 0.5, v[0] + 0.5])
@@ -114,59 +162,167 @@ def _edges(values: Sequence[float]) -> np.ndarray:
     return np.concatenate([[v[0] - (mid[0] - v[0])], mid, [v[-1] + (v[-1] - mid[-1])]])
 
 
-def _grid(sweep: Sweep, records: Sequence[dict[str, Any]], name: str) -> np.ndarray:
-    data = np.array(
-        [np.nan if r[name] is None or r["status"] != "ok" else float(r[name]) for r in records]
+def _grid(data: Mapping[str, Any], name: str) -> np.ndarray:
+    """A variable over the two swept keys as floats, NaN where not measured."""
+    values = np.asarray(data[name], dtype=float).copy()
+    values[np.asarray(data["status"]) != "ok"] = np.nan
+    return values
+
+
+def constant_value(field: np.ndarray, resolution: float = 0.0) -> float | None:
+    """The one value of a map whose finite values agree to rounding (relative spread at
+    most 1e-9) or within ``resolution`` (in the field's unit), else None."""
+    finite = field[np.isfinite(field)]
+    if finite.size == 0:
+        return None
+    low, high = float(finite.min()), float(finite.max())
+    scale = max(abs(low), abs(high))
+    if high - low <= max(_ROUNDING * scale, resolution):
+        return float(np.mean(finite)) if scale > 0.0 else 0.0
+    return None
+
+
+def _panel(
+    fig: Any,
+    ax: Any,
+    xe: Any,
+    ye: Any,
+    field: np.ndarray,
+    cmap: str,
+    label: str,
+    resolution: tuple[float, str] | None = None,
+) -> Any:
+    """A continuous map with a labelled colour bar; one colour and one value when the
+    map is constant to rounding or within ``resolution`` (value, and its text)."""
+    from matplotlib.colors import BoundaryNorm, ListedColormap
+    from matplotlib.ticker import ScalarFormatter
+
+    masked = np.ma.masked_invalid(field).T
+    value = constant_value(field, resolution[0] if resolution else 0.0)
+    if value is None:
+        mesh = ax.pcolormesh(xe, ye, masked, cmap=cmap)
+        bar = fig.colorbar(mesh, ax=ax)
+        bar.formatter = ScalarFormatter(useOffset=False)  # values, not an offset to add
+        bar.update_ticks()
+        bar.set_label(label, fontsize=8)
+        return bar
+    import matplotlib.pyplot as plt
+
+    half = max(abs(value), 1.0) * 1e-6
+    norm = BoundaryNorm([value - half, value + half], 1)
+    mesh = ax.pcolormesh(xe, ye, masked, cmap=ListedColormap([plt.get_cmap(cmap)(0.6)]), norm=norm)
+    bar = fig.colorbar(mesh, ax=ax, ticks=[value])
+    bar.ax.set_yticklabels([f"{value:.6g}"])
+    bar.set_label(label, fontsize=8)
+    within = f"all within {resolution[1]}" if resolution else "equal to rounding"
+    ax.text(
+        0.5,
+        0.5,
+        f"one value: {value:.6g}\n({within})",
+        transform=ax.transAxes,
+        ha="center",
+        va="center",
+        fontsize=8,
+        bbox={"facecolor": "white", "alpha": 0.8, "edgecolor": "none"},
     )
-    return data.reshape(sweep.shape)
+    return bar
 
 
-def heatmaps(sweep: Sweep, records: Sequence[dict[str, Any]], path: Path) -> Path:
+def _period_panel(fig: Any, ax: Any, xe: Any, ye: Any, period: np.ndarray) -> Any:
+    """Periods are whole numbers: one discrete colour per period, ticks on whole numbers."""
+    import matplotlib.pyplot as plt
+    from matplotlib.colors import BoundaryNorm
+    from matplotlib.ticker import MaxNLocator
+
+    found = np.unique(period[np.isfinite(period)]).astype(int)
+    low, high = (int(found.min()), int(found.max())) if found.size else (1, 1)
+    levels = high - low + 1
+    cmap = plt.get_cmap("viridis", levels)
+    norm = BoundaryNorm(np.arange(low - 0.5, high + 1.0, 1.0), levels)
+    mesh = ax.pcolormesh(xe, ye, np.ma.masked_invalid(period).T, cmap=cmap, norm=norm)
+    ticks = found if found.size <= 12 else None  # no period at all: no ticks
+    bar = fig.colorbar(mesh, ax=ax, ticks=ticks)
+    if ticks is None:
+        bar.locator = MaxNLocator(integer=True)
+        bar.update_ticks()
+    bar.set_label("period (impacts per repetition of the state)", fontsize=8)
+    if not found.size:
+        ax.text(0.5, 0.5, "no period found", transform=ax.transAxes, ha="center", fontsize=8)
+    return bar
+
+
+def heatmaps(sweep: Sweep, data: Mapping[str, Any], path: Path) -> Path:
     """Period, mean impact height and Lyapunov exponent over two swept keys."""
+    return _save(heatmaps_figure(sweep, data), path)
+
+
+def heatmaps_figure(sweep: Sweep, data: Mapping[str, Any]) -> Any:
     import matplotlib.pyplot as plt
     from matplotlib.colors import TwoSlopeNorm
 
     xa, ya = sweep.axes  # first key horizontal, second vertical
-    xe, ye = _edges(xa.values), _edges(ya.values)
-    period = _grid(sweep, records, "period")
+    xe, ye = _edges(data[variable_name(xa.key)]), _edges(data[variable_name(ya.key)])
+    period = _grid(data, "period")
     period[period == 0] = np.nan
-    panels = [
-        (
-            "period (impacts per repetition;\nblank: none, failed or invalid)",
-            period,
-            "viridis",
-            None,
-        ),
-        ("mean impact height q2 (m)", _grid(sweep, records, "height_mean"), "magma", None),
-    ]
-    lyap = _grid(sweep, records, "lyapunov")
-    if np.isfinite(lyap).any():
-        span = float(np.nanmax(np.abs(lyap))) or 1.0
-        norm = TwoSlopeNorm(0.0, -span, span)
-        panels.append(("Lyapunov exponent (1/impact)", lyap, "coolwarm", norm))
-    fig, axes = plt.subplots(1, len(panels), figsize=(4.6 * len(panels), 4.0), dpi=100)
-    for ax, (title, data, cmap, norm) in zip(np.atleast_1d(axes), panels, strict=True):
-        mesh = ax.pcolormesh(xe, ye, np.ma.masked_invalid(data).T, cmap=cmap, norm=norm)
-        fig.colorbar(mesh, ax=ax)
-        ax.set_title(title, fontsize=9)
+    lyap = _grid(data, "lyapunov")
+    panels = 3 if np.isfinite(lyap).any() else 2
+    fig, axes = plt.subplots(1, panels, figsize=(4.8 * panels, 4.3), dpi=100)
+    axes = np.atleast_1d(axes)
+    _period_panel(fig, axes[0], xe, ye, period)
+    axes[0].set_title("period (blank: none, failed or invalid)", fontsize=9)
+    # heights closer than the sweep's state tolerance are one orbit's to the sweep
+    resolution = (sweep.tolerance, f"{sweep.tolerance:g} m, the sweep's tolerance")
+    heights = _grid(data, "height_mean")
+    _panel(fig, axes[1], xe, ye, heights, "magma", "mean impact height q2 (m)", resolution)
+    axes[1].set_title("mean impact height q2 (blank: no impacts, failed)", fontsize=9)
+    if panels == 3:
+        value = constant_value(lyap)
+        if value is None:
+            span = float(np.nanmax(np.abs(lyap))) or 1.0
+            mesh = axes[2].pcolormesh(
+                xe,
+                ye,
+                np.ma.masked_invalid(lyap).T,
+                cmap="coolwarm",
+                norm=TwoSlopeNorm(0.0, -span, span),
+            )
+            bar = fig.colorbar(mesh, ax=axes[2])
+            bar.set_label("Lyapunov exponent (1/impact)", fontsize=8)
+        else:
+            _panel(fig, axes[2], xe, ye, lyap, "coolwarm", "Lyapunov exponent (1/impact)")
+        axes[2].set_title("largest Lyapunov exponent", fontsize=9)
+    from matplotlib.ticker import MaxNLocator
+
+    for ax in axes:
+        ax.xaxis.set_major_locator(MaxNLocator(nbins=4))
         ax.set_xlabel(axis_label(xa.key))
         ax.set_ylabel(axis_label(ya.key))
-    fig.suptitle(_title(sweep), fontsize=9)
-    fig.tight_layout()
-    fig.savefig(path)
-    plt.close(fig)
-    return path
+    fig.suptitle(_title(sweep, 40 * panels), fontsize=9)
+    return fig
 
 
-def basins(sweep: Sweep, records: Sequence[dict[str, Any]], path: Path) -> Path:
+def basins(sweep: Sweep, data: Mapping[str, Any], path: Path) -> Path:
     """Each start coloured by the attractor it reaches."""
     import matplotlib.pyplot as plt
     from matplotlib.colors import BoundaryNorm, ListedColormap
     from matplotlib.patches import Patch
 
+    flat = {name: np.asarray(data[name]).ravel() for name in ("attractor", "period", "height_mean")}
+    records = [
+        {"attractor": str(a), "period": int(p), "height_mean": h}
+        for a, p, h in zip(flat["attractor"], flat["period"], flat["height_mean"], strict=True)
+    ]
     ids, labels = attractor_labels(records)
     palette = plt.get_cmap("tab10").colors
-    special = {"failed": "black", "invalid": "white", "resting": "0.6", "chaotic": "tab:red"}
+    special = {
+        "failed": "black",
+        "invalid": "white",
+        "resting": "0.6",
+        "chaotic": "tab:red",
+        "rolling": "tab:green",
+        "sliding": "tab:olive",
+        "held": "tab:brown",
+    }
     colours = []
     k = 0
     for label in labels:
@@ -180,7 +336,13 @@ def basins(sweep: Sweep, records: Sequence[dict[str, Any]], path: Path) -> Path:
     xa, ya = sweep.axes  # first key horizontal, second vertical
     grid = np.array(ids).reshape(sweep.shape)
     fig, ax = plt.subplots(figsize=(7.5, 5.0), dpi=100)
-    ax.pcolormesh(_edges(xa.values), _edges(ya.values), grid.T, cmap=cmap, norm=norm)
+    ax.pcolormesh(
+        _edges(data[variable_name(xa.key)]),
+        _edges(data[variable_name(ya.key)]),
+        grid.T,
+        cmap=cmap,
+        norm=norm,
+    )
     counts = np.bincount(grid.ravel(), minlength=len(labels))
     handles = [
         Patch(facecolor=c, edgecolor="black", label=f"{lab} ({n} starts)")
@@ -189,8 +351,5 @@ def basins(sweep: Sweep, records: Sequence[dict[str, Any]], path: Path) -> Path:
     ax.legend(handles=handles, fontsize=7, loc="upper left", bbox_to_anchor=(1.01, 1.0))
     ax.set_xlabel(axis_label(xa.key))
     ax.set_ylabel(axis_label(ya.key))
-    ax.set_title(f"attractor reached from each start\n{_title(sweep)}", fontsize=9)
-    fig.tight_layout()
-    fig.savefig(path)
-    plt.close(fig)
-    return path
+    ax.set_title(f"attractor reached from each start\n{_title(sweep, 70)}", fontsize=9)
+    return _save(fig, path)
