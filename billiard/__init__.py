@@ -20,7 +20,73 @@ from __future__ import annotations
 
 import gc
 import importlib
+import importlib.util
+import os
+import sys
+from importlib.machinery import ModuleSpec
 from typing import Any
+
+#: The subpackages pyproject.toml maps from folders beside billiard/ (package-dir): an
+#: installed copy holds them inside billiard/, a source checkout beside it.
+_MAPPED = {"billiard.derivation": "derivation", "billiard.generated": "generated"}
+
+
+def _checkout_folders(package: str) -> dict[str, str]:
+    """Where the mapped subpackages are when ``package`` (this package's folder) is the
+    ``billiard/`` folder of a source checkout rather than an installed copy: the folders
+    beside it, if that is this project's checkout (pyproject.toml and both folders, each
+    with its ``__init__.py``); else an empty dict (an installed copy finds them itself)."""
+    if os.path.isfile(os.path.join(package, "derivation", "__init__.py")):
+        return {}
+    root = os.path.dirname(package)
+    folders = {name: os.path.join(root, folder) for name, folder in _MAPPED.items()}
+    inits = [os.path.join(folder, "__init__.py") for folder in folders.values()]
+    if os.path.isfile(os.path.join(root, "pyproject.toml")) and all(map(os.path.isfile, inits)):
+        return folders
+    return {}
+
+
+class _CheckoutFinder:
+    """Finds ``billiard.derivation`` and ``billiard.generated`` in a source checkout.
+
+    Python started in a checkout's root imports the checkout's ``billiard/`` folder (the
+    current directory comes first on ``sys.path``), even where the package is installed
+    (``pip install .``); the installed copy holds the two subpackages, the checkout holds
+    them beside ``billiard/``. It answers for these two names alone, so nothing else of
+    the checkout's root becomes part of the package, and is asked first: the
+    subpackages come from beside the ``billiard/`` folder imported, even where an
+    editable install of another checkout maps them to that checkout's folders.
+    """
+
+    folders: dict[str, str] = {}
+
+    @classmethod
+    def find_spec(cls, fullname: str, path: Any = None, target: Any = None) -> ModuleSpec | None:
+        folder = cls.folders.get(fullname)
+        if folder is None:
+            return None
+        return importlib.util.spec_from_file_location(
+            fullname, os.path.join(folder, "__init__.py"), submodule_search_locations=[folder]
+        )
+
+
+def _find_checkout_subpackages() -> None:
+    """Put :class:`_CheckoutFinder` first in ``sys.meta_path`` when this package is
+    imported from a source checkout (once: a reload replaces the finder a former import
+    added)."""
+    folders = _checkout_folders(os.path.dirname(os.path.abspath(__file__)))
+    sys.meta_path[:] = [
+        f
+        for f in sys.meta_path
+        if (getattr(f, "__module__", None), getattr(f, "__qualname__", None))
+        != (__name__, "_CheckoutFinder")
+    ]
+    if folders:
+        _CheckoutFinder.folders = folders
+        sys.meta_path.insert(0, _CheckoutFinder)  # type: ignore[arg-type]
+
+
+_find_checkout_subpackages()
 
 # The imports below (numpy, numba and its compiler, the engine) create some 90,000
 # objects that live as long as the process (modules, classes, functions, numba's types):

@@ -2,7 +2,11 @@
 throughput; writes ``performance.md`` and its figures.
 
 The measurements live in the ``bench/`` folder of a source checkout (they are not part
-of the installed package); this module is the command's entry point.
+of the installed package); this module is the command's entry point. They measure the
+checkout's code: where the ``billiard`` that runs is another copy (``pip install .``, a
+wheel), the command starts again as ``python -m billiard.cli bench ...`` with the
+checkout's root first on ``PYTHONPATH``, so that it and every process it starts import
+the checkout's ``billiard``.
 """
 
 from __future__ import annotations
@@ -10,6 +14,9 @@ from __future__ import annotations
 import argparse
 import importlib
 import importlib.util
+import os
+import shlex
+import subprocess
 import sys
 import tomllib
 from pathlib import Path
@@ -29,6 +36,9 @@ SECTIONS = (
     "sweep",
 )
 _PROJECT = "realworld-billiard"
+#: Set in the environment of the command started again in a checkout (see
+#: :func:`rerun_in_checkout`): a second start would be a loop.
+_RERUN = "BILLIARD_BENCH_CHECKOUT"
 
 
 class BenchError(UserError):
@@ -103,7 +113,7 @@ def add_bench_arguments(parser: argparse.ArgumentParser) -> None:
         type=_sections,
         metavar="SECTIONS",
         help=f"comma-separated sections to measure again ({', '.join(SECTIONS)});"
-        " the others are taken from the saved results",
+        " the others are taken from the saved results (default: all)",
     )
     parser.add_argument(
         "--render",
@@ -118,13 +128,80 @@ def add_bench_arguments(parser: argparse.ArgumentParser) -> None:
     )
 
 
+def runs_checkout(root: Path) -> bool:
+    """Whether the ``billiard`` package that runs is ``root``'s ``billiard/`` folder."""
+    import billiard
+
+    return Path(billiard.__file__).resolve().parent == (root / "billiard").resolve()
+
+
+def bench_argv(args: argparse.Namespace) -> list[str]:
+    """The command-line arguments of ``billiard bench`` that give ``args`` again."""
+    argv = ["--quick"] if args.quick else []
+    if args.only:
+        argv += ["--only", ",".join(args.only)]
+    if args.render:
+        argv.append("--render")
+    if args.out:
+        argv += ["--out", args.out]
+    return argv
+
+
+def checkout_command(root: Path, args: argparse.Namespace) -> tuple[list[str], dict[str, str]]:
+    """The command and environment that run ``billiard bench`` on ``root``'s code: the
+    checkout's root first on ``PYTHONPATH`` (inherited by every process the measurements
+    start, whatever their working directory)."""
+    env = dict(os.environ)
+    env["PYTHONPATH"] = os.pathsep.join(p for p in (str(root), env.get("PYTHONPATH", "")) if p)
+    env[_RERUN] = str(root)
+    return [sys.executable, "-m", "billiard.cli", "bench", *bench_argv(args)], env
+
+
+def rerun_in_checkout(root: Path, args: argparse.Namespace) -> int:
+    """Run ``billiard bench`` again on ``root``'s code (this process runs another copy of
+    the package, e.g. one installed with ``pip install .``). On POSIX the process is
+    replaced (signals, Ctrl-C and the exit status are the new command's); elsewhere it
+    waits for it."""
+    import billiard
+
+    if os.environ.get(_RERUN):
+        raise BenchError(
+            f"bench: the checkout {root} does not run its own billiard package even with "
+            f"PYTHONPATH={os.environ.get('PYTHONPATH', '')} (it runs {billiard.__file__})"
+        )
+    command, env = checkout_command(root, args)
+    print(
+        f"billiard: bench measures the source checkout {root}: starting it again on the "
+        f"checkout's code (the package running is {Path(billiard.__file__).parent})",
+        file=sys.stderr,
+        flush=True,
+    )
+    sys.stdout.flush()
+    if os.name == "posix":
+        os.execve(command[0], command, env)
+    return subprocess.run(command, env=env).returncode  # pragma: no cover - not POSIX
+
+
+def _saved_results(out: Path) -> Path:
+    return out / "figures" / "performance" / "results.json"
+
+
 def run_bench(args: argparse.Namespace) -> int:
-    run = _bench_package()
+    root = find_checkout()
+    if root is not None and not runs_checkout(root):
+        return rerun_in_checkout(root, args)
+    run = _bench_package(root)
     Config = importlib.import_module("bench.common").Config
 
     cfg = Config.quick_mode() if args.quick else Config.full()
     out = Path(args.out) if args.out else Path("runs/bench-quick" if args.quick else "docs")
     only = () if args.render else (args.only or SECTIONS)
+    if not only and not _saved_results(out).is_file():
+        raise BenchError(
+            f"bench --render: no saved results in {_saved_results(out)}; measure first "
+            f"(`billiard bench{' --quick' if args.quick else ''}"
+            f"{f' --out {shlex.quote(args.out)}' if args.out else ''}`)"
+        )
     path = run.main(cfg, out, only)
     print(f"wrote {path} and {out / 'figures' / 'performance'}")
     return 0

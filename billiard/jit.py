@@ -28,15 +28,18 @@ import hashlib
 import importlib.util
 import os
 import sys
+import time
 import warnings
 from collections.abc import Callable, Iterator
 from pathlib import Path
 from typing import Any, TypeVar
 
 __all__ = [
+    "COMPILED_NOTICE",
     "COMPILE_NOTICE",
     "ENABLED",
     "KERNEL_SOURCES",
+    "compile_family",
     "jit",
     "kernel_source_hash",
     "numba_problem",
@@ -72,12 +75,56 @@ F = TypeVar("F", bound=Callable[..., Any])
 
 _problem: str | None = None
 _noticed = False
-_compile_noticed = False
-#: printed once when the kernels are compiled (an empty or outdated cache)
-COMPILE_NOTICE = (
-    "billiard: compiling the engine's kernels with numba (once per install or update, "
-    "about half a minute; cached afterwards)"
-)
+#: printed when numba starts compiling a function of billiard's that is not in the cache
+#: (an empty or outdated cache, or a kind of argument, e.g. a curve's number of walls,
+#: not compiled before): what it is and the function; one line per family and curve
+COMPILE_NOTICE = "billiard: compiling {family} with numba ({function}); cached for later runs"
+#: printed when such a compile ends, if it took a second or more
+COMPILED_NOTICE = "billiard: compiled {family} in {seconds:.1f} s"
+#: the compiles shorter than this (s) end without a line
+COMPILED_NOTICE_AFTER = 1.0
+#: what the functions of each module are, for the compile notices
+_FAMILIES = {
+    "billiard.kernels.loop": "the impact loop",
+    "billiard.kernels.locate": "the impact locator",
+    "billiard.kernels.flight": "the flight (exact, or with air drag)",
+    "billiard.kernels.impact": "the impact law",
+    "billiard.kernels.fixed_step": "the rk4 method's fixed steps",
+    "billiard.kernels.contact": "the contact phases (rolling, sliding)",
+    "billiard.kernels.contact_forces": "the contact phases (rolling, sliding)",
+    "billiard.kernels.contact_equations": "the contact phases (rolling, sliding)",
+    "billiard.kernels.vertex": "the hold in a vertex",
+    "billiard.kernels.rest": "the resting-position scan",
+    "billiard.kernels.surfaces": "the walls' offset surfaces",
+    "billiard.kernels.float_text": "the CSV number formatting",
+    "billiard.kernels.ryu": "the CSV number formatting",
+}
+#: the functions whose family is not their module's
+_FUNCTION_FAMILIES = {
+    "billiard.kernels.loop.run_chunk_fixed": "the impact loop of the rk4 method",
+}
+#: the families (a curve's wall functions among them) announced in this process
+_announced: set[str] = set()
+#: the compiles in progress, outermost first: (function, family, start time)
+_compiling: list[tuple[Any, str | None, float]] = []
+
+
+def compile_family(function: Any) -> str | None:
+    """What a function numba compiles belongs to, in words, for the compile notices
+    (None: not billiard's, no notice): a kernel family, or a curve's wall functions."""
+    module = getattr(function, "__module__", "") or ""
+    if module.startswith(("billiard.generated.curves.", "billiard_user_curves.")):
+        names = getattr(function, "__globals__", {})
+        name, expression = names.get("NAME", module.rpartition(".")[2]), names.get("EXPRESSION")
+        if str(name).startswith("expr_") and expression:
+            return f"the wall functions of the curve f(x) = {expression}"
+        return f"the wall functions of curve {name!r}"
+    if module.startswith("billiard.kernels."):
+        where = f"{module}.{getattr(function, '__qualname__', '')}"
+        return _FUNCTION_FAMILIES.get(where) or _FAMILIES.get(
+            module, f"the engine's kernels ({module})"
+        )
+    return None
 
 
 def _disabled() -> bool:
@@ -184,21 +231,31 @@ else:
     from numba.core import event as _event
 
     class _CompileNotice(_event.Listener):
-        """Says, once per process, that the kernels are being compiled: numba signals
-        "numba:compile" only when a function is compiled, not when it is loaded from the
-        cache, so a warm start prints nothing."""
+        """Says what of billiard's is being compiled, and how long a long compile took:
+        numba signals "numba:compile" only when a function is compiled, not when it is
+        loaded from the cache, so a warm start prints nothing. A compile compiles the
+        functions it calls within its own signal: only the outermost one speaks. Its
+        family is named once per process (a second compile of it, for other argument
+        types, says only how long it took when that was long)."""
 
         def on_start(self, event):
-            global _compile_noticed
-            dispatcher = (event.data or {}).get("dispatcher")
-            module = getattr(getattr(dispatcher, "py_func", None), "__module__", "") or ""
-            if _compile_noticed or not module.startswith("billiard.kernels."):
-                return
-            _compile_noticed = True
-            print(COMPILE_NOTICE, file=sys.stderr, flush=True)
+            function = getattr((event.data or {}).get("dispatcher"), "py_func", None)
+            family = compile_family(function) if not _compiling else None
+            _compiling.append((function, family, time.perf_counter()))
+            if family is not None and family not in _announced:
+                _announced.add(family)
+                where = f"{function.__module__}.{function.__qualname__}"
+                line = COMPILE_NOTICE.format(family=family, function=where)
+                print(line, file=sys.stderr, flush=True)
 
         def on_end(self, event):
-            pass
+            if not _compiling:  # pragma: no cover - a start always comes first
+                return
+            _, family, started = _compiling.pop()
+            seconds = time.perf_counter() - started
+            if family is not None and seconds >= COMPILED_NOTICE_AFTER:
+                line = COMPILED_NOTICE.format(family=family, seconds=seconds)
+                print(line, file=sys.stderr, flush=True)
 
     _event.register("numba:compile", _CompileNotice())
 

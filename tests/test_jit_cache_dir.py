@@ -43,5 +43,15 @@ def test_kernels_cache_in_the_user_cache_dir_when_the_package_is_read_only(tmp_p
         assert runs[-1].returncode == 0, runs[-1].stderr
     cached = [p.name for p in (tmp_path / "cache" / "numba").rglob("*.nbi")]
     assert any(name.startswith("loop.run_chunk") for name in cached), cached
-    assert runs[0].stderr.strip() == jit.COMPILE_NOTICE  # the first process compiled
+    # the first process compiled, and said what
+    notices = runs[0].stderr.splitlines()
+    assert notices and all(
+        line.startswith(("billiard: compiling ", "billiard: compiled ")) for line in notices
+    ), notices
+    assert (
+        jit.COMPILE_NOTICE.format(
+            family="the impact loop", function="billiard.kernels.loop.run_chunk"
+        )
+        in notices
+    )
     assert runs[1].stderr == ""  # the second loaded the user-wide cache

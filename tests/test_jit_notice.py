@@ -1,5 +1,6 @@
-"""The one-line notices of billiard.jit: a compile of the kernels says so once; a start
-from numba's cache says nothing."""
+"""The notices of billiard.jit: a compile of billiard's functions names what it
+compiles (a kernel family, a curve's wall functions) and, when long, how long it took; a
+start from numba's cache says nothing."""
 
 from __future__ import annotations
 
@@ -14,32 +15,86 @@ from billiard import jit
 compiled = pytest.mark.skipif(not jit.ENABLED, reason=f"numba unavailable: {jit.numba_problem()}")
 
 
-@compiled
-def test_a_compile_of_the_kernels_is_announced_once(capsys, monkeypatch):
+@pytest.fixture
+def fresh_notices(monkeypatch):
+    """No family announced yet in this process, no compile in progress."""
+    monkeypatch.setattr(jit, "_announced", set())
+    monkeypatch.setattr(jit, "_compiling", [])
+
+
+def compile_signal(function, inner=()):
+    """numba's "numba:compile" signals of a compile of ``function`` that compiles the
+    functions ``inner`` within it (as a kernel compiles the kernels it calls)."""
     from numba.core import event
 
-    from billiard.kernels import loop
-
-    monkeypatch.setattr(jit, "_compile_noticed", False)
-    for dispatcher in (loop.run_chunk, loop.run_chunk):
-        with event.trigger_event("numba:compile", data={"dispatcher": dispatcher}):
-            pass
-    assert capsys.readouterr().err.splitlines() == [jit.COMPILE_NOTICE]
+    with event.trigger_event("numba:compile", data={"dispatcher": function}):
+        for other in inner:
+            compile_signal(other)
 
 
 @compiled
-def test_other_compiles_are_not_announced(capsys, monkeypatch):
+def test_a_compile_names_its_family_and_function_once(capsys, fresh_notices, monkeypatch):
+    from billiard.kernels import locate, loop
+
+    monkeypatch.setattr(jit, "COMPILED_NOTICE_AFTER", float("inf"))  # no end lines
+    compile_signal(loop.run_chunk, inner=[locate.locate, loop.step])
+    compile_signal(loop.run_chunk)  # again (other argument types): named once
+    assert capsys.readouterr().err.splitlines() == [
+        "billiard: compiling the impact loop with numba (billiard.kernels.loop.run_chunk); "
+        "cached for later runs"
+    ]
+
+
+@compiled
+def test_a_long_compile_says_how_long_it_took(capsys, fresh_notices, monkeypatch):
+    from billiard.kernels import contact, rest
+
+    monkeypatch.setattr(jit, "COMPILED_NOTICE_AFTER", 0.0)  # every compile is "long"
+    compile_signal(rest.offset_heights)
+    compile_signal(contact.run_phase, inner=[rest.offset_heights])
+    lines = capsys.readouterr().err.splitlines()
+    assert [line.split(" with numba")[0] for line in lines[::2]] == [
+        "billiard: compiling the resting-position scan",
+        "billiard: compiling the contact phases (rolling, sliding)",
+    ]
+    assert [line.rsplit(" in ", 1)[0] for line in lines[1::2]] == [
+        "billiard: compiled the resting-position scan",
+        "billiard: compiled the contact phases (rolling, sliding)",
+    ]
+    for line in lines[1::2]:
+        seconds = line.rsplit(" in ", 1)[1]
+        assert seconds.endswith(" s") and float(seconds[:-2]) >= 0.0
+
+
+def test_the_families_name_the_kernels_and_a_curves_wall_functions():
+    from billiard.generated.curves import wedge
+
+    from billiard.curves import curve_module
+    from billiard.kernels import fixed_step, float_text, loop, vertex
+
+    assert jit.compile_family(wedge.f_0) == "the wall functions of curve 'wedge'"
+    expression = curve_module("3*x**2 + 0.005")  # derived into BILLIARD_HOME if new
+    family = jit.compile_family(expression.f_0)
+    assert family == f"the wall functions of the curve f(x) = {expression.EXPRESSION}"
+    for function, family in (
+        (fixed_step.locate, "the rk4 method's fixed steps"),
+        (loop.run_chunk_fixed, "the impact loop of the rk4 method"),
+        (float_text.format_rows, "the CSV number formatting"),
+        (vertex.begin, "the hold in a vertex"),
+    ):
+        assert jit.compile_family(getattr(function, "py_func", function)) == family
+    assert jit.compile_family(compile_signal) is None  # not billiard's
+
+
+@compiled
+def test_other_compiles_are_not_announced(capsys, fresh_notices):
     import numba
-    from numba.core import event
-
-    monkeypatch.setattr(jit, "_compile_noticed", False)
 
     @numba.njit
     def twice(x):
         return 2 * x
 
-    with event.trigger_event("numba:compile", data={"dispatcher": twice}):
-        pass
+    compile_signal(twice)
     assert capsys.readouterr().err == ""
 
 

@@ -52,3 +52,42 @@ def test_readme_csv_table_lists_every_column():
     named = set(re.findall(r"\| `([^`]+)`(?:, `([^`]+)`)?(?:, `([^`]+)`)? \|", table))
     listed = {name for row in named for name in row if name}
     assert set(COLUMNS) <= listed, set(COLUMNS) - listed
+
+
+@pytest.mark.slow
+def test_readme_scene_example_prints_the_summary_shown(tmp_path):
+    """The summary the README shows for its scene example is the one a run prints (less
+    the wall-clock time and rate, which vary): a full run of the example, 25,000 impacts."""
+    from billiard.scene import load_scene
+    from billiard.simulate import simulate
+
+    text = README.read_text()
+    scene = re.search(r"## Scene files\n\n```toml\n(.*?)```", text, re.S).group(1)
+    path = tmp_path / "my-scene.toml"
+    path.write_text(scene)
+    shown = re.search(r"the run prints[^`]*```\n(.*?)\n```", text, re.S).group(1)
+
+    def timeless(line: str) -> str:
+        return re.sub(r" in \S+ s \([\d,]+ impacts/s\)", "", line)
+
+    summary = simulate(load_scene(path)).summary()
+    assert timeless(shown) == timeless(summary)
+    assert timeless(summary) != summary  # the time was there to leave out
+
+
+def test_readme_plane_example_runs_and_needs_its_start(tmp_path):
+    """The plane of "Scene files" runs from the start it gives; without one, the run is
+    refused with the message the README quotes."""
+    from billiard.errors import GeometryError
+    from billiard.scene import load_scene
+    from billiard.simulate import simulate
+
+    blocks = re.findall(r"```toml\n(.*?)```", README.read_text(), re.S)
+    [plane] = [b for b in blocks if 'name = "ramp"' in b]
+    path = tmp_path / "ramp.toml"
+    path.write_text(plane)
+    result = simulate(load_scene(path), collisions=20)
+    assert len(result) == 20 and result.stop_reason is None
+    path.write_text(plane.split("[initial]")[0])
+    with pytest.raises(GeometryError, match="no bottom to rest on.*give initial.q1 and initial.q2"):
+        simulate(load_scene(path), collisions=20)

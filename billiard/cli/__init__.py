@@ -16,7 +16,7 @@ from collections.abc import Sequence
 from billiard.cli import derive, run, study, sweep
 from billiard.cli.common import UserError
 
-__all__ = ["UserError", "build_parser", "main"]
+__all__ = ["UserError", "build_parser", "main", "shows_default", "version_text"]
 
 
 def _user_errors() -> tuple[type[BaseException], ...]:
@@ -44,17 +44,83 @@ def _user_errors() -> tuple[type[BaseException], ...]:
     return tuple(errors)
 
 
+_DISTRIBUTION = "realworld-billiard"
+
+
+def version_text() -> str:
+    """``billiard --version``: the distribution's name and version, and the folder of the
+    package that runs (a source checkout's ``billiard/`` can shadow an installed copy).
+
+    The version comes from the installed distribution's metadata, or, where none is
+    installed (a checkout run with ``python -m billiard.cli``), from ``billiard.__version__``.
+    """
+    import importlib.metadata
+    from pathlib import Path
+
+    import billiard
+
+    folder = Path(billiard.__file__).resolve().parent
+    try:
+        version = importlib.metadata.version(_DISTRIBUTION)
+    except importlib.metadata.PackageNotFoundError:
+        return f"{_DISTRIBUTION} {billiard.__version__} (not installed; package at {folder})"
+    return f"{_DISTRIBUTION} {version} (package at {folder})"
+
+
+class _Version(argparse.Action):
+    """``--version``: the text is made only when asked (reading the distribution's
+    metadata on every command would slow every start)."""
+
+    def __init__(self, option_strings: list[str], dest: str, **kwargs: object) -> None:
+        super().__init__(
+            option_strings,
+            dest,
+            nargs=0,
+            default=argparse.SUPPRESS,
+            help="print the package's name and version, then exit",
+        )
+
+    def __call__(self, parser, namespace, values, option_string=None) -> None:
+        print(version_text())
+        parser.exit()
+
+
+class _DefaultsFormatter(argparse.HelpFormatter):
+    """Help that shows every option's default: an option whose help does not mention its
+    default gets "(default: VALUE)" appended. Flags (on or off), the help option and
+    repeatable options that start empty have nothing to show."""
+
+    def _get_help_string(self, action: argparse.Action) -> str:
+        text = action.help or ""
+        if shows_default(action) and "default" not in text.lower():
+            text += " (default: %(default)s)"
+        return text
+
+
+def shows_default(action: argparse.Action) -> bool:
+    """Whether ``--help`` must show ``action``'s default: an option (not a positional)
+    taking a value, whose default is neither None, suppressed nor an empty list."""
+    if not action.option_strings or action.nargs == 0:
+        return False  # a positional, or a flag (store_true, --help, --version)
+    default = action.default
+    return default is not None and default is not argparse.SUPPRESS and default != []
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog="billiard",
         description="Driven gravitational billiard with a spinning, rubbing ball (SI units).",
+        formatter_class=_DefaultsFormatter,
     )
+    parser.add_argument("--version", action=_Version)
     sub = parser.add_subparsers(dest="command", required=True)
     derive.add_parser(sub)
     study.add_scenes_parser(sub)
     run.add_parser(sub)
     study.add_parsers(sub)  # calibrate, plot, lyapunov, bench, reproduce
     sweep._add_sweep_parser(sub)
+    for command in sub.choices.values():
+        command.formatter_class = _DefaultsFormatter
     return parser
 
 
