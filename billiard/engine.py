@@ -41,6 +41,7 @@ from billiard.flight import flight_model
 from billiard.impact import ImpactLaw, impact_law
 from billiard.interrupt import RunInterrupted, StopRequest
 from billiard.locators import LOCATORS
+from billiard.progress import Progress, report_time
 from billiard.record import ContactRecord, ImpactRecord
 from billiard.scene import SceneError, with_values
 from billiard.state import BallState, EngineState
@@ -52,16 +53,6 @@ __all__ = ["COLLAPSE_COUNT", "COLLAPSE_SPAN", "ZERO_FLIGHT_LIMIT", "Simulation"]
 _PROGRESS_EVERY = 100
 #: Wall-clock seconds between two checkpoints (and CSV flushes) of a streamed run.
 CHECKPOINT_INTERVAL = 1.0
-
-Progress = Callable[[int, int], None]
-
-
-def _report_time(progress: Any, t: float) -> None:
-    """Tell a progress object that has an ``at_time`` method the simulated time (s)
-    reached: while the ball rolls the impact count stands still, the time does not."""
-    at_time = getattr(progress, "at_time", None)
-    if at_time is not None and math.isfinite(t):
-        at_time(t)
 
 
 class Simulation(ContactPhases, EventStep):
@@ -464,7 +455,7 @@ class Simulation(ContactPhases, EventStep):
         finally:
             self._request = self._pause = None
             if progress is not None:
-                _report_time(progress, self.final_time)
+                report_time(progress, self.final_time)
                 progress(self._impacts, collisions)
         self.status = status
         return reason
@@ -483,7 +474,7 @@ class Simulation(ContactPhases, EventStep):
                 return True
             if progress is not None and monotonic() - last[0] >= 0.1:
                 last[0] = monotonic()
-                _report_time(progress, self._ball.t + tau)
+                report_time(progress, self._ball.t + tau)
                 progress(self._impacts, collisions)
             return False
 

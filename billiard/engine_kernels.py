@@ -37,6 +37,7 @@ from billiard.interrupt import RunInterrupted, StopRequest
 from billiard.kernels import layout as L
 from billiard.kernels.state import COUNT_KEYS, engine_state, state_vector, write_ball, write_state
 from billiard.kernels_python import stop_text
+from billiard.progress import report_time
 from billiard.record import MemoryRecorder
 from billiard.rows import as_block, record_of
 from billiard.status import Status
@@ -437,6 +438,7 @@ class KernelEngine:
             if on_record is not None:
                 on_record(n)
             if progress is not None and n % _PROGRESS_EVERY == 0:
+                report_time(progress, float(buffer[(j - 1) * L.NCOL + 1]))  # column 1: t
                 progress(n, collisions)
             if request.signum and j < done:
                 return j
