@@ -179,6 +179,11 @@ class Result:
             text += "; at rest on the boundary (moving with it): nothing more happens"
         if self.status is Status.IN_CONTACT:
             text += "; " + _in_contact_message(self.scene, self.final_mode)
+            if n == 0:
+                text += (
+                    "; a stronger drive (drive.amplitude, m) or a start above the wall "
+                    "(initial.q2, m) makes it fly"
+                )
         if self.stop_reason:
             text += f"; stopped: {self.stop_reason}"
         return text
