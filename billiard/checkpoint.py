@@ -15,6 +15,8 @@ from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
 
+from billiard.userfile import FileRefused, read_limited
+
 __all__ = [
     "CHECKPOINT_FORMAT",
     "CHECKPOINT_VERSION",
@@ -24,6 +26,8 @@ __all__ = [
     "write_text_atomic",
 ]
 
+#: Largest checkpoint file read (bytes): one holds an engine state, a few kilobytes.
+MAX_CHECKPOINT_BYTES = 1 << 20
 #: ``format`` and ``version`` fields of a checkpoint file.
 CHECKPOINT_FORMAT = "billiard-checkpoint"
 CHECKPOINT_VERSION = 2
@@ -91,9 +95,11 @@ def read_checkpoint(path: str | os.PathLike[str]) -> dict[str, Any]:
     """
     path = Path(path)
     try:
-        text = path.read_text(encoding="utf-8")
+        text = read_limited(path, MAX_CHECKPOINT_BYTES).decode("utf-8")
     except FileNotFoundError:
         raise CheckpointError(f"{path} is missing") from None
+    except FileRefused as exc:
+        raise CheckpointError(f"{path} {exc.reason}") from None
     except (OSError, UnicodeDecodeError) as exc:
         raise CheckpointError(f"{path} cannot be read: {exc}") from None
     try:

@@ -55,6 +55,7 @@ from billiard.sidecsv import CONTACTS_NAME, TRAJECTORY_NAME, SideCsv
 from billiard.state import EngineState
 from billiard.status import Status
 from billiard.stream import CsvMark, CsvRecorder, RowMismatchError, RunBusyError, Truncation
+from billiard.userfile import MAX_SCENE_BYTES, FileRefused, read_limited
 from billiard.write_error import RunWriteError
 
 __all__ = [
@@ -163,9 +164,11 @@ def resume(
         raise CheckpointError(f"{checkpoint_path} has an unknown status {status!r}")
     scene_path = out / SCENE_NAME
     try:
-        text = scene_path.read_text(encoding="utf-8")
+        text = read_limited(scene_path, MAX_SCENE_BYTES).decode("utf-8")
     except FileNotFoundError:
         raise CheckpointError(f"{scene_path} is missing") from None
+    except FileRefused as exc:
+        raise CheckpointError(f"{scene_path} {exc.reason}") from None
     except (OSError, UnicodeDecodeError) as exc:
         raise CheckpointError(f"{scene_path} cannot be read: {exc}") from None
     scene = scene_from_toml(text, source=f"'{scene_path}'")

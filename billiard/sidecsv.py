@@ -16,6 +16,7 @@ import numpy as np
 
 from billiard.checkpoint import CheckpointError
 from billiard.record import _format
+from billiard.userfile import read_limited
 
 __all__ = ["CONTACTS_NAME", "TRAJECTORY_NAME", "SideCsv", "read_side_csv"]
 
@@ -70,8 +71,14 @@ class SideCsv:
 
 
 def read_side_csv(path: str | os.PathLike[str]) -> dict[str, np.ndarray]:
-    """Column name -> numpy array of a side file (text columns as str)."""
-    lines = Path(path).read_text(encoding="utf-8").splitlines()
+    """Column name -> numpy array of a side file (text columns as str).
+
+    Raises:
+        OSError: the file cannot be read, or is not a regular file
+            (:class:`~billiard.userfile.FileRefused`: a device or a pipe never ends).
+        UnicodeDecodeError: the file is not UTF-8 text.
+    """
+    lines = read_limited(path, None).decode("utf-8").splitlines()
     names = lines[0].split(",")
     rows = [line.split(",") for line in lines[1:] if line]
     out: dict[str, np.ndarray] = {}

@@ -149,7 +149,8 @@ class CsvRecorder:
         path = Path(path)
         try:
             with open(path, "rb") as handle:
-                start = handle.readline()
+                # no further than the longest header: the file may be anything
+                start = handle.readline(len(_header_line(columns, "\r\n")))
         except FileNotFoundError:
             raise CheckpointError(f"{path} is missing") from None
         except OSError as exc:

@@ -130,11 +130,13 @@ def _checkpoint_clock(folder: Path):
     while there is none."""
     import json
 
+    from billiard.checkpoint import MAX_CHECKPOINT_BYTES
     from billiard.persist import CHECKPOINT_NAME
+    from billiard.userfile import read_limited
 
     def clock() -> float | None:
         try:
-            data = json.loads((folder / CHECKPOINT_NAME).read_text(encoding="utf-8"))
+            data = json.loads(read_limited(folder / CHECKPOINT_NAME, MAX_CHECKPOINT_BYTES))
             return float(data["engine"]["ball"]["t"])
         except (OSError, ValueError, KeyError, TypeError):
             return None
