@@ -23,6 +23,10 @@ __all__ = ["CONTACTS_NAME", "TRAJECTORY_NAME", "SideCsv", "read_side_csv"]
 CONTACTS_NAME = "contacts.csv"
 TRAJECTORY_NAME = "trajectory.csv"
 _TEXT = frozenset({"wall", "mode", "end"})
+#: Characters of rows collected before they are written (not synced) whatever the time
+#: to the next flush: a long flight sampled finely makes millions of rows between two
+#: impacts, which would otherwise all wait in memory.
+SPILL_CHARS = 1 << 22
 
 
 class SideCsv:
@@ -38,6 +42,7 @@ class SideCsv:
     def __init__(self, path: Path, columns: Sequence[str], size: int | None = None):
         self.path = Path(path)
         self._pending: list[str] = []
+        self._pending_chars = 0
         if size is None:
             self._file = open(self.path, "wb")  # noqa: SIM115 - closed by close()
             self._file.write((",".join(columns) + "\n").encode())
@@ -53,13 +58,22 @@ class SideCsv:
             self._file.seek(size)
 
     def append(self, row: Sequence[Any]) -> None:
-        self._pending.append(",".join(_format(v) for v in row) + "\n")
+        line = ",".join(_format(v) for v in row) + "\n"
+        self._pending.append(line)
+        self._pending_chars += len(line)
+        if self._pending_chars >= SPILL_CHARS:
+            # written, not synced: a resume cuts the file back to its checkpoint's size
+            self._write()
 
-    def flush(self) -> int:
-        """Write the buffered rows; returns the file's size (bytes)."""
+    def _write(self) -> None:
         if self._pending:
             self._file.write("".join(self._pending).encode())
             self._pending.clear()
+            self._pending_chars = 0
+
+    def flush(self) -> int:
+        """Write the buffered rows; returns the file's size (bytes)."""
+        self._write()
         self._file.flush()
         os.fsync(self._file.fileno())
         return self._file.tell()

@@ -149,6 +149,7 @@ def cmd_run(args: argparse.Namespace) -> int:
     import signal
 
     from billiard.checkpoint import CheckpointError
+    from billiard.output_size import OutputSizeError
     from billiard.persist import CSV_NAME, SCENE_NAME, resume
     from billiard.simulate import RunInterrupted, simulate
 
@@ -198,6 +199,7 @@ def cmd_run(args: argparse.Namespace) -> int:
                         collisions=args.collisions,
                         progress=bar,
                         notify=lambda line: print(f"billiard: {line}", file=sys.stderr),
+                        allow_large=args.yes,
                     )
                 except CheckpointError as exc:
                     raise UserError(f"cannot resume {out}: {exc}") from None
@@ -226,6 +228,7 @@ def cmd_run(args: argparse.Namespace) -> int:
                         progress=bar,
                         duration=args.duration,
                         sample=args.sample,
+                        allow_large=args.yes,
                     )
                 except CheckpointError as exc:  # another process is writing a run in DIR
                     changed = False
@@ -235,6 +238,8 @@ def cmd_run(args: argparse.Namespace) -> int:
                 bar.stream.write("\n")
             if changed and out.is_dir():
                 stale = _remove_plots(out)
+    except OutputSizeError as exc:
+        raise UserError(f"run: {exc.confirmed_by('--yes')}") from None
     except RunInterrupted as exc:
         where = exc.out_dir or Path(".")
         again = f"billiard run --resume {shlex.quote(str(where))}"
@@ -323,7 +328,14 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
         "--sample",
         type=float,
         metavar="DT",
-        help="also write DIR/trajectory.csv: the state every DT seconds of simulated time",
+        help="also write DIR/trajectory.csv: the state every DT seconds of simulated time "
+        "(refused when it may exceed 1 GB, estimated before the run, unless --yes)",
+    )
+    p.add_argument(
+        "--yes",
+        action="store_true",
+        help="go ahead when the estimate of trajectory.csv exceeds 1 GB (with --sample; "
+        "also with --resume)",
     )
     p.add_argument("--out", help="output directory (default: runs/SCENE)")
     add_set_argument(p, "override a scene key, e.g. --set drive.frequency=6.0 (repeatable)")
