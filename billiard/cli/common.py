@@ -40,6 +40,8 @@ def check_output_folder(folder: str | os.PathLike[str], option: str) -> None:
         probe = probe.parent
     if path.exists() and not path.is_dir():
         raise UserError(f"{option} {path}: it is not a folder")
+    if not probe.is_dir():  # a file where a folder on the way should be
+        raise UserError(f"{option} {path}: {probe} is not a folder")
     try:
         for part in reversed(missing):
             part.mkdir()
