@@ -30,7 +30,11 @@ __all__ = [
 MAX_CHECKPOINT_BYTES = 1 << 20
 #: ``format`` and ``version`` fields of a checkpoint file.
 CHECKPOINT_FORMAT = "billiard-checkpoint"
-CHECKPOINT_VERSION = 2
+CHECKPOINT_VERSION = 3
+#: Versions read: 3 adds the CRC-32 of each file's rows before the checkpoint and the
+#: sha256 of scene.toml's bytes; a version 2 checkpoint (without them) is resumed
+#: without those two checks.
+READABLE_VERSIONS = (2, 3)
 
 
 class CheckpointError(ValueError):
@@ -108,10 +112,12 @@ def read_checkpoint(path: str | os.PathLike[str]) -> dict[str, Any]:
         raise CheckpointError(f"{path} is corrupt (not valid JSON: {exc})") from None
     if not isinstance(data, dict) or data.get("format") != CHECKPOINT_FORMAT:
         raise CheckpointError(f"{path} is not a billiard checkpoint")
-    if data.get("version") != CHECKPOINT_VERSION:
+    version = data.get("version")
+    if isinstance(version, bool) or version not in READABLE_VERSIONS:
+        readable = " and ".join(map(str, READABLE_VERSIONS))
         raise CheckpointError(
-            f"{path} has checkpoint version {data.get('version')!r}; this version of "
-            f"billiard reads version {CHECKPOINT_VERSION}"
+            f"{path} has checkpoint version {version!r}; this version of "
+            f"billiard reads versions {readable}"
         )
     stored = data.pop("sha256", None)
     try:

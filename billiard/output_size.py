@@ -34,6 +34,7 @@ __all__ = [
     "estimate_samples",
     "guard_samples",
     "longest_flight",
+    "vertical_range",
 ]
 
 #: Largest trajectory a run writes (trajectory.csv) or keeps (in memory) without the
@@ -118,6 +119,18 @@ def _gravity_fall(height: float, g: float, terminal: float) -> float:
     return hi
 
 
+def vertical_range(scene: Any, boundary: Any) -> tuple[float, float]:
+    """Lowest and highest height (m, lab frame) of the ball's centre in the container:
+    the lowest point of the curve (on a grid of 2001 abscissas, less a ball radius for
+    what lies between them) and the top (the lid, or the escape height), both moved by
+    a vertical drive's amplitude."""
+    lo, hi = boundary.x_range
+    xs = [lo + (hi - lo) * k / 2000 for k in range(2001)]
+    bottom = min(boundary.curve_height(x) for x in xs) - scene.ball.radius
+    sway = scene.drive.amplitude if scene.drive.direction == "vertical" else 0.0
+    return bottom - sway, boundary.top + sway
+
+
 def longest_flight(scene: Any, boundary: Any) -> float:
     """An upper bound (s) on one flight of the ball in the container.
 
@@ -128,12 +141,8 @@ def longest_flight(scene: Any, boundary: Any) -> float:
     (:func:`_gravity_fall`). The Magnus force, which can lift a spinning ball, is left
     out (the run-time guard covers it).
     """
-    lo, hi = boundary.x_range
-    xs = [lo + (hi - lo) * k / 2000 for k in range(2001)]
-    bottom = min(boundary.curve_height(x) for x in xs) - scene.ball.radius
-    drive = scene.drive
-    sway = 2.0 * drive.amplitude if drive.direction == "vertical" else 0.0
-    height = max(boundary.top - bottom + sway, 1e-9)
+    bottom, top = vertical_range(scene, boundary)
+    height = max(top - bottom, 1e-9)
     g = scene.run.gravity
     c_lin, c_quad = scene.air.coefficients
     weight = scene.ball.mass * g

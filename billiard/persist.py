@@ -46,6 +46,7 @@ from billiard.checkpoint import (
     write_checkpoint,
     write_text_atomic,
 )
+from billiard.csvfile import is_crc32
 from billiard.engine import COLLAPSE_COUNT, Progress, Simulation
 from billiard.interrupt import RunInterrupted, StopRequest, signals_deferred
 from billiard.output_size import (
@@ -56,8 +57,9 @@ from billiard.output_size import (
 )
 from billiard.record import CONTACT_COLUMNS, TRAJECTORY_COLUMNS
 from billiard.result import Result, RunFile
+from billiard.resume_checks import check_state
 from billiard.scene import scene_from_toml, scene_to_toml
-from billiard.sidecsv import CONTACTS_NAME, TRAJECTORY_NAME, SideCsv
+from billiard.sidecsv import CONTACTS_NAME, TRAJECTORY_NAME, SideCsv, check_side
 from billiard.state import EngineState
 from billiard.status import Status
 from billiard.stream import CsvMark, CsvRecorder, RowMismatchError, RunBusyError, Truncation
@@ -173,6 +175,9 @@ def resume(
         stop_status = Status(data.get("stop_status", Status.COMPLETE))
         sample = _sample_interval(data.get("sample"))
         side_sizes = {str(k): int(v) for k, v in data.get("side", {}).items()}
+        side_crcs = _side_crcs(data.get("side_crc32", {}), side_sizes)
+        scene_file_sha256 = data.get("scene_toml_sha256")
+        checked = data["version"] >= 3  # earlier ones have neither checksum
     except CheckpointError as exc:  # first: it is a ValueError too
         raise CheckpointError(f"{checkpoint_path}: {exc}") from None
     except (KeyError, TypeError, ValueError):
@@ -194,6 +199,16 @@ def resume(
     if _fingerprint(sim) != fingerprint:
         raise CheckpointError(
             f"{scene_path} is not the scene the checkpoint was written for (edited since?)"
+        )
+    if (
+        scene_file_sha256 is not None
+        and _sha256(text.encode("utf-8")) != scene_file_sha256
+        # scene.toml as billiard writes it for a new total (an extended run, the
+        # checkpoint not yet rewritten): the impact count is all that differs
+        and text != scene_to_toml(sim.resolved_scene(scene.run.collisions))
+    ):
+        raise CheckpointError(
+            f"{scene_path} was edited after the checkpoint was written (its sha256 differs)"
         )
     total = scene.run.collisions if collisions is None else int(collisions)
     rows = mark.rows
@@ -241,8 +256,10 @@ def resume(
     # check the state before touching the CSV file: a mismatch leaves everything as it was
     try:
         sim.restore(state)
+        check_state(state, sim, rows=rows, sample=sample, regimes=tuple(sim.impact.regimes))
     except CheckpointError as exc:
         raise CheckpointError(f"{checkpoint_path}: {exc}") from None
+    _check_sides(out, side_sizes, side_crcs, state.samples)
     sim.resolved_scene(total)  # validates the new total
     samples = _samples(sim, total, state.ball.t, state.impacts, allow_large)
     try:
@@ -260,11 +277,16 @@ def resume(
             )
         if cut.partial_bytes:
             notes.append(f"dropped an unterminated last line ({cut.partial_bytes} bytes)")
+        if not checked:
+            notes.append(
+                "its checkpoint is of an earlier version, without the checksums of the "
+                "rows before it: they are not checked"
+            )
         note = f"; {'; '.join(notes)}" if notes else ""
         notify(f"resuming {out} after impact {rows} of {total}{note}")
     return _continue(
         sim, scene, total, out, stream, state, progress, on_record, rows, cut, side_sizes,
-        samples,
+        samples, side_crcs,
     )  # fmt: skip
 
 
@@ -324,6 +346,7 @@ def _continue(
     cut: Truncation,
     side_sizes: Any = None,
     samples: SampleEstimate | None = None,
+    side_crcs: Any = None,
 ) -> Result:
     """Go on with a resumed run from ``start`` (after recording a new total in scene.toml)."""
     if total != scene.run.collisions:
@@ -332,7 +355,7 @@ def _continue(
         return _run_streamed(
             sim, total, out, stream, start, progress, on_record,
             resumed_from=resumed_from, truncation=cut, side_sizes=side_sizes,
-            samples=samples,
+            samples=samples, side_crcs=side_crcs,
         )  # fmt: skip
 
 
@@ -380,9 +403,38 @@ def _samples(
     return estimate
 
 
+def _side_crcs(data: Any, sizes: Mapping[str, int]) -> dict[str, int | None]:
+    """The checkpoint's CRC-32 of each side file (None where it has none)."""
+    if not isinstance(data, Mapping) or not set(data) <= set(sizes):
+        raise CheckpointError("its 'side_crc32' entry is malformed")
+    crcs = {name: data.get(name) for name in sizes}
+    if not all(crc is None or is_crc32(crc) for crc in crcs.values()):
+        raise CheckpointError("its 'side_crc32' entry is malformed")
+    return crcs
+
+
+def _check_sides(
+    out: Path, sizes: Mapping[str, int], crcs: Mapping[str, int | None], samples: int
+) -> None:
+    """Check the side files' rows before the checkpoint (unchanged, and as many samples
+    in trajectory.csv as the engine state made) before anything is written."""
+    for name, size in sizes.items():
+        path = out / (CONTACTS_NAME if name == "contacts" else TRAJECTORY_NAME)
+        rows = check_side(path, size, crcs.get(name))
+        if name == "trajectory" and rows != samples:
+            raise CheckpointError(
+                f"{path} holds {rows} samples before the checkpoint, its engine state "
+                f"says {samples} (was the file edited?)"
+            )
+
+
+def _sha256(data: bytes) -> str:
+    return hashlib.sha256(data).hexdigest()
+
+
 def _fingerprint(sim: Simulation) -> str:
     """sha256 of the resolved scene, impact count aside (a run may be extended)."""
-    return hashlib.sha256(scene_to_toml(sim.resolved_scene(1)).encode("utf-8")).hexdigest()
+    return _sha256(scene_to_toml(sim.resolved_scene(1)).encode("utf-8"))
 
 
 def _run_streamed(
@@ -398,6 +450,7 @@ def _run_streamed(
     truncation: Truncation | None = None,
     side_sizes: Mapping[str, int] | None = None,
     samples: SampleEstimate | None = None,
+    side_crcs: Mapping[str, int | None] | None = None,
 ) -> Result:
     """Run ``sim`` from ``start`` to ``total`` impacts, streaming rows to ``stream`` and
     keeping ``out/checkpoint.json`` in step with what the CSV file holds (and the side
@@ -406,14 +459,21 @@ def _run_streamed(
     fingerprint = _fingerprint(sim)
     saved = [start.impacts]
     sides: dict[str, SideCsv] = {}
+    crcs = side_crcs or {}
     try:
+        # the bytes of scene.toml as the run wrote it (a resume checks them)
+        scene_file_sha256 = _sha256(read_limited(out / SCENE_NAME, MAX_SCENE_BYTES))
         if sim.phases:
             size = None if side_sizes is None else side_sizes.get("contacts")
-            sides["contacts"] = SideCsv(out / CONTACTS_NAME, CONTACT_COLUMNS, size)
+            sides["contacts"] = SideCsv(
+                out / CONTACTS_NAME, CONTACT_COLUMNS, size, crcs.get("contacts")
+            )
             sim.on_contact = sides["contacts"].append
         if sim.sample_dt is not None:
             size = None if side_sizes is None else side_sizes.get("trajectory")
-            trajectory = SideCsv(out / TRAJECTORY_NAME, TRAJECTORY_COLUMNS, size)
+            trajectory = SideCsv(
+                out / TRAJECTORY_NAME, TRAJECTORY_COLUMNS, size, crcs.get("trajectory")
+            )
             sides["trajectory"] = trajectory
             if samples is None:  # pragma: no cover - every caller estimates them
                 raise AssertionError("a sampled run without its estimate")
@@ -450,6 +510,8 @@ def _run_streamed(
                 "engine": engine,
                 "sample": sim.sample_dt,
                 "side": {name: side.flush() for name, side in sides.items()},
+                "side_crc32": {name: side.crc32 for name, side in sides.items()},
+                "scene_toml_sha256": scene_file_sha256,
             },
         )
         saved[0] = mark.rows
