@@ -3,7 +3,9 @@
 from __future__ import annotations
 
 import argparse
+import contextlib
 import math
+import os
 import sys
 import time
 from pathlib import Path
@@ -144,6 +146,30 @@ def _checkpoint_clock(folder: Path):
     return clock
 
 
+def _report(text: str, out: Path) -> None:
+    """Print a line of the report of a run whose files are complete.
+
+    Standard output may fail after the run (a reader that closed the pipe, a full disk
+    under a redirection): that is one line on stderr, not a traceback (Python's exit
+    status 1 after a summary was printed), and standard output is pointed at the null
+    device so that flushing it at exit cannot fail again.
+
+    Raises:
+        UserError: standard output could not be written.
+    """
+    try:
+        print(text, flush=True)
+    except OSError as exc:
+        with contextlib.suppress(OSError, ValueError):
+            null = os.open(os.devnull, os.O_WRONLY)
+            os.dup2(null, sys.stdout.fileno())
+            os.close(null)
+        raise UserError(
+            f"cannot write to standard output ({exc.strerror or exc}); the run's files "
+            f"in {out} are complete"
+        ) from None
+
+
 def cmd_run(args: argparse.Namespace) -> int:
     import shlex
     import signal
@@ -211,9 +237,10 @@ def cmd_run(args: argparse.Namespace) -> int:
                             file=sys.stderr,
                         )
                         return 3
-                    print(
+                    _report(
                         f"billiard: {out}: the run is already complete ({len(result)} impacts); "
-                        f"nothing to resume (--collisions N extends it)"
+                        f"nothing to resume (--collisions N extends it)",
+                        out,
                     )
                     return 0
                 changed = True
@@ -259,10 +286,10 @@ def cmd_run(args: argparse.Namespace) -> int:
     except OSError as exc:
         where = f": {exc.filename}" if exc.filename else ""
         raise UserError(f"cannot write the run: {exc.strerror or exc}{where}") from None
-    print(result.summary())
+    _report(result.summary(), out)
     extra = [p for p in (result._contacts, result._trajectory) if isinstance(p, Path)]
     names = ", ".join(str(p) for p in (out / CSV_NAME, *extra))
-    print(f"wrote {names} and {out / SCENE_NAME}")
+    _report(f"wrote {names} and {out / SCENE_NAME}", out)
     if not args.no_plot and len(result) > 1:
         from billiard.plot import plot_run
 
@@ -275,11 +302,12 @@ def cmd_run(args: argparse.Namespace) -> int:
                 file=sys.stderr,
             )
             return 130
-        print(f"plots: {', '.join(p.name for p in paths)} in {out}")
+        _report(f"plots: {', '.join(p.name for p in paths)} in {out}", out)
     elif stale:
-        print(
+        _report(
             f"removed the plots of the earlier data ({', '.join(stale)}) from {out}; "
-            f"draw new ones with `billiard plot {shlex.quote(str(out))}`"
+            f"draw new ones with `billiard plot {shlex.quote(str(out))}`",
+            out,
         )
     if result.stop_reason:
         print(f"billiard: stopped: {result.stop_reason}", file=sys.stderr)
