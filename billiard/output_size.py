@@ -138,8 +138,9 @@ def longest_flight(scene: Any, boundary: Any) -> float:
     escape height, above which the run ends), both moving with a vertical drive. Rising,
     gravity and drag both slow the ball, so it spends at most sqrt(2 H / g) rising through
     the height H; falling, at most the time of a fall through H from rest against drag
-    (:func:`_gravity_fall`). The Magnus force, which can lift a spinning ball, is left
-    out (the run-time guard covers it).
+    (:func:`_gravity_fall`). Left out, and covered by the run-time guard instead: the
+    Magnus force, which can lift a spinning ball, and a fast sideways motion, which adds
+    to the quadratic drag on a falling ball.
     """
     bottom, top = vertical_range(scene, boundary)
     height = max(top - bottom, 1e-9)
