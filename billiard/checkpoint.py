@@ -15,6 +15,8 @@ from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
 
+from billiard.userfile import FileRefused, read_limited
+
 __all__ = [
     "CHECKPOINT_FORMAT",
     "CHECKPOINT_VERSION",
@@ -24,9 +26,15 @@ __all__ = [
     "write_text_atomic",
 ]
 
+#: Largest checkpoint file read (bytes): one holds an engine state, a few kilobytes.
+MAX_CHECKPOINT_BYTES = 1 << 20
 #: ``format`` and ``version`` fields of a checkpoint file.
 CHECKPOINT_FORMAT = "billiard-checkpoint"
-CHECKPOINT_VERSION = 2
+CHECKPOINT_VERSION = 3
+#: Versions read: 3 adds the CRC-32 of each file's rows before the checkpoint and the
+#: sha256 of scene.toml's bytes; a version 2 checkpoint (without them) is resumed
+#: without those two checks.
+READABLE_VERSIONS = (2, 3)
 
 
 class CheckpointError(ValueError):
@@ -91,9 +99,11 @@ def read_checkpoint(path: str | os.PathLike[str]) -> dict[str, Any]:
     """
     path = Path(path)
     try:
-        text = path.read_text(encoding="utf-8")
+        text = read_limited(path, MAX_CHECKPOINT_BYTES).decode("utf-8")
     except FileNotFoundError:
         raise CheckpointError(f"{path} is missing") from None
+    except FileRefused as exc:
+        raise CheckpointError(f"{path} {exc.reason}") from None
     except (OSError, UnicodeDecodeError) as exc:
         raise CheckpointError(f"{path} cannot be read: {exc}") from None
     try:
@@ -102,10 +112,12 @@ def read_checkpoint(path: str | os.PathLike[str]) -> dict[str, Any]:
         raise CheckpointError(f"{path} is corrupt (not valid JSON: {exc})") from None
     if not isinstance(data, dict) or data.get("format") != CHECKPOINT_FORMAT:
         raise CheckpointError(f"{path} is not a billiard checkpoint")
-    if data.get("version") != CHECKPOINT_VERSION:
+    version = data.get("version")
+    if isinstance(version, bool) or version not in READABLE_VERSIONS:
+        readable = " and ".join(map(str, READABLE_VERSIONS))
         raise CheckpointError(
-            f"{path} has checkpoint version {data.get('version')!r}; this version of "
-            f"billiard reads version {CHECKPOINT_VERSION}"
+            f"{path} has checkpoint version {version!r}; this version of "
+            f"billiard reads versions {readable}"
         )
     stored = data.pop("sha256", None)
     try:

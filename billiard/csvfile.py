@@ -6,6 +6,7 @@ writes, reads and line scans :class:`billiard.stream.CsvRecorder` makes of it.
 from __future__ import annotations
 
 import os
+import zlib
 from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
@@ -26,27 +27,59 @@ __all__ = ["CsvMark", "RowMismatchError", "RunBusyError", "Truncation"]
 class CsvMark:
     """A row boundary of a streamed CSV file: ``rows`` data rows occupy the first
     ``size`` bytes, the last of which form ``last_line`` (the header when rows = 0,
-    line terminator included). A checkpoint stores one to find its place in the file."""
+    line terminator included), and ``crc32`` is the CRC-32 of those bytes (None when
+    unknown: a checkpoint of an earlier version). A checkpoint stores one to find its
+    place in the file and to tell that nothing before it was changed."""
 
     rows: int
     size: int
     last_line: str
+    crc32: int | None = None
 
     def as_dict(self) -> dict[str, Any]:
-        return {"rows": self.rows, "bytes": self.size, "last_line": self.last_line}
+        data: dict[str, Any] = {"rows": self.rows, "bytes": self.size, "last_line": self.last_line}
+        if self.crc32 is not None:
+            data["crc32"] = self.crc32
+        return data
 
     @classmethod
     def from_dict(cls, data: Mapping[str, Any]) -> CsvMark:
         rows, size, line = data.get("rows"), data.get("bytes"), data.get("last_line")
+        crc = data.get("crc32")
         if not (
             _is_count(rows) and _is_count(size) and isinstance(line, str) and line.endswith("\n")
-        ):
+        ) or not (crc is None or is_crc32(crc)):
             raise CheckpointError("its 'csv' entry is malformed")
-        return cls(rows, size, line)
+        return cls(rows, size, line, crc)
+
+    def then(self, data: bytes | bytearray | memoryview, rows: int, last_line: str) -> CsvMark:
+        """The mark after ``rows`` more rows, the bytes ``data``."""
+        crc = None if self.crc32 is None else zlib.crc32(data, self.crc32)
+        return CsvMark(self.rows + rows, self.size + len(data), last_line, crc)
 
 
 def _is_count(value: Any) -> bool:
     return isinstance(value, int) and not isinstance(value, bool) and value >= 0
+
+
+def is_crc32(value: Any) -> bool:
+    """A CRC-32 as a checkpoint stores it: an int in [0, 2^32)."""
+    return _is_count(value) and value < 1 << 32
+
+
+def prefix_crc32(fd: int, size: int) -> tuple[int, int]:
+    """(CRC-32, number of line ends) of the first ``size`` bytes of the open file ``fd``
+    (fewer when the file is shorter), read in chunks: a checkpoint's check of what a
+    file holds before it."""
+    crc, lines, offset = 0, 0, 0
+    while offset < size:
+        chunk = _read_at(fd, min(_SCAN_CHUNK, size - offset), offset)
+        if not chunk:
+            break
+        crc = zlib.crc32(chunk, crc)
+        lines += chunk.count(b"\n")
+        offset += len(chunk)
+    return crc, lines
 
 
 @dataclass(frozen=True)

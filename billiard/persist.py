@@ -46,15 +46,24 @@ from billiard.checkpoint import (
     write_checkpoint,
     write_text_atomic,
 )
+from billiard.csvfile import is_crc32
 from billiard.engine import COLLAPSE_COUNT, Progress, Simulation
 from billiard.interrupt import RunInterrupted, StopRequest, signals_deferred
+from billiard.output_size import (
+    SampleEstimate,
+    check_samples,
+    estimate_samples,
+    guard_samples,
+)
 from billiard.record import CONTACT_COLUMNS, TRAJECTORY_COLUMNS
 from billiard.result import Result, RunFile
+from billiard.resume_checks import check_state
 from billiard.scene import scene_from_toml, scene_to_toml
-from billiard.sidecsv import CONTACTS_NAME, TRAJECTORY_NAME, SideCsv
+from billiard.sidecsv import CONTACTS_NAME, TRAJECTORY_NAME, SideCsv, check_side
 from billiard.state import EngineState
 from billiard.status import Status
 from billiard.stream import CsvMark, CsvRecorder, RowMismatchError, RunBusyError, Truncation
+from billiard.userfile import MAX_SCENE_BYTES, FileRefused, read_limited
 from billiard.write_error import RunWriteError
 
 __all__ = [
@@ -81,17 +90,22 @@ def run_streamed(
     collisions: int | None = None,
     progress: Progress | None = None,
     on_record: OnRecord | None = None,
+    allow_large: bool = False,
 ) -> Result:
     """Stream a run of ``sim`` (built by the caller, who may have given it its own impact
     law, e.g. to audit every impact) to ``out_dir``: write ``scene.toml`` first, then
     the records with checkpoints.
 
     Raises:
+        OutputSizeError: ``sim.sample_dt`` makes a trajectory.csv of more than 1 GB and
+            ``allow_large`` is False (checked before anything is written), or more rows
+            than estimated (raised when it gets there).
         RunBusyError: another process is writing a run in ``out_dir``.
         RunInterrupted: SIGINT or SIGTERM; the files are complete up to the last impact.
     """
     total = sim.scene.run.collisions if collisions is None else int(collisions)
     resolved = sim.resolved_scene(total)
+    samples = _samples(sim, total, sim.initial.t, 0, allow_large)
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     # first take the CSV file (locked: a run still going on in DIR is left alone) ...
@@ -103,7 +117,9 @@ def run_streamed(
     except BaseException:
         stream.close()
         raise
-    return _run_streamed(sim, total, out, stream, sim.start_state(), progress, on_record)
+    return _run_streamed(
+        sim, total, out, stream, sim.start_state(), progress, on_record, samples=samples
+    )
 
 
 def resume(
@@ -113,6 +129,7 @@ def resume(
     progress: Progress | None = None,
     notify: Callable[[str], None] | None = None,
     on_record: OnRecord | None = None,
+    allow_large: bool = False,
 ) -> Result:
     """Continue a streamed run from its checkpoint.
 
@@ -129,6 +146,8 @@ def resume(
         notify: called with a one-line description of where the run continues from,
             before the first new impact.
         on_record: called with the impact number after each new record.
+        allow_large: go on even when the rest of a sampled run may write more than
+            1 GB of trajectory.csv (see :mod:`billiard.output_size`).
 
     Returns:
         A :class:`~billiard.result.Result`. A run that is already complete (and not
@@ -140,6 +159,7 @@ def resume(
         SceneError: DIR/scene.toml is not a valid scene.
         RunInterrupted: as for :func:`~billiard.simulate.simulate`.
         RunWriteError: a write failed (a full disk); every whole row is kept.
+        OutputSizeError: as for :func:`run_streamed`.
     """
     out = Path(out_dir)
     if not out.is_dir():
@@ -153,33 +173,51 @@ def resume(
         engine = data["engine"]
         stop_reason = data.get("stop_reason")
         stop_status = Status(data.get("stop_status", Status.COMPLETE))
-        sample = data.get("sample")
+        sample = _sample_interval(data.get("sample"))
         side_sizes = {str(k): int(v) for k, v in data.get("side", {}).items()}
+        side_crcs = _side_crcs(data.get("side_crc32", {}), side_sizes)
+        scene_file_sha256 = data.get("scene_toml_sha256")
+        checked = data["version"] >= 3  # earlier ones have neither checksum
+    except CheckpointError as exc:  # first: it is a ValueError too
+        raise CheckpointError(f"{checkpoint_path}: {exc}") from None
     except (KeyError, TypeError, ValueError):
         raise CheckpointError(f"{checkpoint_path} lacks an entry it needs") from None
-    except CheckpointError as exc:
-        raise CheckpointError(f"{checkpoint_path}: {exc}") from None
     if status not in ("running", "interrupted", "complete", "stopped"):
         raise CheckpointError(f"{checkpoint_path} has an unknown status {status!r}")
     scene_path = out / SCENE_NAME
     try:
-        text = scene_path.read_text(encoding="utf-8")
+        text = read_limited(scene_path, MAX_SCENE_BYTES).decode("utf-8")
     except FileNotFoundError:
         raise CheckpointError(f"{scene_path} is missing") from None
+    except FileRefused as exc:
+        raise CheckpointError(f"{scene_path} {exc.reason}") from None
     except (OSError, UnicodeDecodeError) as exc:
         raise CheckpointError(f"{scene_path} cannot be read: {exc}") from None
     scene = scene_from_toml(text, source=f"'{scene_path}'")
     sim = Simulation(scene)
-    sim.sample_dt = None if sample is None else float(sample)
+    sim.sample_dt = sample
     if _fingerprint(sim) != fingerprint:
         raise CheckpointError(
             f"{scene_path} is not the scene the checkpoint was written for (edited since?)"
+        )
+    if (
+        scene_file_sha256 is not None
+        and _sha256(text.encode("utf-8")) != scene_file_sha256
+        # scene.toml as billiard writes it for a new total (an extended run, the
+        # checkpoint not yet rewritten): the impact count is all that differs
+        and text != scene_to_toml(sim.resolved_scene(scene.run.collisions))
+    ):
+        raise CheckpointError(
+            f"{scene_path} was edited after the checkpoint was written (its sha256 differs)"
         )
     total = scene.run.collisions if collisions is None else int(collisions)
     rows = mark.rows
     csv_path = out / CSV_NAME
     if csv_path.is_file() and csv_path.stat().st_size < mark.size:
-        return _recompute(out, scene, total, rows, progress, notify, on_record, sim.sample_dt)
+        samples = _samples(sim, total, sim.initial.t, 0, allow_large)
+        return _recompute(
+            out, scene, total, rows, progress, notify, on_record, sim.sample_dt, samples
+        )
     by_time = scene.run.duration is not None and collisions is None
     if status == "stopped" or (status == "complete" and (total <= rows or by_time)):
         if collisions is not None and total < rows:
@@ -218,9 +256,12 @@ def resume(
     # check the state before touching the CSV file: a mismatch leaves everything as it was
     try:
         sim.restore(state)
+        check_state(state, sim, rows=rows, sample=sample, regimes=tuple(sim.impact.regimes))
     except CheckpointError as exc:
         raise CheckpointError(f"{checkpoint_path}: {exc}") from None
+    _check_sides(out, side_sizes, side_crcs, state.samples)
     sim.resolved_scene(total)  # validates the new total
+    samples = _samples(sim, total, state.ball.t, state.impacts, allow_large)
     try:
         stream, cut = CsvRecorder.reopen(csv_path, mark, autoflush=False)
     except CheckpointError as exc:
@@ -236,11 +277,17 @@ def resume(
             )
         if cut.partial_bytes:
             notes.append(f"dropped an unterminated last line ({cut.partial_bytes} bytes)")
+        if not checked:
+            notes.append(
+                "its checkpoint is of an earlier version, without the checksums of the "
+                "rows before it: they are not checked"
+            )
         note = f"; {'; '.join(notes)}" if notes else ""
         notify(f"resuming {out} after impact {rows} of {total}{note}")
     return _continue(
-        sim, scene, total, out, stream, state, progress, on_record, rows, cut, side_sizes
-    )
+        sim, scene, total, out, stream, state, progress, on_record, rows, cut, side_sizes,
+        samples, side_crcs,
+    )  # fmt: skip
 
 
 def _recompute(
@@ -252,6 +299,7 @@ def _recompute(
     notify: Callable[[str], None] | None,
     on_record: OnRecord | None,
     sample: float | None = None,
+    samples: SampleEstimate | None = None,
 ) -> Result:
     """Resume a run whose CSV file is shorter than its checkpoint says (cut short by
     hand, or restored from an older copy): the run is deterministic, so it is recomputed
@@ -279,7 +327,10 @@ def _recompute(
             f"the {cut.rows} rows on disk against the recomputed impact, then continuing "
             f"to impact {total}"
         )
-    return _continue(sim, scene, total, out, stream, sim.start_state(), progress, on_record, 0, cut)
+    return _continue(
+        sim, scene, total, out, stream, sim.start_state(), progress, on_record, 0, cut,
+        samples=samples,
+    )  # fmt: skip
 
 
 def _continue(
@@ -294,6 +345,8 @@ def _continue(
     resumed_from: int,
     cut: Truncation,
     side_sizes: Any = None,
+    samples: SampleEstimate | None = None,
+    side_crcs: Any = None,
 ) -> Result:
     """Go on with a resumed run from ``start`` (after recording a new total in scene.toml)."""
     if total != scene.run.collisions:
@@ -302,6 +355,7 @@ def _continue(
         return _run_streamed(
             sim, total, out, stream, start, progress, on_record,
             resumed_from=resumed_from, truncation=cut, side_sizes=side_sizes,
+            samples=samples, side_crcs=side_crcs,
         )  # fmt: skip
 
 
@@ -322,9 +376,65 @@ def _restart_hint(out: Path) -> str:
     )
 
 
+def _sample_interval(value: Any) -> float | None:
+    """The checkpoint's sampling interval (s): None, or a number > 0 (a zero would make
+    the run sample one instant for ever)."""
+    if value is None:
+        return None
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        raise CheckpointError(f"its sampling interval {value!r} is not a number")
+    if not (math.isfinite(value) and value > 0):
+        raise CheckpointError(f"its sampling interval {value!r} is not a number > 0 s")
+    return float(value)
+
+
+def _samples(
+    sim: Simulation, total: int, start_time: float, start_impacts: int, allow_large: bool
+) -> SampleEstimate | None:
+    """The estimate of a sampled run's trajectory.csv from where it starts (None when it
+    samples nothing); refused over the limit unless ``allow_large``."""
+    if sim.sample_dt is None:
+        return None
+    estimate = estimate_samples(
+        sim, total, start_time=start_time, start_impacts=start_impacts, in_memory=False
+    )
+    if not allow_large:
+        check_samples(estimate, sample=sim.sample_dt, allow="allow_large=True")
+    return estimate
+
+
+def _side_crcs(data: Any, sizes: Mapping[str, int]) -> dict[str, int | None]:
+    """The checkpoint's CRC-32 of each side file (None where it has none)."""
+    if not isinstance(data, Mapping) or not set(data) <= set(sizes):
+        raise CheckpointError("its 'side_crc32' entry is malformed")
+    crcs = {name: data.get(name) for name in sizes}
+    if not all(crc is None or is_crc32(crc) for crc in crcs.values()):
+        raise CheckpointError("its 'side_crc32' entry is malformed")
+    return crcs
+
+
+def _check_sides(
+    out: Path, sizes: Mapping[str, int], crcs: Mapping[str, int | None], samples: int
+) -> None:
+    """Check the side files' rows before the checkpoint (unchanged, and as many samples
+    in trajectory.csv as the engine state made) before anything is written."""
+    for name, size in sizes.items():
+        path = out / (CONTACTS_NAME if name == "contacts" else TRAJECTORY_NAME)
+        rows = check_side(path, size, crcs.get(name))
+        if name == "trajectory" and rows != samples:
+            raise CheckpointError(
+                f"{path} holds {rows} samples before the checkpoint, its engine state "
+                f"says {samples} (was the file edited?)"
+            )
+
+
+def _sha256(data: bytes) -> str:
+    return hashlib.sha256(data).hexdigest()
+
+
 def _fingerprint(sim: Simulation) -> str:
     """sha256 of the resolved scene, impact count aside (a run may be extended)."""
-    return hashlib.sha256(scene_to_toml(sim.resolved_scene(1)).encode("utf-8")).hexdigest()
+    return _sha256(scene_to_toml(sim.resolved_scene(1)).encode("utf-8"))
 
 
 def _run_streamed(
@@ -339,6 +449,8 @@ def _run_streamed(
     resumed_from: int | None = None,
     truncation: Truncation | None = None,
     side_sizes: Mapping[str, int] | None = None,
+    samples: SampleEstimate | None = None,
+    side_crcs: Mapping[str, int | None] | None = None,
 ) -> Result:
     """Run ``sim`` from ``start`` to ``total`` impacts, streaming rows to ``stream`` and
     keeping ``out/checkpoint.json`` in step with what the CSV file holds (and the side
@@ -348,19 +460,28 @@ def _run_streamed(
     saved = [start.impacts]
     sides: dict[str, SideCsv] = {}
     cut_rows: list[Any] = []
+    crcs = side_crcs or {}
     try:
+        # the bytes of scene.toml as the run wrote it (a resume checks them)
+        scene_file_sha256 = _sha256(read_limited(out / SCENE_NAME, MAX_SCENE_BYTES))
         if sim.phases:
             size = None if side_sizes is None else side_sizes.get("contacts")
-            sides["contacts"] = SideCsv(out / CONTACTS_NAME, CONTACT_COLUMNS, size)
+            sides["contacts"] = SideCsv(
+                out / CONTACTS_NAME, CONTACT_COLUMNS, size, crcs.get("contacts")
+            )
             sim.on_contact = sides["contacts"].append
             # a phase cut by the run's end is written after the last checkpoint, which
             # does not count it: a resume cuts it off and redoes the phase whole
             sim.on_contact_cut = cut_rows.append
         if sim.sample_dt is not None:
             size = None if side_sizes is None else side_sizes.get("trajectory")
-            trajectory = SideCsv(out / TRAJECTORY_NAME, TRAJECTORY_COLUMNS, size)
+            trajectory = SideCsv(
+                out / TRAJECTORY_NAME, TRAJECTORY_COLUMNS, size, crcs.get("trajectory")
+            )
             sides["trajectory"] = trajectory
-            sim.on_sample = lambda *row: trajectory.append(row)
+            if samples is None:  # pragma: no cover - every caller estimates them
+                raise AssertionError("a sampled run without its estimate")
+            sim.on_sample = guard_samples(trajectory.append, samples, start.samples, sim.sample_dt)
     except BaseException:
         for side in sides.values():
             side.close()
@@ -393,6 +514,8 @@ def _run_streamed(
                 "engine": engine,
                 "sample": sim.sample_dt,
                 "side": {name: side.flush() for name, side in sides.items()},
+                "side_crc32": {name: side.crc32 for name, side in sides.items()},
+                "scene_toml_sha256": scene_file_sha256,
             },
         )
         saved[0] = mark.rows

@@ -51,6 +51,7 @@ from billiard.spec import (
     fowles_coefficients,
 )
 from billiard.toml_text import toml_key, toml_value
+from billiard.userfile import MAX_SCENE_BYTES, FileRefused, read_limited
 
 __all__ = [
     "PAPER_SCENES",
@@ -313,9 +314,11 @@ def _read_scene(name_or_path: str | os.PathLike[str]) -> tuple[str, str, str]:
             )
         raise error(f"scene file '{path}' does not exist")
     try:
-        text = path.read_bytes().decode("utf-8")
+        text = read_limited(path, MAX_SCENE_BYTES).decode("utf-8")
     except UnicodeDecodeError as exc:
         raise error(f"scene file '{path}' is not UTF-8 text: {exc.reason}") from None
+    except FileRefused as exc:
+        raise error(f"scene file '{path}' {exc.reason}") from None
     except OSError as exc:
         raise error(f"scene file '{path}' cannot be read: {exc.strerror or exc}") from None
     return text, f"'{path}'", path.stem

@@ -8,6 +8,8 @@ an uninterrupted run writes them.
 from __future__ import annotations
 
 import os
+import stat
+import zlib
 from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
@@ -15,31 +17,49 @@ from typing import Any
 import numpy as np
 
 from billiard.checkpoint import CheckpointError
+from billiard.csvfile import prefix_crc32
 from billiard.record import _format
+from billiard.userfile import read_limited
 
-__all__ = ["CONTACTS_NAME", "TRAJECTORY_NAME", "SideCsv", "read_side_csv"]
+__all__ = ["CONTACTS_NAME", "TRAJECTORY_NAME", "SideCsv", "check_side", "read_side_csv"]
 
 CONTACTS_NAME = "contacts.csv"
 TRAJECTORY_NAME = "trajectory.csv"
 _TEXT = frozenset({"wall", "mode", "end"})
+#: Characters of rows collected before they are written (not synced) whatever the time
+#: to the next flush: a long flight sampled finely makes millions of rows between two
+#: impacts, which would otherwise all wait in memory.
+SPILL_CHARS = 1 << 22
 
 
 class SideCsv:
-    """A CSV file written by whole rows, buffered until :meth:`flush`.
+    """A CSV file written by whole rows, buffered until :meth:`flush`, with the CRC-32 of
+    what it holds (:attr:`crc32`, for a checkpoint).
 
     Args:
         path: the file.
         columns: its header.
         size: None to start the file afresh; else the size (bytes) a checkpoint
             recorded, to which the file is cut back before writing on.
+        crc32: with ``size``, the CRC-32 of the file's first ``size`` bytes, already
+            checked (:func:`check_side`); None to compute it here.
     """
 
-    def __init__(self, path: Path, columns: Sequence[str], size: int | None = None):
+    def __init__(
+        self,
+        path: Path,
+        columns: Sequence[str],
+        size: int | None = None,
+        crc32: int | None = None,
+    ):
         self.path = Path(path)
         self._pending: list[str] = []
+        self._pending_chars = 0
         if size is None:
             self._file = open(self.path, "wb")  # noqa: SIM115 - closed by close()
-            self._file.write((",".join(columns) + "\n").encode())
+            header = (",".join(columns) + "\n").encode()
+            self._file.write(header)
+            self.crc32 = zlib.crc32(header)
         else:
             try:
                 self._file = open(self.path, "r+b")  # noqa: SIM115
@@ -48,17 +68,31 @@ class SideCsv:
             if os.fstat(self._file.fileno()).st_size < size:
                 self._file.close()
                 raise CheckpointError(f"{self.path} is shorter than its checkpoint says")
+            if crc32 is None:
+                crc32, _ = prefix_crc32(self._file.fileno(), size)
+            self.crc32 = crc32
             self._file.truncate(size)
             self._file.seek(size)
 
     def append(self, row: Sequence[Any]) -> None:
-        self._pending.append(",".join(_format(v) for v in row) + "\n")
+        line = ",".join(_format(v) for v in row) + "\n"
+        self._pending.append(line)
+        self._pending_chars += len(line)
+        if self._pending_chars >= SPILL_CHARS:
+            # written, not synced: a resume cuts the file back to its checkpoint's size
+            self._write()
+
+    def _write(self) -> None:
+        if self._pending:
+            data = "".join(self._pending).encode()
+            self._file.write(data)
+            self.crc32 = zlib.crc32(data, self.crc32)
+            self._pending.clear()
+            self._pending_chars = 0
 
     def flush(self) -> int:
         """Write the buffered rows; returns the file's size (bytes)."""
-        if self._pending:
-            self._file.write("".join(self._pending).encode())
-            self._pending.clear()
+        self._write()
         self._file.flush()
         os.fsync(self._file.fileno())
         return self._file.tell()
@@ -69,9 +103,50 @@ class SideCsv:
             self._file.close()
 
 
+def check_side(path: Path, size: int, crc32: int | None) -> int:
+    """Check, before a run resumes, that the side file ``path`` still holds the
+    ``size`` bytes its checkpoint recorded, unchanged (their CRC-32 is ``crc32``; None:
+    not recorded, by an earlier version), without changing it.
+
+    Returns:
+        The number of rows (line ends after the header's) in those bytes.
+
+    Raises:
+        CheckpointError: the file is missing, not a regular file, shorter than ``size``,
+            or its first ``size`` bytes were changed.
+    """
+    try:
+        fd = os.open(path, os.O_RDONLY | getattr(os, "O_NONBLOCK", 0))
+    except FileNotFoundError:
+        raise CheckpointError(f"{path} is missing") from None
+    except OSError as exc:
+        raise CheckpointError(f"{path} cannot be read: {exc.strerror or exc}") from None
+    try:
+        info = os.fstat(fd)
+        if not stat.S_ISREG(info.st_mode):
+            raise CheckpointError(f"{path} is not a regular file")
+        if info.st_size < size:
+            raise CheckpointError(f"{path} is shorter than its checkpoint says")
+        crc, lines = prefix_crc32(fd, size)
+    finally:
+        os.close(fd)
+    if crc32 is not None and crc != crc32:
+        raise CheckpointError(
+            f"{path} does not match the checkpoint (its rows before it were changed "
+            f"since: their CRC-32 differs; was the file edited?)"
+        )
+    return lines - 1
+
+
 def read_side_csv(path: str | os.PathLike[str]) -> dict[str, np.ndarray]:
-    """Column name -> numpy array of a side file (text columns as str)."""
-    lines = Path(path).read_text(encoding="utf-8").splitlines()
+    """Column name -> numpy array of a side file (text columns as str).
+
+    Raises:
+        OSError: the file cannot be read, or is not a regular file
+            (:class:`~billiard.userfile.FileRefused`: a device or a pipe never ends).
+        UnicodeDecodeError: the file is not UTF-8 text.
+    """
+    lines = read_limited(path, None).decode("utf-8").splitlines()
     names = lines[0].split(",")
     rows = [line.split(",") for line in lines[1:] if line]
     out: dict[str, np.ndarray] = {}

@@ -20,6 +20,7 @@ from typing import Any
 
 from billiard.engine import COLLAPSE_COUNT, COLLAPSE_SPAN, ZERO_FLIGHT_LIMIT, Progress, Simulation
 from billiard.interrupt import RunInterrupted
+from billiard.output_size import check_samples, estimate_samples, guard_samples
 from billiard.persist import (
     CHECKPOINT_NAME,
     CSV_NAME,
@@ -64,6 +65,7 @@ def simulate(
     duration: float | None = None,
     on_record: Callable[[int], None] | None = None,
     sample: float | None = None,
+    allow_large: bool = False,
 ) -> Result:
     """Run a scene.
 
@@ -80,6 +82,9 @@ def simulate(
             and audits).
         sample: sampling interval (s) of simulated time: the state every ``sample``
             seconds in ``result.trajectory`` (and ``trajectory.csv``).
+        allow_large: sample even when the trajectory may take more than 1 GB (of
+            memory, or of ``trajectory.csv`` with ``out_dir``); see
+            :mod:`billiard.output_size`.
 
     Returns:
         A :class:`Result`; a run that had to stop early (ball escaped, inelastic
@@ -89,6 +94,10 @@ def simulate(
     Raises:
         GeometryError: the scene's geometry cannot be simulated.
         SceneError: the scene (or the impact count) is invalid.
+        OutputSizeError: (a ``SceneError``) the samples may take more than 1 GB and
+            ``allow_large`` is False, checked before the run starts; or the run made more
+            samples than estimated (the time in contact phases is not in the estimate
+            without a duration), raised when it gets there.
         RunBusyError: another process is writing a run in ``out_dir``.
         RunInterrupted: a streamed run got SIGINT or SIGTERM; its files are complete up
             to the last impact and :func:`resume` continues it.
@@ -105,15 +114,23 @@ def simulate(
             raise SceneError(f"the sampling interval must be a number > 0 s, got {sample!r}")
         sim.sample_dt = float(sample)
     if out_dir is not None:
-        return run_streamed(sim, out_dir, collisions=total, progress=progress, on_record=on_record)
+        return run_streamed(
+            sim, out_dir, collisions=total, progress=progress, on_record=on_record,
+            allow_large=allow_large,
+        )  # fmt: skip
     recorder = MemoryRecorder()
     contacts = trajectory = None
     if sim.phases:
         contacts = MemoryRecorder(CONTACT_COLUMNS)
         sim.on_contact = sim.on_contact_cut = contacts.append
     if sim.sample_dt is not None:
+        estimate = estimate_samples(
+            sim, total, start_time=sim.initial.t, start_impacts=0, in_memory=True
+        )
+        if not allow_large:
+            check_samples(estimate, sample=sim.sample_dt, allow="allow_large=True")
         trajectory = MemoryRecorder(TRAJECTORY_COLUMNS)
-        sim.on_sample = lambda *row: trajectory.append(row)
+        sim.on_sample = guard_samples(trajectory.append, estimate, 0, sim.sample_dt)
     start = time.perf_counter()
     reason = sim.run(total, recorder, progress, on_record=on_record)
     wall_time = time.perf_counter() - start

@@ -18,10 +18,12 @@ from __future__ import annotations
 
 import contextlib
 import csv
+import dataclasses
 import io
 import os
 import shutil
 import time
+import zlib
 from collections.abc import Sequence
 from pathlib import Path
 from typing import Any, BinaryIO
@@ -39,6 +41,7 @@ from billiard.csvfile import (
     _scan_rows,
     _ShortWrite,
     _write_all,
+    prefix_crc32,
 )
 from billiard.handoff import Handoff
 from billiard.record import (
@@ -135,7 +138,7 @@ class CsvRecorder:
                 raise short.error from None
             if durable:
                 os.fsync(self._fd)
-            self._mark = CsvMark(0, len(data), header)
+            self._mark = CsvMark(0, len(data), header, zlib.crc32(data))
         else:
             self._fd, self._mark = _open
 
@@ -149,7 +152,8 @@ class CsvRecorder:
         path = Path(path)
         try:
             with open(path, "rb") as handle:
-                start = handle.readline()
+                # no further than the longest header: the file may be anything
+                start = handle.readline(len(_header_line(columns, "\r\n")))
         except FileNotFoundError:
             raise CheckpointError(f"{path} is missing") from None
         except OSError as exc:
@@ -157,7 +161,7 @@ class CsvRecorder:
         for line_end in _LINE_ENDS:
             header = _header_line(columns, line_end)
             if start == header.encode():
-                return CsvMark(0, len(start), header)
+                return CsvMark(0, len(start), header, zlib.crc32(start))
         raise CheckpointError(f"{path} does not start with the header of a run file")
 
     @classmethod
@@ -212,6 +216,20 @@ class CsvRecorder:
                     f"{path} does not match the checkpoint (impact {mark.rows} is not "
                     f"where the checkpoint says; was the file edited or replaced?)"
                 )
+            # everything before the mark, byte for byte: its checksum (one byte edited in
+            # the middle leaves the mark's line in place) and its rows
+            crc, lines = prefix_crc32(fd, mark.size)
+            if mark.crc32 is not None and crc != mark.crc32:
+                raise CheckpointError(
+                    f"{path} does not match the checkpoint (its first {mark.rows} impacts "
+                    f"were changed since: their CRC-32 differs; was the file edited?)"
+                )
+            if lines != mark.rows + 1:
+                raise CheckpointError(
+                    f"{path} does not match the checkpoint ({lines - 1} rows before the "
+                    f"checkpoint's place, which follows impact {mark.rows}; was the file edited?)"
+                )
+            mark = dataclasses.replace(mark, crc32=crc)
             rows, whole = _scan_rows(fd, mark.size, size)
             if rows:
                 check = open(path, "rb")  # noqa: SIM115 - closed by the recorder
@@ -325,7 +343,7 @@ class CsvRecorder:
             self._close_check()
             self.failed = RowMismatchError(self.path, self._mark.rows + 1)
             raise self.failed
-        self._mark = CsvMark(self._mark.rows + 1, self._mark.size + len(line), line.decode())
+        self._mark = self._mark.then(line, 1, line.decode())
         self._check_rows -= 1
         self._discard_pending()
 
@@ -400,7 +418,8 @@ class CsvRecorder:
         # the last line of what was written (every row ends with the line terminator)
         start = data.rfind(b"\n", 0, size - 1) + 1
         last = bytes(data[start:size]).decode("utf-8")
-        self._mark = CsvMark(self._mark.rows + rows, self._mark.size + size, last)
+        with memoryview(data) as view:  # released at once: the buffer may grow later
+            self._mark = self._mark.then(view[:size], rows, last)
 
     def _fail(self, data: bytes | bytearray, written: int, error: OSError) -> None:
         """A flush failed after ``written`` bytes of ``data``: keep the whole rows among

@@ -69,6 +69,7 @@ def test_old_crlf_run_resumes_in_its_own_line_ending(tmp_path):
     body.pop("format"), body.pop("version")
     body["csv"]["bytes"] = csv_path.stat().st_size
     body["csv"]["last_line"] = body["csv"]["last_line"].replace("\n", "\r\n")
+    del body["csv"]["crc32"]  # the versions that wrote CRLF kept no checksum of the rows
     write_checkpoint(out / CHECKPOINT_NAME, body)
     resume(out)
     assert csv_path.read_bytes() == expected

@@ -398,7 +398,7 @@ def test_unknown_scene_name() -> None:
 def test_directory_is_not_a_scene(tmp_path: Path) -> None:
     with pytest.raises(SceneError) as info:
         load_scene(tmp_path)
-    _assert_scene_error(info, [str(tmp_path), "cannot be read"])
+    _assert_scene_error(info, [str(tmp_path), "is not a regular file (a folder)"])
 
 
 def test_file_that_is_not_utf8(tmp_path: Path) -> None:

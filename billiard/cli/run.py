@@ -3,7 +3,9 @@
 from __future__ import annotations
 
 import argparse
+import contextlib
 import math
+import os
 import sys
 import time
 from pathlib import Path
@@ -144,11 +146,13 @@ def _checkpoint_clock(folder: Path):
     while there is none."""
     import json
 
+    from billiard.checkpoint import MAX_CHECKPOINT_BYTES
     from billiard.persist import CHECKPOINT_NAME
+    from billiard.userfile import read_limited
 
     def clock() -> float | None:
         try:
-            data = json.loads((folder / CHECKPOINT_NAME).read_text(encoding="utf-8"))
+            data = json.loads(read_limited(folder / CHECKPOINT_NAME, MAX_CHECKPOINT_BYTES))
             return float(data["engine"]["ball"]["t"])
         except (OSError, ValueError, KeyError, TypeError):
             return None
@@ -156,11 +160,36 @@ def _checkpoint_clock(folder: Path):
     return clock
 
 
+def _report(text: str, out: Path) -> None:
+    """Print a line of the report of a run whose files are complete.
+
+    Standard output may fail after the run (a reader that closed the pipe, a full disk
+    under a redirection): that is one line on stderr, not a traceback (Python's exit
+    status 1 after a summary was printed), and standard output is pointed at the null
+    device so that flushing it at exit cannot fail again.
+
+    Raises:
+        UserError: standard output could not be written.
+    """
+    try:
+        print(text, flush=True)
+    except OSError as exc:
+        with contextlib.suppress(OSError, ValueError):
+            null = os.open(os.devnull, os.O_WRONLY)
+            os.dup2(null, sys.stdout.fileno())
+            os.close(null)
+        raise UserError(
+            f"cannot write to standard output ({exc.strerror or exc}); the run's files "
+            f"in {out} are complete"
+        ) from None
+
+
 def cmd_run(args: argparse.Namespace) -> int:
     import shlex
     import signal
 
     from billiard.checkpoint import CheckpointError
+    from billiard.output_size import OutputSizeError
     from billiard.persist import CSV_NAME, SCENE_NAME, resume
     from billiard.simulate import RunInterrupted, simulate
 
@@ -210,6 +239,7 @@ def cmd_run(args: argparse.Namespace) -> int:
                         collisions=args.collisions,
                         progress=bar,
                         notify=lambda line: print(f"billiard: {line}", file=sys.stderr),
+                        allow_large=args.yes,
                     )
                 except CheckpointError as exc:
                     raise UserError(f"cannot resume {out}: {exc}") from None
@@ -221,9 +251,10 @@ def cmd_run(args: argparse.Namespace) -> int:
                             file=sys.stderr,
                         )
                         return 3
-                    print(
+                    _report(
                         f"billiard: {out}: the run is already complete ({len(result)} impacts); "
-                        f"nothing to resume (--collisions N extends it)"
+                        f"nothing to resume (--collisions N extends it)",
+                        out,
                     )
                     return 0
                 changed = True
@@ -238,6 +269,7 @@ def cmd_run(args: argparse.Namespace) -> int:
                         progress=bar,
                         duration=args.duration,
                         sample=args.sample,
+                        allow_large=args.yes,
                     )
                 except CheckpointError as exc:  # another process is writing a run in DIR
                     changed = False
@@ -247,6 +279,8 @@ def cmd_run(args: argparse.Namespace) -> int:
                 bar.stream.write("\n")
             if changed and out.is_dir():
                 stale = _remove_plots(out)
+    except OutputSizeError as exc:
+        raise UserError(f"run: {exc.confirmed_by('--yes')}") from None
     except RunInterrupted as exc:
         where = exc.out_dir or Path(".")
         again = f"billiard run --resume {shlex.quote(str(where))}"
@@ -266,10 +300,10 @@ def cmd_run(args: argparse.Namespace) -> int:
     except OSError as exc:
         where = f": {exc.filename}" if exc.filename else ""
         raise UserError(f"cannot write the run: {exc.strerror or exc}{where}") from None
-    print(result.summary())
+    _report(result.summary(), out)
     extra = [p for p in (result._contacts, result._trajectory) if isinstance(p, Path)]
     names = ", ".join(str(p) for p in (out / CSV_NAME, *extra))
-    print(f"wrote {names} and {out / SCENE_NAME}")
+    _report(f"wrote {names} and {out / SCENE_NAME}", out)
     if not args.no_plot and len(result) > 1:
         from billiard.plot import plot_run
 
@@ -282,11 +316,12 @@ def cmd_run(args: argparse.Namespace) -> int:
                 file=sys.stderr,
             )
             return 130
-        print(f"plots: {', '.join(p.name for p in paths)} in {out}")
+        _report(f"plots: {', '.join(p.name for p in paths)} in {out}", out)
     elif stale:
-        print(
+        _report(
             f"removed the plots of the earlier data ({', '.join(stale)}) from {out}; "
-            f"draw new ones with `billiard plot {shlex.quote(str(out))}`"
+            f"draw new ones with `billiard plot {shlex.quote(str(out))}`",
+            out,
         )
     if result.stop_reason:
         print(f"billiard: stopped: {result.stop_reason}", file=sys.stderr)
@@ -335,7 +370,14 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
         "--sample",
         type=float,
         metavar="DT",
-        help="also write DIR/trajectory.csv: the state every DT seconds of simulated time",
+        help="also write DIR/trajectory.csv: the state every DT seconds of simulated time "
+        "(refused when it may exceed 1 GB, estimated before the run, unless --yes)",
+    )
+    p.add_argument(
+        "--yes",
+        action="store_true",
+        help="go ahead when the estimate of trajectory.csv exceeds 1 GB (with --sample; "
+        "also with --resume)",
     )
     p.add_argument("--out", help="output directory (default: runs/SCENE)")
     add_set_argument(p, "override a scene key, e.g. --set drive.frequency=6.0 (repeatable)")

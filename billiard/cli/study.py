@@ -6,7 +6,7 @@ import argparse
 import time
 from pathlib import Path
 
-from billiard.cli.common import UserError, _note, add_set_argument
+from billiard.cli.common import UserError, _note, add_set_argument, check_output_folder
 from billiard.phase import DEFAULT_PHASE_REFERENCE
 
 
@@ -100,12 +100,18 @@ def cmd_lyapunov(args: argparse.Namespace) -> int:
 def cmd_bench(args: argparse.Namespace) -> int:
     from billiard.bench import run_bench
 
+    if args.out:
+        check_output_folder(args.out, "bench --out")
     return run_bench(args)
 
 
 def cmd_reproduce(args: argparse.Namespace) -> int:
     from billiard.reproduce import run_reproduce
 
+    # a folder that cannot be made fails here in one line, not after minutes of work
+    check_output_folder(args.runs, "reproduce --runs")
+    if args.docs is not None:
+        check_output_folder(args.docs, "reproduce --docs")
     return run_reproduce(args)
 
 
