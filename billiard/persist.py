@@ -399,7 +399,7 @@ def _samples(
         sim, total, start_time=start_time, start_impacts=start_impacts, in_memory=False
     )
     if not allow_large:
-        check_samples(estimate, sample=sim.sample_dt, allow="allow_large=True")
+        estimate = check_samples(estimate, sample=sim.sample_dt, allow="allow_large=True")
     return estimate
 
 

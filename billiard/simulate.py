@@ -128,7 +128,7 @@ def simulate(
             sim, total, start_time=sim.initial.t, start_impacts=0, in_memory=True
         )
         if not allow_large:
-            check_samples(estimate, sample=sim.sample_dt, allow="allow_large=True")
+            estimate = check_samples(estimate, sample=sim.sample_dt, allow="allow_large=True")
         trajectory = MemoryRecorder(TRAJECTORY_COLUMNS)
         sim.on_sample = guard_samples(trajectory.append, estimate, 0, sim.sample_dt)
     start = time.perf_counter()

@@ -68,14 +68,17 @@ def test_the_cli_refuses_a_huge_trajectory_before_writing(tmp_path):
 
 
 def test_without_a_duration_the_impacts_bound_the_time(capsys, tmp_path, monkeypatch):
+    """The bound (every impact after the longest flight) is refused when it is over
+    BOUND_FACTOR times the limit."""
     monkeypatch.setattr(output_size, "MAX_BYTES", 100_000)
     out = tmp_path / "run"
-    args = ["run", WEDGE, "--collisions", "300", "--sample", "0.01", "--no-plot"]
+    args = ["run", WEDGE, "--collisions", "300", "--sample", "0.0001", "--no-plot"]
     assert main([*args, "--out", str(out)]) == 2
     err = capsys.readouterr().err
     assert err.count("\n") == 1
     scene = load_scene(WEDGE)
-    rows = math.floor(300 * longest_flight(scene, boundary_of(scene)) / 0.01) + 1
+    rows = math.floor(300 * longest_flight(scene, boundary_of(scene)) / 0.0001) + 1
+    assert rows * 140 > output_size.BOUND_FACTOR * 100_000
     assert "300 impacts of at most 0.399 s each (the longest flight" in err
     assert f"makes up to {rows:,} rows ({rows * 140 / 1e6:.3g} MB of trajectory.csv)" in err
     assert not out.exists()
@@ -86,11 +89,33 @@ def test_the_api_refuses_a_huge_trajectory_in_memory(monkeypatch):
     monkeypatch.setattr(output_size, "MAX_BYTES", 100_000)
     scene = load_scene(WEDGE)
     with pytest.raises(OutputSizeError) as caught:
-        simulate(scene, collisions=300, sample=0.01)
+        simulate(scene, collisions=300, sample=0.0001)
     message = str(caught.value)
     assert "in memory" in message and "allow_large=True" in message and "\n" not in message
-    rows = math.floor(300 * longest_flight(scene, boundary_of(scene)) / 0.01) + 1
+    rows = math.floor(300 * longest_flight(scene, boundary_of(scene)) / 0.0001) + 1
     assert f"{rows:,} rows ({rows * MEMORY_ROW_BYTES / 1e6:.3g} MB in memory)" in message
+
+
+def test_a_bound_under_the_factor_runs_and_stops_at_the_limit(tmp_path, monkeypatch):
+    """A bound over the limit but under BOUND_FACTOR times it is no refusal (the bound is
+    some 25 times what runs make): the run goes ahead, and stops when its trajectory
+    reaches the limit, in one line naming the limit and --yes; the rows so far are kept
+    and the run resumes."""
+    monkeypatch.setattr(output_size, "MAX_BYTES", 100_000)
+    scene = load_scene(WEDGE)
+    bound = (math.floor(300 * longest_flight(scene, boundary_of(scene)) / 0.002) + 1) * 140
+    assert 100_000 < bound <= output_size.BOUND_FACTOR * 100_000
+    small = simulate(scene, collisions=30, sample=0.002)  # 30 impacts: under the limit
+    assert small.status.finished and len(small.trajectory["t"]) * 140 < 100_000
+    out = tmp_path / "run"
+    with pytest.raises(OutputSizeError) as caught:
+        simulate(scene, collisions=300, sample=0.002, out_dir=out)
+    message = str(caught.value)
+    assert message.startswith("the trajectory reached the limit of 100,000 bytes")
+    assert "allow_large=True to go beyond the limit" in message and "\n" not in message
+    rows = read_side_csv(out / "trajectory.csv")["t"]
+    assert len(rows) * 140 <= 100_000 + 140 * 1000
+    assert resume(out, allow_large=True).status.finished
 
 
 def test_the_longest_flight_without_air():
