@@ -26,12 +26,6 @@ UNIT = re.compile(
 
 #: Options of commands defined in files another change owns (billiard/cli/study.py),
 #: whose help lacks a unit; the wording to give them is in the reason.
-LACKS_UNIT = {
-    ("calibrate", "--low"): "help='lower end of the scan, in the parameter's unit "
-    "(default: value/4)'",
-    ("calibrate", "--high"): "help='upper end of the scan, in the parameter's unit "
-    "(default: 4 x value)'",
-}
 
 
 def commands(
@@ -103,12 +97,7 @@ def _quantity_cases() -> list:
         name, _, action = case
         if action.type is not float and action.metavar not in QUANTITY_METAVARS:
             continue
-        reason = LACKS_UNIT.get((name, action.option_strings[-1]))
-        marks = ()
-        if reason is not None:
-            why = f"billiard/cli/study.py, to be reconciled; proposed: {reason}"
-            marks = (pytest.mark.xfail(strict=True, reason=why),)
-        cases.append(pytest.param(case, marks=marks, id=option_id(case)))
+        cases.append(pytest.param(case, id=option_id(case)))
     return cases
 
 

@@ -371,7 +371,8 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
         type=float,
         metavar="DT",
         help="also write DIR/trajectory.csv: the state every DT seconds of simulated time "
-        "(refused when it may exceed 1 GB, estimated before the run, unless --yes)",
+        "(refused when it may exceed 1 GB, estimated before the run, unless --yes; "
+        "default: no trajectory.csv)",
     )
     p.add_argument(
         "--yes",
@@ -395,6 +396,6 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
         "--frame-interval",
         metavar="S",
         help="also plot what a camera with this frame interval (s, e.g. 0.0333 or 1/30) "
-        "would record",
+        "would record (default: no camera view)",
     )
     p.set_defaults(func=cmd_run)

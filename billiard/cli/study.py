@@ -141,8 +141,16 @@ def add_parsers(sub: argparse._SubParsersAction) -> None:
         metavar="H",
         help="height q2 of the ball centre at the orbit's impacts (m)",
     )
-    p.add_argument("--low", type=float, help="lower end of the scan (default: value/4)")
-    p.add_argument("--high", type=float, help="upper end of the scan (default: 4 x value)")
+    p.add_argument(
+        "--low",
+        type=float,
+        help="lower end of the scan, in the parameter's unit (default: value/4)",
+    )
+    p.add_argument(
+        "--high",
+        type=float,
+        help="upper end of the scan, in the parameter's unit (default: 4 x value)",
+    )
     p.add_argument("--impacts", type=int, default=1500, help="impacts per trial run (default 1500)")
     add_set_argument(p, "override a scene key first (repeatable)")
     p.add_argument("--json", action="store_true", help="print one JSON object")
@@ -160,7 +168,7 @@ def add_parsers(sub: argparse._SubParsersAction) -> None:
         "--frame-interval",
         metavar="S",
         help="also show what a camera with this frame interval (s, e.g. 0.0333 or 1/30) "
-        "would record",
+        "would record (default: no camera view)",
     )
     p.add_argument(
         "--window",
@@ -175,7 +183,8 @@ def add_parsers(sub: argparse._SubParsersAction) -> None:
         "lyapunov",
         help="largest Lyapunov exponent of a scene's trajectory",
         description="Largest Lyapunov exponent (per impact and per second) "
-        "from two nearby trajectories with renormalization.",
+        "from two nearby trajectories with renormalization. Exit status 3 when the "
+        "exponent is undefined (a ball that never flies).",
     )
     p.add_argument("scene", help="built-in scene name or a .toml file")
     p.add_argument("--impacts", type=int, default=5000, help="impacts to average over (>= 1)")
@@ -184,8 +193,7 @@ def add_parsers(sub: argparse._SubParsersAction) -> None:
         "--d0",
         type=float,
         default=1e-9,
-        help="initial separation of the two trajectories (m; at most 1e-3 of the ball "
-        "radius). Exit status 3 when the exponent is undefined (a ball that never flies)",
+        help="initial separation of the two trajectories (m; at most 1e-3 of the ball radius)",
     )
     p.add_argument("--method", choices=["event", "rk4"], help="default: the scene's")
     add_set_argument(p, "override a scene key first (repeatable)")

@@ -137,9 +137,13 @@ def _add_sweep_parser(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--file", metavar="SWEEP.toml", help="a sweep file (see docs/sweeps.md)")
     add_set_argument(p, "override a key of the base scene (repeatable)")
     p.add_argument(
-        "--impacts", type=int, help="impacts measured per point, after the transient (2000)"
+        "--impacts",
+        type=int,
+        help="impacts measured per point, after the transient (default: 2000)",
     )
-    p.add_argument("--transient", type=int, help="impacts simulated first, not measured (500)")
+    p.add_argument(
+        "--transient", type=int, help="impacts simulated first, not measured (default: 500)"
+    )
     p.add_argument(
         "--duration",
         type=float,
@@ -148,14 +152,19 @@ def _add_sweep_parser(sub: argparse._SubParsersAction) -> None:
         "scene's run.duration)",
     )
     p.add_argument(
-        "--keep", type=int, metavar="K", help="last K impact heights and times stored (100)"
+        "--keep",
+        type=int,
+        metavar="K",
+        help="last K impact heights and times stored (default: 100)",
     )
     p.add_argument(
         "--lyapunov",
         action="store_true",
         help="also the largest Lyapunov exponent per point (about three times the cost)",
     )
-    p.add_argument("--workers", type=int, metavar="N", help="local worker processes (all cores)")
+    p.add_argument(
+        "--workers", type=int, metavar="N", help="local worker processes (default: all cores)"
+    )
     p.add_argument(
         "--dask",
         metavar="ADDRESS",
