@@ -39,6 +39,7 @@ from typing import Any, NamedTuple
 import numpy as np
 
 from billiard.rows import column_arrays, format_rows, row_of
+from billiard.userfile import FileRefused, check_regular
 
 __all__ = [
     "COLUMNS",
@@ -229,8 +230,11 @@ def read_collisions(path: str | os.PathLike[str]) -> dict[str, np.ndarray]:
             that is not of its column's type, or impact times that decrease.
     """
     try:
+        check_regular(path)  # /dev/zero or a pipe would be read without end
         with open(path, newline="", encoding="utf-8") as handle:
             return _read_blocks(path, handle)
+    except FileRefused as exc:
+        raise _fail(path, exc.reason) from None
     except FileNotFoundError:
         raise _fail(path, "file not found") from None
     except (OSError, UnicodeDecodeError) as exc:

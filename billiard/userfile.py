@@ -8,7 +8,7 @@ import os
 import stat
 from pathlib import Path
 
-__all__ = ["MAX_SCENE_BYTES", "FileRefused", "read_limited"]
+__all__ = ["MAX_SCENE_BYTES", "FileRefused", "check_regular", "read_limited"]
 
 #: Largest scene file read (bytes): a scene file is a few kilobytes of TOML.
 MAX_SCENE_BYTES = 1 << 20
@@ -35,6 +35,20 @@ class FileRefused(OSError):
 def _size(size: int) -> str:
     mib, rest = divmod(size, 1 << 20)
     return f"{mib} MiB" if mib and not rest else f"{size:,} bytes"
+
+
+def check_regular(path: str | os.PathLike[str]) -> None:
+    """Refuse a path that is not a regular file (a device, a pipe, a folder) before a
+    reader that takes any size (a run's CSV files) opens it.
+
+    Raises:
+        FileRefused: not a regular file.
+        OSError: it cannot be looked at (missing, no permission).
+    """
+    info = os.stat(path)
+    if not stat.S_ISREG(info.st_mode):
+        kind = next((name for test, name in _KINDS if test(info.st_mode)), "not a file")
+        raise FileRefused(Path(path), f"is not a regular file ({kind})")
 
 
 def read_limited(path: str | os.PathLike[str], limit: int | None) -> bytes:

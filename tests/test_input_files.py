@@ -136,3 +136,20 @@ def test_a_side_file_that_is_a_pipe_is_not_read(small_run, tmp_path):
     os.mkfifo(pipe)
     with pytest.raises(FileRefused, match="named pipe"):
         read_side_csv(pipe)
+
+
+@pytest.mark.skipif(not Path("/dev/zero").exists(), reason="needs /dev/zero")
+def test_a_runs_csv_that_is_a_device_is_not_read(small_run, tmp_path, capsys):
+    """billiard plot DIR whose collisions.csv is a link to /dev/zero read it into memory
+    without end; its scene.toml is read under the scene files' limit."""
+    out = copy_of(small_run, tmp_path)
+    (out / "collisions.csv").unlink()
+    (out / "collisions.csv").symlink_to("/dev/zero")
+    assert main(["plot", str(out)]) == 2
+    err = one_error_line(capsys)
+    assert "collisions.csv" in err and "is not a regular file (a character device)" in err
+    (tmp_path / "b").mkdir()
+    out = copy_of(small_run, tmp_path / "b")
+    (out / SCENE_NAME).write_bytes(padded_scene(MAX_SCENE_BYTES + 1))
+    assert main(["plot", str(out)]) == 2
+    assert "scene.toml: is 1,048,577 bytes, over the limit of 1 MiB" in one_error_line(capsys)

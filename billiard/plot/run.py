@@ -12,6 +12,7 @@ from matplotlib.figure import Figure
 
 from ..runfolder import FIGURE_NAMES
 from ..scene import Scene, SceneError, scene_from_toml
+from ..userfile import MAX_SCENE_BYTES, FileRefused, read_limited
 from .animation import animate
 from .common import (
     SINGLE_SIZE,
@@ -41,7 +42,9 @@ def read_scene(path: str | os.PathLike[str]) -> Scene:
         SceneError: the file is not valid TOML or not a valid scene (one line, naming it).
     """
     try:
-        text = Path(path).read_bytes().decode("utf-8")
+        text = read_limited(path, MAX_SCENE_BYTES).decode("utf-8")
+    except FileRefused as exc:
+        raise RunDataError(f"{path}: {exc.reason}") from None
     except FileNotFoundError:
         raise RunDataError(
             f"{path}: file not found (the run's scene is needed "
