@@ -345,7 +345,7 @@ def _interrupt(*args, **kwargs):
             ["run", "wedge-6.6hz", "--collisions", "5"],
             "billiard.simulate",
             "simulate",
-            "billiard: interrupted; the run had not started; nothing was written",
+            "billiard: interrupted; no row was lost: a run that started keeps whole rows",
         ),
     ],
 )

@@ -155,7 +155,12 @@ def _interrupted(args: argparse.Namespace) -> str:
     own interruptions while it writes rows; this is any other moment)."""
     command = args.command
     if command == "run":
-        return "the run had not started; nothing was written"
+        # before the run (loading, compiling) or after it (a signal just after its last
+        # impact, or while plotting): a run's files hold whole rows either way
+        return (
+            "no row was lost: a run that started keeps whole rows and its checkpoint "
+            "(`billiard run --resume DIR` finishes it, `billiard plot DIR` draws its figures)"
+        )
     if command in ("calibrate", "lyapunov", "scenes"):
         return "nothing was written"
     if command == "plot":
