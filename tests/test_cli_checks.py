@@ -4,6 +4,7 @@ reports progress in logs, and says what is true after Ctrl-C."""
 
 from __future__ import annotations
 
+import importlib
 import io
 import math
 import os
@@ -350,9 +351,7 @@ def _interrupt(*args, **kwargs):
     ],
 )
 def test_ctrl_c_says_what_is_true(in_tmp, capsys, monkeypatch, argv, module, name, message):
-    monkeypatch.setattr(
-        sys.modules[module] if module in sys.modules else __import__(module), name, _interrupt
-    )
+    monkeypatch.setattr(importlib.import_module(module), name, _interrupt)
     assert main(argv) == 130
     err = capsys.readouterr().err
     assert err.strip() == message or err.startswith(message), err
