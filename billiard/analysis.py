@@ -25,6 +25,7 @@ import numpy as np
 from billiard.engine import Simulation
 from billiard.errors import BallAtRest, SimulationError
 from billiard.state import BallState
+from billiard.status import Status
 
 __all__ = [
     "LyapunovError",
@@ -97,6 +98,10 @@ class _AtRest(_Stopped):
     """The ball came to rest on the boundary (sustained contact): nothing more happens."""
 
 
+class _InContact(_Stopped):
+    """The ball stayed in contact without an impact for ``run.contact_span``."""
+
+
 def _fly(sim: Simulation, state: BallState, tau: float) -> BallState:
     """State of the ball after flying for tau (s) from ``state`` with the simulation's own
     flight model (spin constant in flight)."""
@@ -123,6 +128,8 @@ def _advance(sim: Simulation, state: BallState, impacts: int) -> BallState:
     except BallAtRest as exc:
         raise _AtRest(str(exc)) from None
     except SimulationError as exc:
+        if exc.status is Status.IN_CONTACT:
+            raise _InContact(str(exc)) from None
         raise _Stopped(str(exc)) from None
     b = sim.ball
     # the drive angle from the impact time, as for any state handed to the engine
@@ -269,6 +276,8 @@ def lyapunov_exponent(
         undefined = f"the ball never flies: {exc}"
     except _AtRest:
         undefined = "the ball rests on the wall: it comes to rest in a contact phase"
+    except _InContact as exc:
+        undefined = f"the ball rolls, slides or is held without impacts ({exc})"
     except _Stopped as exc:
         stop_reason = str(exc)
     n_ref = sum(ref.counts.get(r, 0) for r in regimes) - impacts_before

@@ -209,3 +209,12 @@ def test_the_cli_ends_a_gently_shaken_run_and_says_why(tmp_path):
     assert "no impact for run.contact_span = 1 s" in proc.stdout
     assert "--duration" in proc.stdout
     assert math.isfinite(float(proc.stdout.split("up to t = ")[1].split(" s")[0]))
+
+
+def test_the_lyapunov_exponent_of_a_rolling_ball_is_undefined():
+    """It ran for ever; then it printed +nan over 0 impacts with exit status 0."""
+    from billiard.analysis import lyapunov_exponent
+
+    result = lyapunov_exponent(_gentle(**{"run.contact_span": 1.0}), impacts=50)
+    assert result.undefined is not None and "without impacts" in result.undefined
+    assert math.isnan(result.per_impact)
