@@ -151,8 +151,9 @@ def drag_free(name, amplitude, **changes):
     [
         ("parabola-5.4hz", 0.02),
         ("wedge-6.6hz", 0.02),
-        ("hyperbola-5.8hz", 0.02),
-        ("hyperbola-4.5hz", 0.01),
+        # the hyperbolas (5 to 6 s each) run with the slow validations
+        pytest.param("hyperbola-5.8hz", 0.02, marks=pytest.mark.slow),
+        pytest.param("hyperbola-4.5hz", 0.01, marks=pytest.mark.slow),
     ],
 )
 def test_impact_times_match_an_independent_root_solve(name, amplitude):

@@ -135,16 +135,16 @@ def _measure(task: PointTask) -> dict[str, Any]:
     q2, tof = post["q2"].astype(float), post["tof"].astype(float)
     elastic_share = float(np.mean(post["regime"] == "elastic"))
     lid_share = float(np.mean(post["wall"] == "lid"))
+    measured = dict(
+        impacts=n,
+        total_impacts=total,
+        rest_height=rest,
+        **_impact_statistics(q2, tof, keep),
+        elastic_share=elastic_share,
+        lid_share=lid_share,
+    )
     if in_contact is not None:  # impacts after the transient, then the ball stayed down
-        record.update(
-            attractor=in_contact,
-            impacts=n,
-            total_impacts=total,
-            rest_height=rest,
-            **_impact_statistics(q2, tof, keep),
-            elastic_share=elastic_share,
-            lid_share=lid_share,
-        )
+        record.update(attractor=in_contact, **measured)
         return record
     period = find_period(
         post,
@@ -177,12 +177,7 @@ def _measure(task: PointTask) -> dict[str, Any]:
         attractor=attractor,
         period=int(period),
         drive_periods=int(drive_periods),
-        impacts=n,
-        total_impacts=total,
-        rest_height=rest,
-        **_impact_statistics(q2, tof, keep),
-        elastic_share=elastic_share,
-        lid_share=lid_share,
+        **measured,
         lyapunov=lyap,
         lyapunov_per_second=lyap_s,
     )
