@@ -369,6 +369,7 @@ def test_user_curves_supply_the_third_derivative(tmp_path, monkeypatch):
     assert w.d3f(0.01, w.p) == pytest.approx(12.0, rel=1e-15)
 
 
+@pytest.mark.slow  # the whole derivation again (8 s); `derive --check` runs in test_derivation
 def test_check_detects_an_edit_of_the_contact_module(tmp_path):
     from billiard.derivation import build
 
