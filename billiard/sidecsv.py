@@ -8,7 +8,6 @@ an uninterrupted run writes them.
 from __future__ import annotations
 
 import os
-import stat
 import zlib
 from collections.abc import Sequence
 from pathlib import Path
@@ -19,7 +18,7 @@ import numpy as np
 from billiard.checkpoint import CheckpointError
 from billiard.csvfile import prefix_crc32
 from billiard.record import _format
-from billiard.userfile import read_limited
+from billiard.userfile import FileRefused, open_regular, read_limited
 
 __all__ = ["CONTACTS_NAME", "TRAJECTORY_NAME", "SideCsv", "check_side", "read_side_csv"]
 
@@ -116,15 +115,15 @@ def check_side(path: Path, size: int, crc32: int | None) -> int:
             or its first ``size`` bytes were changed.
     """
     try:
-        fd = os.open(path, os.O_RDONLY | getattr(os, "O_NONBLOCK", 0))
+        fd = open_regular(path)
     except FileNotFoundError:
         raise CheckpointError(f"{path} is missing") from None
+    except FileRefused as exc:
+        raise CheckpointError(f"{path} {exc.reason}") from None
     except OSError as exc:
         raise CheckpointError(f"{path} cannot be read: {exc.strerror or exc}") from None
     try:
         info = os.fstat(fd)
-        if not stat.S_ISREG(info.st_mode):
-            raise CheckpointError(f"{path} is not a regular file")
         if info.st_size < size:
             raise CheckpointError(f"{path} is shorter than its checkpoint says")
         crc, lines = prefix_crc32(fd, size)

@@ -8,7 +8,7 @@ import os
 import stat
 from pathlib import Path
 
-__all__ = ["MAX_SCENE_BYTES", "FileRefused", "check_regular", "read_limited"]
+__all__ = ["MAX_SCENE_BYTES", "FileRefused", "check_regular", "open_regular", "read_limited"]
 
 #: Largest scene file read (bytes): a scene file is a few kilobytes of TOML.
 MAX_SCENE_BYTES = 1 << 20
@@ -37,6 +37,12 @@ def _size(size: int) -> str:
     return f"{mib} MiB" if mib and not rest else f"{size:,} bytes"
 
 
+def _refuse_irregular(path: Path, mode: int) -> None:
+    if not stat.S_ISREG(mode):
+        kind = next((name for test, name in _KINDS if test(mode)), "not a file")
+        raise FileRefused(path, f"is not a regular file ({kind})")
+
+
 def check_regular(path: str | os.PathLike[str]) -> None:
     """Refuse a path that is not a regular file (a device, a pipe, a folder) before a
     reader that takes any size (a run's CSV files) opens it.
@@ -45,31 +51,42 @@ def check_regular(path: str | os.PathLike[str]) -> None:
         FileRefused: not a regular file.
         OSError: it cannot be looked at (missing, no permission).
     """
-    info = os.stat(path)
-    if not stat.S_ISREG(info.st_mode):
-        kind = next((name for test, name in _KINDS if test(info.st_mode)), "not a file")
-        raise FileRefused(Path(path), f"is not a regular file ({kind})")
+    _refuse_irregular(Path(path), os.stat(path).st_mode)
+
+
+def open_regular(path: str | os.PathLike[str]) -> int:
+    """A file descriptor of ``path`` opened for reading, refused unless it is a regular
+    file. It is opened without blocking (a named pipe with no writer does not hang the
+    open) and checked on the descriptor; the caller closes it.
+
+    Raises:
+        FileRefused: not a regular file (a device, a pipe, a folder).
+        OSError: the file cannot be opened (missing, no permission).
+    """
+    flags = os.O_RDONLY | getattr(os, "O_NONBLOCK", 0) | getattr(os, "O_CLOEXEC", 0)
+    fd = os.open(path, flags)
+    try:
+        _refuse_irregular(Path(path), os.fstat(fd).st_mode)
+    except BaseException:
+        os.close(fd)
+        raise
+    return fd
 
 
 def read_limited(path: str | os.PathLike[str], limit: int | None) -> bytes:
     """The bytes of ``path``, a regular file of at most ``limit`` bytes (None: any size).
 
-    The file is opened without blocking (a named pipe with no writer does not hang the
-    open) and checked before anything is read; at most ``limit`` + 1 bytes are read, so
-    a file that grows meanwhile is refused too.
+    The file is opened by :func:`open_regular` and checked before anything is read; at
+    most ``limit`` + 1 bytes are read, so a file that grows meanwhile is refused too.
 
     Raises:
         FileRefused: not a regular file (a device, a pipe, a folder), or over the limit.
         OSError: the file cannot be opened or read (missing, no permission).
     """
     path = Path(path)
-    flags = os.O_RDONLY | getattr(os, "O_NONBLOCK", 0) | getattr(os, "O_CLOEXEC", 0)
-    fd = os.open(path, flags)
+    fd = open_regular(path)
     try:
         info = os.fstat(fd)
-        if not stat.S_ISREG(info.st_mode):
-            kind = next((name for test, name in _KINDS if test(info.st_mode)), "not a file")
-            raise FileRefused(path, f"is not a regular file ({kind})")
         if limit is not None and info.st_size > limit:
             raise FileRefused(path, f"is {_size(info.st_size)}, over the limit of {_size(limit)}")
         chunks: list[bytes] = []

@@ -24,8 +24,6 @@ A sweep is written to (and read back from) a sweep file, TOML::
 from __future__ import annotations
 
 import math
-import os
-import stat
 import tomllib
 from collections.abc import Iterator, Mapping, Sequence
 from dataclasses import dataclass, field, replace
@@ -33,6 +31,7 @@ from pathlib import Path
 from typing import Any
 
 from billiard.scene import Scene, SceneError, load_scene
+from billiard.userfile import FileRefused, read_limited
 
 __all__ = [
     "Axis",
@@ -442,15 +441,10 @@ def is_sweep_file(path: str | Path) -> bool:
 def _read_text(path: Path) -> str:
     """A regular file's text, refused (SweepError) beyond MAX_FILE_BYTES: never read an
     endless or huge file (``/dev/zero``, a FIFO) into memory."""
-    with open(path, "rb") as f:
-        info = os.fstat(f.fileno())
-        if not stat.S_ISREG(info.st_mode):
-            raise SweepError(f"sweep file '{path}' is not a regular file")
-        data = f.read(MAX_FILE_BYTES + 1)
-    if len(data) > MAX_FILE_BYTES:
-        raise SweepError(
-            f"sweep file '{path}' is larger than {MAX_FILE_BYTES // 2**20} MiB: not a sweep file"
-        )
+    try:
+        data = read_limited(path, MAX_FILE_BYTES)
+    except FileRefused as exc:
+        raise SweepError(f"sweep file '{path}' {exc.reason}: not a sweep file") from None
     return data.decode("utf-8")
 
 
