@@ -19,9 +19,9 @@ import numpy as np
 from billiard.generated import ball as _ball
 
 from billiard.errors import SimulationError
-from billiard.record import MemoryRecorder
-from billiard.scene import PAPER_SCENES, Scene, load_scene, with_values
-from billiard.simulate import BallState, Simulation, simulate
+from billiard.run.simulate import BallState, Simulation, simulate
+from billiard.runfile.record import MemoryRecorder
+from billiard.scene.scene import PAPER_SCENES, Scene, load_scene, with_values
 
 SCENES = PAPER_SCENES
 #: A run shorter than this (CPU s) is repeated and the median of the repeats kept.

@@ -27,14 +27,14 @@ class _Discard:
 
 
 def _scene(name: str, drag: str):
-    from billiard.scene import load_scene, with_values
+    from billiard.scene.scene import load_scene, with_values
 
     return with_values(load_scene(name), {"air.drag": drag})
 
 
 def interpreted(name: str, drag: str, impacts: int, repeats: int) -> float:
     """Median CPU seconds per impact of Simulation.run (records discarded)."""
-    from billiard.engine import Simulation
+    from billiard.engine.simulation import Simulation
 
     times = []
     for _ in range(repeats):
@@ -48,8 +48,8 @@ def interpreted(name: str, drag: str, impacts: int, repeats: int) -> float:
 def kernel(name: str, drag: str, impacts: int, repeats: int) -> tuple[float, float]:
     """Median CPU seconds per impact of run_chunk alone (one chunk of all impacts), and
     of simulate_compiled (records in memory, the rows turned into records)."""
-    from billiard.compiled import prepare, simulate_compiled
     from billiard.kernels.loop import run_chunk
+    from billiard.run.compiled import prepare, simulate_compiled
 
     scene = _scene(name, drag)
     bare, whole = [], []

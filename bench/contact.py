@@ -26,9 +26,9 @@ from dataclasses import dataclass
 
 from billiard.generated import contact as _c
 
-from billiard.engine import Simulation
-from billiard.record import MemoryRecorder
-from billiard.scene import PAPER_SCENES, Scene, load_scene, scene_from_dict, with_values
+from billiard.engine.simulation import Simulation
+from billiard.runfile.record import MemoryRecorder
+from billiard.scene.scene import PAPER_SCENES, Scene, load_scene, scene_from_dict, with_values
 from billiard.status import Status
 
 MODELS = ("impacts", "phases")

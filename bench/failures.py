@@ -27,9 +27,9 @@ from billiard.generated import ball as _ball
 
 from bench.common import SAME_IMPACT, Config, one_flight, post_impact_state
 from bench.peer import SolveIvpPeer
-from billiard.record import MemoryRecorder
-from billiard.scene import Scene, load_scene, with_values
-from billiard.simulate import BallState, Simulation, simulate
+from billiard.run.simulate import BallState, Simulation, simulate
+from billiard.runfile.record import MemoryRecorder
+from billiard.scene.scene import Scene, load_scene, with_values
 
 TRUTH_RTOL = 1e-13
 #: samples of an arc when its clearance is checked

@@ -19,9 +19,9 @@ import math
 import numpy as np
 
 from bench.common import full_model
-from billiard.calibrate import find_period_one
-from billiard.scene import Scene, with_values
-from billiard.simulate import simulate
+from billiard.analysis.calibrate import find_period_one
+from billiard.run.simulate import simulate
+from billiard.scene.scene import Scene, with_values
 
 VARIANTS: tuple[tuple[str, dict], ...] = (
     ("full model", {}),

@@ -22,9 +22,9 @@ from billiard.generated import ball as _ball
 from scipy.integrate import solve_ivp
 
 from billiard.errors import SimulationError
-from billiard.impact import Contact
-from billiard.scene import Scene
-from billiard.simulate import BallState, Simulation
+from billiard.models.impact import Contact
+from billiard.run.simulate import BallState, Simulation
+from billiard.scene.scene import Scene
 
 #: A flight with no event within this time (s) has passed through a wall.
 LONGEST_FLIGHT = 10.0

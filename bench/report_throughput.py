@@ -5,7 +5,7 @@ of the targets table."""
 from __future__ import annotations
 
 from bench.throughput import TARGETS
-from billiard.rows import NCOL
+from billiard.runfile.rows import NCOL
 
 FIG = "figures/performance"
 

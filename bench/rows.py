@@ -1,5 +1,5 @@
 """Writing ``collisions.csv`` rows: microseconds per row of
-:func:`billiard.rows.format_rows`, ``repr`` against the compiled formatter
+:func:`billiard.runfile.rows.format_rows`, ``repr`` against the compiled formatter
 (:mod:`billiard.kernels.float_text`), on the rows of a real run.
 
     python -m bench.rows [--scene wedge-6.6hz] [--rows 20000] [--repeats 5]
@@ -21,9 +21,9 @@ def _block(scene_name: str, rows: int):
     """The rows of a ``rows``-impact run kept in memory, as one float64 block."""
     import numpy as np
 
-    from billiard import rows as _rows
-    from billiard.scene import load_scene
-    from billiard.simulate import simulate
+    from billiard.run.simulate import simulate
+    from billiard.runfile import rows as _rows
+    from billiard.scene.scene import load_scene
 
     result = simulate(load_scene(scene_name), collisions=rows)
     columns = result.columns
@@ -52,7 +52,7 @@ def main(argv: list[str] | None = None) -> None:
     args = parser.parse_args(argv)
 
     from billiard import jit
-    from billiard import rows as _rows
+    from billiard.runfile import rows as _rows
 
     block = _block(args.scene, args.rows)
     print(f"{len(block)} rows of {args.scene}, median of {args.repeats}")

@@ -16,7 +16,7 @@ from pathlib import Path
 from bench import charts, contact, failures, ladder, report, throughput, workprecision
 from bench import sweep as sweep_bench
 from bench.common import Config, start_scene
-from billiard.bench import SECTIONS as BENCH_SECTIONS
+from billiard.cli.bench import SECTIONS as BENCH_SECTIONS
 
 #: The sections of the page (``sweep`` keeps its own results, docs/figures/sweeps/bench.json,
 #: and its own part of the page, between markers).

@@ -18,7 +18,7 @@ contacts.csv with :func:`audit_contact_rows`. Counted, and required to be zero:
 
 penetrations
     impacts at which the ball overlaps the wall or the lid by more than ``GAP_LIMIT``
-    (1e-9 m): the clearance from :meth:`billiard.boundary.Boundary.clearance`, the
+    (1e-9 m): the clearance from :meth:`billiard.geometry.boundary.Boundary.clearance`, the
     Euclidean distance from the ball's centre to the curve (global nearest point) minus r.
 detached impacts
     impacts recorded with the ball more than ``GAP_LIMIT`` away from every surface.
@@ -82,15 +82,12 @@ from typing import Any
 
 import numpy as np
 
-from billiard.boundary import Boundary, Drive
-from billiard.curves import load_curve
+from billiard.engine.interrupt import signal_after
 from billiard.errors import GeometryError
-from billiard.impact import ImpactResult
-from billiard.interrupt import signal_after
-from billiard.record import read_collisions
-from billiard.scene import PAPER_SCENES, Scene, fowles_coefficients, load_scene, with_values
-from billiard.sidecsv import CONTACTS_NAME, read_side_csv
-from billiard.simulate import (
+from billiard.geometry.boundary import Boundary, Drive
+from billiard.geometry.curves import load_curve
+from billiard.models.impact import ImpactResult
+from billiard.run.simulate import (
     CSV_NAME,
     RunInterrupted,
     Simulation,
@@ -98,6 +95,9 @@ from billiard.simulate import (
     run_streamed,
     simulate,
 )
+from billiard.runfile.record import read_collisions
+from billiard.runfile.sidecsv import CONTACTS_NAME, read_side_csv
+from billiard.scene.scene import PAPER_SCENES, Scene, fowles_coefficients, load_scene, with_values
 from billiard.status import Status
 
 __all__ = [
@@ -408,7 +408,7 @@ def audit_rows(boundary: Boundary, drive: Any, columns: Mapping[str, np.ndarray]
 
 
 #: Absolute error allowed per step of a contact phase on s (m) and s_dot (m/s), as in
-#: :mod:`billiard.contact_phase` (its ``_ATOL``): the absolute part of the phase-energy
+#: :mod:`billiard.models.contact` (its ``_ATOL``): the absolute part of the phase-energy
 #: tolerance.
 PHASE_ATOL = 1e-12
 
@@ -419,7 +419,7 @@ class PhaseAudit:
     the transitions into them, in the boundary's frame. Build it with
     :meth:`PhaseAudit.of`; it gets every impact's outcome (``ImpactAudit.on_impact``)
     and every finished phase (:meth:`contact`, a
-    :class:`billiard.record.ContactRecord`) in the order the engine makes them, so each
+    :class:`billiard.runfile.record.ContactRecord`) in the order the engine makes them, so each
     phase is linked to the event it starts from.
 
     Transitions (any drive; exact). A phase starts at a landing (an impact, also one at a

@@ -28,7 +28,7 @@ Methods compared:
 * **DOP853**, the peer a typical user writes: `scipy.integrate.solve_ivp(method="DOP853")`
   per flight, one terminal event function per surface (the engine's offset-curve gap,
   falling through zero), `atol = rtol`, then the same impact law
-  (`billiard.impact.KaneLevinsonImpact`). **DOP853 careful** adds `max_step = T/20`
+  (`billiard.models.impact.KaneLevinsonImpact`). **DOP853 careful** adds `max_step = T/20`
   (T the drive period) and `first_step = 1e-6 s` (`bench/peer.py`).
 """
 
@@ -283,7 +283,7 @@ runs (one right after the other) shows how far the load moved it.
 
 The cases: the four paper scenes as built in (drag as each scene says, the ball from rest
 at the bottom, as `billiard run` starts it), and closed-form cases of the validation tests
-(`tests/test_validation_contact.py`) with the paper's ball, restitution and friction: a
+(`tests/validation/test_contact.py`) with the paper's ball, restitution and friction: a
 ball at rest at the bottom of the static parabola and in the static wedge's vertex,
 small rolling oscillations in the static parabola, a drop onto a static flat floor
 (`boundary.curve = "0.001"`), a slide down a straight wall too steep to roll on

@@ -15,13 +15,13 @@ import tempfile
 import time
 from pathlib import Path
 
-from billiard.scene import load_scene
-from billiard.simulate import simulate
+from billiard.run.simulate import simulate
+from billiard.scene.scene import load_scene
 
 _MEMORY_SCRIPT = """
 import resource, sys, time
-from billiard.scene import load_scene
-from billiard.simulate import simulate
+from billiard.scene.scene import load_scene
+from billiard.run.simulate import simulate
 n, out = int(sys.argv[1]), sys.argv[2]
 start = time.perf_counter()
 if n:
@@ -52,9 +52,9 @@ TARGETS = {
 _RATE_SCRIPT = """
 import json, statistics, sys, time
 from billiard import jit
-from billiard.engine import Simulation
-from billiard.record import MemoryRecorder
-from billiard.scene import load_scene, with_values
+from billiard.engine.simulation import Simulation
+from billiard.runfile.record import MemoryRecorder
+from billiard.scene.scene import load_scene, with_values
 name, drag, n, repeats = sys.argv[1], sys.argv[2], int(sys.argv[3]), int(sys.argv[4])
 scene = with_values(load_scene(name), {"air.drag": drag})
 Simulation(scene).run(min(n, 100), MemoryRecorder())
@@ -133,9 +133,9 @@ def impact_rate(
 _FIRST_IMPACT = """
 import time
 start = time.perf_counter()
-from billiard.engine import Simulation
-from billiard.record import MemoryRecorder
-from billiard.scene import load_scene
+from billiard.engine.simulation import Simulation
+from billiard.runfile.record import MemoryRecorder
+from billiard.scene.scene import load_scene
 Simulation(load_scene({name!r})).run(1, MemoryRecorder())
 print(time.perf_counter() - start)
 """
@@ -233,8 +233,8 @@ def whole_runs(scenes: tuple[str, ...], impacts: int, repeats: int) -> list[dict
 
 _MILLION_SCRIPT = """
 import sys, time
-from billiard.scene import load_scene
-from billiard.simulate import simulate
+from billiard.scene.scene import load_scene
+from billiard.run.simulate import simulate
 n, out, name = int(sys.argv[1]), sys.argv[2], sys.argv[3]
 start = time.perf_counter()
 result = simulate(load_scene(name), collisions=n, out_dir=out or None)
@@ -331,7 +331,11 @@ def startup(repeats: int) -> dict:
     py = sys.executable
     commands = {
         "python -c pass": [py, "-c", "pass"],
-        "import billiard.simulate": [py, "-c", "import billiard.simulate, billiard.scene"],
+        "import billiard.run.simulate": [
+            py,
+            "-c",
+            "import billiard.run.simulate, billiard.scene.scene",
+        ],
         "billiard run parabola-5.4hz --collisions 1 --no-plot": billiard_command()
         + [
             "run",

@@ -25,8 +25,8 @@ from bench.common import (
 )
 from bench.peer import SolveIvpPeer
 from billiard import jit
-from billiard.scene import Scene, with_values
-from billiard.simulate import Simulation
+from billiard.run.simulate import Simulation
+from billiard.scene.scene import Scene, with_values
 
 REFERENCE_RTOL = 1e-13
 #: start perturbation (m) whose effect after n impacts is the "chaos floor"
@@ -64,7 +64,7 @@ _INTERPRETED = """
 import json, sys
 from bench.common import Config, engine_run, start_scene, timed
 from bench.workprecision import settings
-from billiard.scene import with_values
+from billiard.scene.scene import with_values
 name, quick = sys.argv[1], sys.argv[2] == "1"
 cfg = Config.quick_mode() if quick else Config.full()
 start = start_scene(name, cfg.transient)

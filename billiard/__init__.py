@@ -9,11 +9,9 @@ generated code (``billiard.generated``). The Python API::
     result = simulate(scene, collisions=2000)
     heights = result.columns["q2"]   # numpy array, m
 
-The scene, simulation and calibration API is imported eagerly: ``billiard.simulate`` and
-``billiard.calibrate`` are functions named like the modules that define them, and binding
-them here, after those modules are imported, keeps them the functions however often the
-modules are imported later. Plotting, curves and run files are imported on first use
-(none of their names is a module's).
+This module is the public API only: it binds the names above from the wings that define
+them (docs/design.md, "Layout"). The scene, simulation and calibration API is imported
+eagerly; plotting, curves and run files on first use.
 """
 
 from __future__ import annotations
@@ -102,10 +100,11 @@ try:
     # numba before billiard's own modules: imported after them, numba's set-up of its
     # casting rules (numba.core.typeconv.rules) took 0.11-0.17 s instead of 0.01 s
     # (measured with python -X importtime; the same code, in another order)
-    from . import jit  # noqa: F401
-    from .calibrate import calibrate
-    from .engine import Simulation
-    from .scene import (
+    from billiard import jit  # noqa: F401
+    from billiard.analysis.calibrate import calibrate
+    from billiard.engine.simulation import Simulation
+    from billiard.run.simulate import Result, simulate
+    from billiard.scene.scene import (
         Scene,
         SceneError,
         builtin_scenes,
@@ -114,8 +113,7 @@ try:
         scene_to_toml,
         with_values,
     )
-    from .simulate import Result, simulate
-    from .status import Status
+    from billiard.status import Status
 finally:
     if gc.get_freeze_count() == 0:
         gc.freeze()
@@ -126,9 +124,9 @@ finally:
 __version__ = "0.1.0"
 
 _EXPORTS = {
-    "load_curve": "billiard.curves",
-    "read_collisions": "billiard.record",
-    "camera_filter": "billiard.camera",
+    "load_curve": "billiard.geometry.curves",
+    "read_collisions": "billiard.runfile.record",
+    "camera_filter": "billiard.analysis.camera",
     "plot_run": "billiard.plot",
 }
 

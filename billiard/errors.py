@@ -21,7 +21,7 @@ class GeometryError(ValueError):
 
 class SimulationError(RuntimeError):
     """A run cannot continue: the ball escaped, the impacts collapsed, a number became
-    non-finite, or a root solve failed. :func:`billiard.simulate.simulate` turns it into
+    non-finite, or a root solve failed. :func:`billiard.run.simulate.simulate` turns it into
     ``Result.status`` and ``Result.stop_reason`` and keeps the impacts recorded so far.
 
     Attributes:

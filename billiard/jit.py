@@ -50,7 +50,6 @@ _KERNELS = _PACKAGE / "kernels"
 #: The modules compiled into the kernels besides billiard.kernels.*
 KERNEL_SOURCES = (
     "billiard.jit",
-    "billiard.engine_phases",
     "billiard.generated.ball",
     "billiard.generated.contact",
 )

@@ -1,7 +1,7 @@
 """Safe parsing of user-supplied boundary curve expressions, and the rules for curve names.
 
 Pure Python: sympy is imported only inside :meth:`CurveExpression.to_sympy`, so the
-runtime (``billiard.scene``, ``billiard.curves``) imports this module without loading
+runtime (``billiard.scene.scene``, ``billiard.geometry.curves``) imports this module without loading
 sympy.
 
 A scene may describe its boundary by an expression in ``x`` (metres) such as

@@ -18,8 +18,8 @@ from matplotlib.figure import Figure
 from PIL import Image
 from scipy.optimize import brentq
 
-from billiard.record import REQUIRED_COLUMNS, write_collisions
-from billiard.scene import Scene, scene_from_toml
+from billiard.runfile.record import REQUIRED_COLUMNS, write_collisions
+from billiard.scene.scene import Scene, scene_from_toml
 
 A_CURVE, C_CURVE = 26.0, 0.0063  # parabola a (1/m), c (m)
 RADIUS, MASS, K = 1.55e-3, 1.3028e-4, 0.4

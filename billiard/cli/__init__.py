@@ -28,15 +28,15 @@ def _user_errors() -> tuple[type[BaseException], ...]:
     errors: list[type[BaseException]] = [UserError]
     for module, names in (
         ("billiard.derivation.expr", ["CurveExpressionError"]),
-        ("billiard.curves", ["CurveNotFoundError"]),
-        ("billiard.scene", ["SceneError"]),
+        ("billiard.geometry.curves", ["CurveNotFoundError"]),
+        ("billiard.scene.scene", ["SceneError"]),
         ("billiard.errors", ["GeometryError", "SimulationError"]),
         ("billiard.derivation.curve", ["CurveDerivationError"]),
-        ("billiard.calibrate", ["CalibrationError"]),
-        ("billiard.analysis", ["LyapunovError"]),
-        ("billiard.reproduce", ["ReproduceError"]),
-        ("billiard.record", ["RunDataError"]),
-        ("billiard.checkpoint", ["CheckpointError"]),
+        ("billiard.analysis.calibrate", ["CalibrationError"]),
+        ("billiard.analysis.lyapunov", ["LyapunovError"]),
+        ("billiard.reproduce.paper", ["ReproduceError"]),
+        ("billiard.runfile.record", ["RunDataError"]),
+        ("billiard.runfile.checkpoint", ["CheckpointError"]),
     ):
         mod = sys.modules.get(module)
         if mod is not None:

@@ -17,7 +17,7 @@ def cmd_derive(args: argparse.Namespace) -> int:
         if not (args.curve and args.name):
             raise UserError("derive: --name and --curve go together")
         params = dict(_key_value(p, "--param") for p in args.param)
-        from billiard.curves import user_curve_dir
+        from billiard.geometry.curves import user_curve_dir
 
         directory = Path(args.dir) if args.dir else user_curve_dir()
         if args.dir:
@@ -133,6 +133,6 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     p.add_argument(
         "--dir",
         help="where to write a user curve (default: the user curve directory, "
-        "$BILLIARD_HOME/curves, see `billiard.curves.user_curve_dir`)",
+        "$BILLIARD_HOME/curves, see `billiard.geometry.curves.user_curve_dir`)",
     )
     p.set_defaults(func=cmd_derive)

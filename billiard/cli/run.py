@@ -112,14 +112,14 @@ def _duration(seconds: float) -> str:
 
 def _frame_interval(text: str | None) -> float | None:
     """``--frame-interval`` in seconds (a number or a fraction such as 1/30), or None."""
-    from billiard.camera import parse_frame_interval
+    from billiard.analysis.camera import parse_frame_interval
 
     return None if text is None else parse_frame_interval(text)
 
 
 def _holds_run(folder: Path) -> bool:
     """Whether a folder holds a run's files (CSV, scene or checkpoint)."""
-    from billiard.persist import CHECKPOINT_NAME, CSV_NAME, SCENE_NAME
+    from billiard.run.persist import CHECKPOINT_NAME, CSV_NAME, SCENE_NAME
 
     return folder.is_dir() and any(
         (folder / name).exists() for name in (CSV_NAME, SCENE_NAME, CHECKPOINT_NAME)
@@ -129,7 +129,7 @@ def _holds_run(folder: Path) -> bool:
 def _remove_plots(folder: Path) -> list[str]:
     """Delete the figures ``plot_run`` wrote into a run folder (they no longer match its
     data); returns the names removed."""
-    from billiard.runfolder import FIGURE_NAMES
+    from billiard.runfile.folder import FIGURE_NAMES
 
     removed = []
     for name in FIGURE_NAMES:
@@ -146,9 +146,9 @@ def _checkpoint_clock(folder: Path):
     while there is none."""
     import json
 
-    from billiard.checkpoint import MAX_CHECKPOINT_BYTES
-    from billiard.persist import CHECKPOINT_NAME
-    from billiard.userfile import read_limited
+    from billiard.run.persist import CHECKPOINT_NAME
+    from billiard.runfile.checkpoint import MAX_CHECKPOINT_BYTES
+    from billiard.scene.userfile import read_limited
 
     def clock() -> float | None:
         try:
@@ -188,10 +188,10 @@ def cmd_run(args: argparse.Namespace) -> int:
     import shlex
     import signal
 
-    from billiard.checkpoint import CheckpointError
-    from billiard.output_size import OutputSizeError
-    from billiard.persist import CSV_NAME, SCENE_NAME, resume
-    from billiard.simulate import RunInterrupted, simulate
+    from billiard.run.output_size import OutputSizeError
+    from billiard.run.persist import CSV_NAME, SCENE_NAME, resume
+    from billiard.run.simulate import RunInterrupted, simulate
+    from billiard.runfile.checkpoint import CheckpointError
 
     # every argument is checked before any work
     frame_interval = _frame_interval(args.frame_interval)
@@ -215,7 +215,7 @@ def cmd_run(args: argparse.Namespace) -> int:
     else:
         if not args.scene:
             raise UserError("run: give a SCENE (a built-in name or a .toml file), or --resume DIR")
-        from billiard.scene import load_scene, with_values
+        from billiard.scene.scene import load_scene, with_values
 
         scene = load_scene(args.scene, overrides=args.set, notify=_note)
         if args.duration is not None:

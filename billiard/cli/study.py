@@ -6,12 +6,12 @@ import argparse
 import time
 from pathlib import Path
 
+from billiard.analysis.phase import DEFAULT_PHASE_REFERENCE
 from billiard.cli.common import UserError, _note, add_set_argument, check_output_folder
-from billiard.phase import DEFAULT_PHASE_REFERENCE
 
 
 def cmd_scenes(args: argparse.Namespace) -> int:
-    from billiard.scene import builtin_scenes
+    from billiard.scene.scene import builtin_scenes
 
     scenes = builtin_scenes()
     width = max(map(len, scenes))
@@ -23,8 +23,8 @@ def cmd_scenes(args: argparse.Namespace) -> int:
 def cmd_calibrate(args: argparse.Namespace) -> int:
     import json
 
-    from billiard.calibrate import calibrate
-    from billiard.scene import load_scene
+    from billiard.analysis.calibrate import calibrate
+    from billiard.scene.scene import load_scene
 
     if args.impacts < 1:
         raise UserError(f"calibrate: --impacts must be >= 1, got {args.impacts}")
@@ -85,8 +85,8 @@ def cmd_plot(args: argparse.Namespace) -> int:
 
 
 def cmd_lyapunov(args: argparse.Namespace) -> int:
-    from billiard.analysis import check_arguments, format_lyapunov, lyapunov_exponent
-    from billiard.scene import load_scene
+    from billiard.analysis.lyapunov import check_arguments, format_lyapunov, lyapunov_exponent
+    from billiard.scene.scene import load_scene
 
     scene = load_scene(args.scene, overrides=args.set, notify=_note)
     check_arguments(scene, impacts=args.impacts, transient=args.transient, d0=args.d0)
@@ -98,7 +98,7 @@ def cmd_lyapunov(args: argparse.Namespace) -> int:
 
 
 def cmd_bench(args: argparse.Namespace) -> int:
-    from billiard.bench import run_bench
+    from billiard.cli.bench import run_bench
 
     if args.out:
         check_output_folder(args.out, "bench --out")
@@ -106,7 +106,7 @@ def cmd_bench(args: argparse.Namespace) -> int:
 
 
 def cmd_reproduce(args: argparse.Namespace) -> int:
-    from billiard.reproduce import run_reproduce
+    from billiard.reproduce.paper import run_reproduce
 
     # a folder that cannot be made fails here in one line, not after minutes of work
     check_output_folder(args.runs, "reproduce --runs")
@@ -199,7 +199,7 @@ def add_parsers(sub: argparse._SubParsersAction) -> None:
     add_set_argument(p, "override a scene key first (repeatable)")
     p.set_defaults(func=cmd_lyapunov)
 
-    from billiard.bench import add_bench_arguments  # argparse only: cheap
+    from billiard.cli.bench import add_bench_arguments  # argparse only: cheap
 
     p = sub.add_parser(
         "bench",

@@ -54,7 +54,7 @@ def cmd_sweep(args: argparse.Namespace) -> int:
                 axes = [*file_axes, *axes]
                 settings = {**file_settings, **settings}
             else:
-                from billiard.scene import load_scene
+                from billiard.scene.scene import load_scene
 
                 scene = load_scene(source, overrides=args.set)
             if not axes:

@@ -22,7 +22,7 @@ One concept per module:
 * :mod:`~billiard.kernels.loop`: one impact, and ``run_chunk`` (up to N impacts into a
   preallocated array; ``run_chunk_fixed`` for method ``rk4``).
 
-:mod:`billiard.engine_kernels` builds the state vector from a scene and runs the chunks.
-:mod:`billiard.kernels_python` loads these files again as plain Python
+:mod:`billiard.engine.kernel_engine` builds the state vector from a scene and runs the chunks.
+:mod:`billiard.kernels.interpreted` loads these files again as plain Python
 (``billiard.kernels_py``), which the runtime's classes call.
 """

@@ -5,7 +5,7 @@ compiled kernels.
 
 numba counts references on every array passed to a call it does not inline: an
 atomic increment and decrement per array per call, on the hot path of every gap
-evaluation. The kernels' arrays are owned by the caller (:mod:`billiard.compiled`) for
+evaluation. The kernels' arrays are owned by the caller (:mod:`billiard.run.compiled`) for
 the whole call of :func:`billiard.kernels.loop.run_chunk`, so inside it they can be
 borrowed: a view with no memory-info pointer, whose reference counting is a test of a
 null pointer. Interpreted, ``borrow`` is the identity.
@@ -33,7 +33,7 @@ interpreted, it is ``math.ulp``. Both give the exact power of two, so the result
 the generated ball equations).
 
 The same files also load as the interpreted twin :mod:`billiard.kernels_py`
-(:mod:`billiard.kernels_python`), whose functions the runtime's classes call one gap at a
+(:mod:`billiard.kernels.interpreted`), whose functions the runtime's classes call one gap at a
 time; there every decorator here is the identity (and ``ulp`` is ``math.ulp``) whether
 numba is there or not: the kernels import these from their sibling, so the package a
 file is loaded in decides.

@@ -1,7 +1,7 @@
 """A contact phase over the state vector: the ball rolling or sliding on one wall
 (``contact.model = "phases"``), integrated by Dormand-Prince 5(4) with its fourth-order
 continuous extension, its end located by Illinois regula falsi on the dense output.
-:class:`billiard.contact_phase.ContactModel` runs these functions interpreted; the
+:class:`billiard.models.contact.ContactModel` runs these functions interpreted; the
 equations and the transition functions they integrate are
 :mod:`~billiard.kernels.contact_forces`.
 
@@ -359,7 +359,7 @@ def advance(ctx, p, walls):
 @jit
 def run_phase(ctx, p, walls, start):
     """:func:`begin` (when ``start``) and :func:`advance` as one compiled function: the
-    entry :class:`billiard.contact_phase.ContactModel` calls, once per phase and once
+    entry :class:`billiard.models.contact.ContactModel` calls, once per phase and once
     per sample, when the kernels are compiled."""
     # the caller owns the arrays throughout the call: no reference counting inside
     ctx = borrow(ctx)

@@ -1,6 +1,6 @@
 """The generated contact equations (:mod:`billiard.generated.contact`) under
 :func:`billiard.jit.jit`: the same functions, compiled when numba is there (the functions
-themselves in the interpreted twin, :mod:`billiard.kernels_python`)."""
+themselves in the interpreted twin, :mod:`billiard.kernels.interpreted`)."""
 
 from __future__ import annotations
 

@@ -49,7 +49,7 @@ def n_y(ctx):
 @inline
 def boundary(ctx, theta):
     """(vb1, vb2, ab1, ab2): the boundary's velocity (m/s) and acceleration (m/s^2) in
-    the lab frame at drive angle theta (as :class:`billiard.drive.Drive` computes them)."""
+    the lab frame at drive angle theta (as :class:`billiard.geometry.drive.Drive` computes them)."""
     v = ctx[AMP] * ctx[OMEGA] * math.cos(theta)
     a = -ctx[AMP] * ctx[OMEGA] * ctx[OMEGA] * math.sin(theta)
     if ctx[HORIZ] == 1.0:

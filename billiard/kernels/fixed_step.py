@@ -1,4 +1,4 @@
-"""The paper's impact detection (``method = "rk4"``, :mod:`billiard.fixed_step`) as
+"""The paper's impact detection (``method = "rk4"``, :mod:`billiard.models.rk4_locator`) as
 kernels: fixed RK4 steps, after each the signed Euclidean distance to the curve from
 Newton's method on each wall's nearest-point condition, and an impact located by
 shrinking the step (Illinois while its start is clear, bisection otherwise) until the
@@ -89,7 +89,7 @@ def nearest_newton(near, dnear, p, s, px, py, iterations):
     """Newton's method on a wall's nearest-point condition
     g(s) = (s - px) + (f(s) - py) f'(s) = 0 from the start s (m), ``near`` and ``dnear``
     being g and dg/ds: (s, how it ended), the one place it is written
-    (:func:`billiard.walls.nearest_newton` runs it interpreted)."""
+    (:func:`billiard.geometry.walls.nearest_newton` runs it interpreted)."""
     for _ in range(iterations):
         d = dnear(s, px, py, p)
         if not d > 0.0:

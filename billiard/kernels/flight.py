@@ -1,6 +1,6 @@
 """Flight between impacts over the state vector: the exact parabola without air forces,
-Dormand-Prince 5(4) with them. :class:`billiard.flight.ExactFlight` and
-:class:`billiard.flight.AdaptiveFlight` are these functions, run interpreted."""
+Dormand-Prince 5(4) with them. :class:`billiard.models.flight.ExactFlight` and
+:class:`billiard.models.flight.AdaptiveFlight` are these functions, run interpreted."""
 
 from __future__ import annotations
 

@@ -1,13 +1,13 @@
 """Floats as text, compiled: the bytes of CPython's ``repr(float)`` written into a
 uint8 array, and the ``collisions.csv`` lines of a block of rows
-(:func:`billiard.rows.format_rows`).
+(:func:`billiard.runfile.rows.format_rows`).
 
 Why: a compiled run makes an impact in about a microsecond, and formatting its row
 with ``repr`` cost about 17 us, almost all of it David Gay's ``dtoa`` (500-800 ns per
 17-digit float, 16 floats per row). The digits here are Ryu's
 (:mod:`~billiard.kernels.ryu`), the same as ``repr``'s; the layout follows
 ``float_repr`` (format code 'r' with ``Py_DTSF_ADD_DOT_0``).
-``tests/test_float_text.py`` compares the bytes with ``repr`` on millions of random
+``tests/kernels/test_float_text.py`` compares the bytes with ``repr`` on millions of random
 bit patterns and on the hard cases.
 """
 
@@ -231,7 +231,7 @@ def format_rows(block, nrows, out, labels, label_starts, lid, line_end):
     the wall code (column 13) as ``lid`` when it is ``LID_LABEL`` and an int otherwise,
     every other column with :func:`write_float`. ``out`` holds at least the longest
     row times ``nrows``. Returns the number of bytes, or -1 when a code is not an
-    integer :func:`billiard.rows.format_rows` can format (nan, out of range): its
+    integer :func:`billiard.runfile.rows.format_rows` can format (nan, out of range): its
     repr path then formats or raises as it always did."""
     count = label_starts.size - 1
     pos = 0

@@ -1,6 +1,6 @@
 """Kane and Levinson's impact law with the low-velocity rule on the generated maps
-(:class:`billiard.impact.KaneLevinsonImpact` is this, run interpreted;
-:class:`billiard.impact.LowVelocityRule` describes the rule)."""
+(:class:`billiard.models.impact.KaneLevinsonImpact` is this, run interpreted;
+:class:`billiard.models.impact.LowVelocityRule` describes the rule)."""
 
 from __future__ import annotations
 

@@ -1,10 +1,9 @@
 """The event-driven impact locator over the state vector (the search
-:mod:`billiard.events` describes; :class:`billiard.events.EventLocator` is this, run
-interpreted): substeps proven clear by the gap's deceleration bound, grazing
-candidates, halving, and the root refinement. A substep split in two is one loop over a
-stack of substeps, not a recursion. "No time" is :data:`NONE` (the times searched are
->= 0).
-"""
+:mod:`billiard.models.event_locator` describes;
+:class:`billiard.models.event_locator.EventLocator` is this, run interpreted): substeps
+proven clear by the gap's deceleration bound, grazing candidates, halving, and the root
+refinement. A substep split in two is one loop over a stack of substeps, not a
+recursion. "No time" is :data:`NONE` (the times searched are >= 0)."""
 
 from __future__ import annotations
 

@@ -1,21 +1,12 @@
 """One impact of the impact-only engine (``contact.model = "impacts"``, method
 ``event``) and ``run_chunk``, a loop over it that writes one row per impact into a
-preallocated array: :meth:`billiard.engine.Simulation.step` and the body of
-:meth:`billiard.engine.Simulation.run`, with the same operations in the same order.
+preallocated array: :meth:`billiard.engine.simulation.Simulation.step` and the body of
+:meth:`billiard.engine.simulation.Simulation.run`, with the same operations in the same order.
 """
 
 from __future__ import annotations
 
 import math
-
-from billiard.engine_phases import (
-    COLLAPSE_COUNT,
-    COLLAPSE_SPAN,
-    ZERO_FLIGHT_LIMIT,
-)
-from billiard.engine_phases import (
-    compensated_add as _compensated_add,
-)
 
 from . import fixed_step, flight
 from .ball import contact_velocity, energy, frame_velocity
@@ -77,6 +68,8 @@ from .layout import (
     KernelError,
 )
 from .locate import locate
+from .rules import COLLAPSE_COUNT, COLLAPSE_SPAN, ZERO_FLIGHT_LIMIT
+from .rules import compensated_add as _compensated_add
 from .surfaces import gap_accel
 
 compensated_add = inline(_compensated_add)

@@ -1,5 +1,5 @@
 """The lowest admissible centre height along a row of abscissas: the scan with which
-:meth:`billiard.boundary.Boundary.resting_position` finds where a ball rests.
+:meth:`billiard.geometry.boundary.Boundary.resting_position` finds where a ball rests.
 
 The boundary's offset surfaces are the surface blocks ``0 .. n - 1`` of ``ctx``; each
 block's warm start moves from one abscissa to the next, as it does when the surfaces are

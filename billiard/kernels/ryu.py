@@ -9,7 +9,7 @@ does.
 numba has no 128-bit integers: the products of Ryu's 125-bit powers of five with a
 55-bit significand are assembled from 32-bit halves (:func:`_mul_64x64`), without
 wrapping around, so the same source also runs interpreted on numpy's uint64 scalars (as
-it does in :mod:`billiard.kernels_python`'s twin). Every integer of the digit search is
+it does in :mod:`billiard.kernels.interpreted`'s twin). Every integer of the digit search is
 a ``np.uint64`` and every constant is one too: numba types uint64 mixed with int64 as
 float64.
 

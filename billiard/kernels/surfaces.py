@@ -1,11 +1,11 @@
 """The surfaces over the state vector: the offset curve of a curved wall, of a straight
 one, the lid and the escape level, with the warm starts in the surface's block of
-``ctx``. The classes of :mod:`billiard.surfaces` are these functions, run interpreted.
+``ctx``. The classes of :mod:`billiard.geometry.surfaces` are these functions, run interpreted.
 
 A curved wall's functions come in ``walls = (f, df, d2f)``, each a tuple with one
 function per wall of the curve, called as ``walls[1][w](x, p)``; compiled, they are
 first-class function values of type ``float64(float64, float64[::1])`` (see
-:mod:`billiard.compiled`), so the kernels are compiled once for every curve.
+:mod:`billiard.run.compiled`), so the kernels are compiled once for every curve.
 """
 
 from __future__ import annotations

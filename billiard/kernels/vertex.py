@@ -1,6 +1,6 @@
 """A hold by two walls over the state vector: the ball in a vertex, its centre fixed in
 the boundary's frame, only its spin u3 free (``contact.model = "phases"``).
-:class:`billiard.vertex.VertexHold` runs these functions interpreted; the physics is
+:class:`billiard.models.hold.VertexHold` runs these functions interpreted; the physics is
 described there.
 
 The forces are exact functions of the drive angle: a release (a normal force falling
@@ -313,7 +313,7 @@ def advance(ctx):
 @jit
 def run_hold(ctx, start):
     """:func:`begin` (when ``start``) and :func:`advance` as one compiled function: the
-    entry :class:`billiard.vertex.VertexHold` calls, once per hold and once per sample,
+    entry :class:`billiard.models.hold.VertexHold` calls, once per hold and once per sample,
     when the kernels are compiled."""
     # the caller owns the array throughout the call: no reference counting inside
     ctx = borrow(ctx)

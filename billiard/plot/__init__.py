@@ -1,8 +1,8 @@
 """Figures of a run: return map, times-of-flight map, phase plot, trajectory, animation.
 
 Every function here reads the columns of a run's ``collisions.csv`` (see
-:func:`billiard.camera.read_collisions`) and, where it needs them, the run's validated
-:class:`billiard.scene.Scene` (read from ``scene.toml`` by :func:`read_scene`). Lengths are
+:func:`billiard.analysis.camera.read_collisions`) and, where it needs them, the run's validated
+:class:`billiard.scene.scene.Scene` (read from ``scene.toml`` by :func:`read_scene`). Lengths are
 stored in metres and drawn in millimetres; times in seconds.
 
 The figures follow Hartl, Miller and Mazzoleni, "Dynamic Modeling and Simulation of a Real
@@ -33,17 +33,17 @@ One module per figure:
 
 from __future__ import annotations
 
-from .animation import animate
-from .common import RunDataError
-from .flights import flight_positions
-from .inputs import parse_frame_interval, parse_window
-from .maps import return_map, time_map
-from .outline import drive_offset
-from .paper import paper_figure, paper_models_figure, paper_phase_figure
-from .phase import phase_coordinates, phase_plot
-from .run import FIGURE_NAMES, load_run, load_sides, plot_run, read_scene
-from .titles import scene_title
-from .trajectory import default_window, trajectory
+from billiard.plot.animation import animate
+from billiard.plot.common import RunDataError
+from billiard.plot.flights import flight_positions
+from billiard.plot.inputs import parse_frame_interval, parse_window
+from billiard.plot.maps import return_map, time_map
+from billiard.plot.outline import drive_offset
+from billiard.plot.paper import paper_figure, paper_models_figure, paper_phase_figure
+from billiard.plot.phase import phase_coordinates, phase_plot
+from billiard.plot.run import FIGURE_NAMES, load_run, load_sides, plot_run, read_scene
+from billiard.plot.titles import scene_title
+from billiard.plot.trajectory import default_window, trajectory
 
 __all__ = [
     "FIGURE_NAMES",

@@ -11,12 +11,12 @@ from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.patches import Circle
 from PIL import Image
 
-from ..scene import Scene
-from .common import MM, Columns, Window, cannot_write, column, new_figure
-from .contacts import MODE_LABELS, MODE_STYLES, PhasePath, Side, joined, phase_path
-from .flights import arcs, flight_positions
-from .outline import drive_offset
-from .trajectory import boundary_positions, view, window_rows
+from billiard.plot.common import MM, Columns, Window, cannot_write, column, new_figure
+from billiard.plot.contacts import MODE_LABELS, MODE_STYLES, PhasePath, Side, joined, phase_path
+from billiard.plot.flights import arcs, flight_positions
+from billiard.plot.outline import drive_offset
+from billiard.plot.trajectory import boundary_positions, view, window_rows
+from billiard.scene.scene import Scene
 
 __all__ = ["animate"]
 

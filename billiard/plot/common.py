@@ -1,7 +1,7 @@
 """What every figure shares: reading a run's CSV, units, colours, axes helpers and saving.
 
 This is the one module of :mod:`billiard.plot` that imports the run-file reader
-(:func:`billiard.camera.read_collisions`) and :class:`RunDataError`; the others import
+(:func:`billiard.analysis.camera.read_collisions`) and :class:`RunDataError`; the others import
 them from here.
 """
 
@@ -19,8 +19,8 @@ from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
 
-from ..camera import camera_filter
-from ..record import RunDataError, read_collisions
+from billiard.analysis.camera import camera_filter
+from billiard.runfile.record import RunDataError, read_collisions
 
 __all__ = ["RunDataError", "camera_filter", "read_collisions"]
 

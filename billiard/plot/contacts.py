@@ -11,13 +11,13 @@ centre's state at both ends) and, with ``--sample DT``, exact states every DT se
   the phase's end state, q and v at ``t_end``), and ends at the next impact or the next
   phase's start. It follows the scene's flight model (:mod:`billiard.plot.flights`). The
   engine gives a ball leaving a wall a normal speed of 1e-6 m/s
-  (:data:`billiard.engine_phases.LIFT_OFF_SPEED`) that the end state does not hold: the
+  (:data:`billiard.engine.contact_phases.LIFT_OFF_SPEED`) that the end state does not hold: the
   arc drawn differs from the flight by at most 1e-6 m per second of flight.
 * a **contact stretch** is the centre's path over a phase, on the wall's offset curve. With
   samples, it joins the phase's start state, the samples inside the phase and its end
   state (all exact states). Without them, a rolling or sliding phase is integrated again
   from its start state with the engine's contact equations
-  (:meth:`billiard.contact_phase.ContactModel.run_phase`, no other wall watched, up to
+  (:meth:`billiard.models.contact.ContactModel.run_phase`, no other wall watched, up to
   the phase's duration); the points are then on the offset curve by construction and the
   phase's recorded end state closes the stretch. Should that fail (or end more than
   :data:`AGREE` from the recorded end) the stretch is the path along the offset curve in
@@ -41,9 +41,9 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..scene import Scene
-from .common import Columns, RunDataError, column
-from .flights import arc_count, flight_from_state
+from billiard.plot.common import Columns, RunDataError, column
+from billiard.plot.flights import arc_count, flight_from_state
+from billiard.scene.scene import Scene
 
 __all__ = [
     "AGREE",
@@ -226,8 +226,8 @@ class _Rebuild:
     """Rebuilds contact stretches with the scene's contact equations and curve."""
 
     def __init__(self, scene: Scene):
-        from ..contact_phase import ContactModel
-        from ..drive import Drive
+        from billiard.geometry.drive import Drive
+        from billiard.models.contact import ContactModel
 
         self.scene = scene
         self.drive = Drive.from_scene(scene.drive)
@@ -238,7 +238,7 @@ class _Rebuild:
 
     def walls(self) -> tuple | None:
         if not self._loaded:
-            from .outline import _curve
+            from billiard.plot.outline import _curve
 
             self._loaded = True
             try:
@@ -362,7 +362,7 @@ class _Rebuild:
     ) -> tuple[np.ndarray, np.ndarray] | None:
         """The phase integrated again from its start state, at ``times``; None if the
         integration fails or ends before the last time."""
-        from ..errors import SimulationError
+        from billiard.errors import SimulationError
 
         model = self.model
         theta0 = self.drive.angle(t0)

@@ -14,9 +14,9 @@ from collections.abc import Callable
 
 import numpy as np
 
-from ..generated import ball as _ball
-from ..scene import Scene
-from .common import Columns, RunDataError, column
+from billiard.generated import ball as _ball
+from billiard.plot.common import Columns, RunDataError, column
+from billiard.scene.scene import Scene
 
 __all__ = ["arc_count", "arcs", "flight_from_state", "flight_label", "flight_positions"]
 

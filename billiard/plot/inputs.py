@@ -4,8 +4,8 @@ from __future__ import annotations
 
 import math
 
-from ..camera import parse_frame_interval
-from .common import RunDataError, Window
+from billiard.analysis.camera import parse_frame_interval
+from billiard.plot.common import RunDataError, Window
 
 __all__ = ["checked_interval", "parse_frame_interval", "parse_window"]
 

@@ -7,7 +7,7 @@ import numpy as np
 from matplotlib.axes import Axes
 from matplotlib.lines import Line2D
 
-from .common import (
+from billiard.plot.common import (
     LID_COLOR,
     MM,
     MODEL_COLOR,
@@ -22,8 +22,8 @@ from .common import (
     square_limits,
     uniform_legend_markers,
 )
-from .inputs import checked_interval
-from .titles import camera_label
+from billiard.plot.inputs import checked_interval
+from billiard.plot.titles import camera_label
 
 __all__ = ["return_map", "time_map"]
 
@@ -43,7 +43,7 @@ def return_map(columns: Columns, ax: Axes, *, frame_interval: float | None = Non
         ax: the axes to draw in.
         frame_interval: if given (s), also draw, as hollow rings beneath the model's dots,
             the return map of the impacts a camera with this frame interval would have
-            recorded (see :func:`billiard.camera.camera_filter`).
+            recorded (see :func:`billiard.analysis.camera.camera_filter`).
 
     Returns:
         The data lines: the model's pairs without a lid impact (x data ``q2,n`` and y data

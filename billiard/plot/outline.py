@@ -1,6 +1,6 @@
 """The moving boundary as drawn: its outline y = f(x) and the drive's displacement D(t).
 
-The outline uses only :meth:`billiard.curves.CurveModel.f` (the curve's height, m) and
+The outline uses only :meth:`billiard.geometry.curves.CurveModel.f` (the curve's height, m) and
 its ``breakpoints`` (the x of its kinks, added to every grid so that a wedge's vertex is
 drawn sharp).
 """
@@ -11,9 +11,9 @@ from collections.abc import Callable
 
 import numpy as np
 
-from ..curves import load_curve
-from ..scene import Scene
-from .common import RunDataError
+from billiard.geometry.curves import load_curve
+from billiard.plot.common import RunDataError
+from billiard.scene.scene import Scene
 
 __all__ = ["boundary_function", "boundary_outline", "drive_offset"]
 

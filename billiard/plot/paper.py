@@ -1,5 +1,5 @@
 """Figures in the layout of the paper's Figs. 2 and 3, several runs side by side (used by
-:mod:`billiard.reproduce`)."""
+:mod:`billiard.reproduce.paper`)."""
 
 from __future__ import annotations
 
@@ -10,8 +10,7 @@ from pathlib import Path
 from matplotlib.axes import Axes
 from matplotlib.lines import Line2D
 
-from ..scene import Scene
-from .common import (
+from billiard.plot.common import (
     LID_COLOR,
     MODEL_COLOR,
     Columns,
@@ -23,11 +22,12 @@ from .common import (
     new_figure,
     save,
 )
-from .inputs import checked_interval
-from .maps import return_map, time_map
-from .phase import PHASE_CAPTION, phase_plot
-from .run import load_run
-from .titles import short_label
+from billiard.plot.inputs import checked_interval
+from billiard.plot.maps import return_map, time_map
+from billiard.plot.phase import PHASE_CAPTION, phase_plot
+from billiard.plot.run import load_run
+from billiard.plot.titles import short_label
+from billiard.scene.scene import Scene
 
 __all__ = ["paper_figure", "paper_models_figure", "paper_phase_figure"]
 

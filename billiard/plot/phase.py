@@ -8,10 +8,14 @@ from matplotlib.axes import Axes
 from matplotlib.lines import Line2D
 from matplotlib.ticker import MultipleLocator
 
-from ..errors import GeometryError
-from ..phase import DEFAULT_PHASE_REFERENCE, PHASE_REFERENCES, normalized_points, phase_frame
-from ..scene import Scene
-from .common import (
+from billiard.analysis.phase import (
+    DEFAULT_PHASE_REFERENCE,
+    PHASE_REFERENCES,
+    normalized_points,
+    phase_frame,
+)
+from billiard.errors import GeometryError
+from billiard.plot.common import (
     MODEL_COLOR,
     Columns,
     RunDataError,
@@ -22,8 +26,9 @@ from .common import (
     rings,
     uniform_legend_markers,
 )
-from .inputs import checked_interval
-from .titles import camera_label
+from billiard.plot.inputs import checked_interval
+from billiard.plot.titles import camera_label
+from billiard.scene.scene import Scene
 
 __all__ = [
     "PHASE_CAPTION",
@@ -35,7 +40,7 @@ __all__ = [
 ]
 
 #: Axis labels of the phase plot: the normalizations, with their units (h0 and E0 are
-#: defined in :mod:`billiard.phase`, and for a caption by :func:`phase_caption`).
+#: defined in :mod:`billiard.analysis.phase`, and for a caption by :func:`phase_caption`).
 PHASE_XLABEL = (
     "normalized tangential velocity $u_4/u_{4,max}$\n"
     "$u_4$ (m/s) over $u_{4,max} = \\sqrt{2E_0/m}$ (m/s)"
@@ -54,7 +59,7 @@ _ZERO_TEXT = {
 
 def phase_caption(reference: str = DEFAULT_PHASE_REFERENCE) -> str:
     """What E0 and h0 are under a phase reference (a key of
-    :data:`billiard.phase.PHASE_REFERENCES`), for a caption under the phase plot."""
+    :data:`billiard.analysis.phase.PHASE_REFERENCES`), for a caption under the phase plot."""
     ref = PHASE_REFERENCES[reference]
     kinds = "translation and spin" if ref.spin else "translation (spin left out)"
     return (
@@ -73,8 +78,8 @@ def phase_coordinates(
 ) -> tuple[np.ndarray, np.ndarray]:
     """Normalized tangential velocity and height after each impact.
 
-    Under a phase reference of :data:`billiard.phase.PHASE_REFERENCES` (default
-    :data:`billiard.phase.DEFAULT_PHASE_REFERENCE`), with h0 its zero of potential energy
+    Under a phase reference of :data:`billiard.analysis.phase.PHASE_REFERENCES` (default
+    :data:`billiard.analysis.phase.DEFAULT_PHASE_REFERENCE`), with h0 its zero of potential energy
     (m) and E0 the energy it shares out (J; from the ``energy`` column, the height h0 and,
     when the spin is left out, the ``omega`` column), m the ball's mass
     (``scene.ball.mass``, kg) and g the gravity (``scene.run.gravity``, m/s^2):

@@ -10,11 +10,8 @@ import numpy as np
 from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 
-from ..runfolder import FIGURE_NAMES
-from ..scene import Scene, SceneError, scene_from_toml
-from ..userfile import MAX_SCENE_BYTES, FileRefused, read_limited
-from .animation import animate
-from .common import (
+from billiard.plot.animation import animate
+from billiard.plot.common import (
     SINGLE_SIZE,
     Columns,
     RunDataError,
@@ -25,17 +22,20 @@ from .common import (
     save,
     uniform_legend_markers,
 )
-from .inputs import checked_interval
-from .maps import return_map, time_map
-from .phase import PHASE_CAPTION, phase_plot
-from .titles import scene_title
-from .trajectory import trajectory, window_rows
+from billiard.plot.inputs import checked_interval
+from billiard.plot.maps import return_map, time_map
+from billiard.plot.phase import PHASE_CAPTION, phase_plot
+from billiard.plot.titles import scene_title
+from billiard.plot.trajectory import trajectory, window_rows
+from billiard.runfile.folder import FIGURE_NAMES
+from billiard.scene.scene import Scene, SceneError, scene_from_toml
+from billiard.scene.userfile import MAX_SCENE_BYTES, FileRefused, read_limited
 
 __all__ = ["FIGURE_NAMES", "load_run", "load_sides", "plot_run", "read_scene"]
 
 
 def read_scene(path: str | os.PathLike[str]) -> Scene:
-    """Read and validate a run's ``scene.toml`` (see :func:`billiard.scene.scene_from_toml`).
+    """Read and validate a run's ``scene.toml`` (see :func:`billiard.scene.scene.scene_from_toml`).
 
     Raises:
         RunDataError: the file is missing or unreadable (one line, naming it).
@@ -85,7 +85,7 @@ def load_sides(
     Raises:
         RunDataError: a file is present but cannot be read (one line, naming it).
     """
-    from ..sidecsv import CONTACTS_NAME, TRAJECTORY_NAME, read_side_csv
+    from billiard.runfile.sidecsv import CONTACTS_NAME, TRAJECTORY_NAME, read_side_csv
 
     out: list[dict[str, np.ndarray] | None] = []
     for name in (CONTACTS_NAME, TRAJECTORY_NAME):
@@ -214,7 +214,7 @@ def plot_run(
 
     With ``frame_interval`` (s), the maps also show, as hollow rings in a second colour,
     the data a camera with that frame interval would have recorded (the experiment missed
-    impacts in rapid succession; see :func:`billiard.camera.camera_filter`), with the
+    impacts in rapid succession; see :func:`billiard.analysis.camera.camera_filter`), with the
     frame interval and impact counts in the legend, and the trajectory rings the impacts
     the camera would have seen. The files keep the same names.
 

@@ -4,8 +4,8 @@ from __future__ import annotations
 
 import textwrap
 
-from ..scene import Scene
-from .common import MM
+from billiard.plot.common import MM
+from billiard.scene.scene import Scene
 
 __all__ = ["camera_label", "fmt", "scene_title", "short_label"]
 

@@ -9,8 +9,7 @@ from typing import Any
 import numpy as np
 from matplotlib.axes import Axes
 
-from ..scene import Scene
-from .common import (
+from billiard.plot.common import (
     CAMERA_COLOR,
     MM,
     MODEL_COLOR,
@@ -21,11 +20,12 @@ from .common import (
     camera_filter,
     column,
 )
-from .contacts import MODE_LABELS, MODE_STYLES, MODES, Side, joined, phase_path
-from .flights import arcs, flight_label
-from .inputs import checked_interval
-from .outline import boundary_function, boundary_outline
-from .titles import fmt
+from billiard.plot.contacts import MODE_LABELS, MODE_STYLES, MODES, Side, joined, phase_path
+from billiard.plot.flights import arcs, flight_label
+from billiard.plot.inputs import checked_interval
+from billiard.plot.outline import boundary_function, boundary_outline
+from billiard.plot.titles import fmt
+from billiard.scene.scene import Scene
 
 __all__ = ["default_window", "trajectory", "view", "window_rows"]
 

@@ -30,8 +30,8 @@ from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
-from billiard.scene import Scene, SceneError, load_scene
-from billiard.userfile import FileRefused, read_limited
+from billiard.scene.scene import Scene, SceneError, load_scene
+from billiard.scene.userfile import FileRefused, read_limited
 
 __all__ = [
     "Axis",
@@ -134,7 +134,7 @@ class Sweep:
     settings_order: tuple[str, ...] = field(default=_SETTINGS, repr=False, compare=False)
 
     def __post_init__(self) -> None:
-        from billiard.spec import MAX_COLLISIONS
+        from billiard.scene.spec import MAX_COLLISIONS
 
         # every number is checked here, before any point runs: a value no point can run
         # with (a duration of 1e300 s) would otherwise fail every point one by one
@@ -153,7 +153,7 @@ class Sweep:
                     f"sweep setting '{name}' must be true or false, got {getattr(self, name)!r}"
                 )
         if self.duration is not None:
-            from billiard.checks import LIMITS
+            from billiard.scene.checks import LIMITS
 
             limit = LIMITS["run.duration"]  # the scene's own limit on simulated time
             _check_range("duration", self.duration, limit.low, limit.high, limit.unit)
@@ -369,7 +369,7 @@ def parse_vary(text: str) -> Axis:
 
 def check_keys(scene: Scene, axes: Sequence[Axis]) -> None:
     """Refuse an axis whose key is not a scene key (with the scene's did-you-mean hint)."""
-    from billiard.scene import with_values
+    from billiard.scene.scene import with_values
 
     for axis in axes:
         if axis.key in ("name", "description"):
@@ -497,7 +497,7 @@ def read_sweep_file(
 def load_base_scene(name: str, overrides: Sequence[str], relative_to: Path | None = None) -> Scene:
     """A built-in scene or a scene file (relative to ``relative_to`` when given), with
     ``overrides`` (``"KEY=VALUE"``) applied."""
-    from billiard.scene import builtin_scene_names
+    from billiard.scene.scene import builtin_scene_names
 
     if relative_to is not None and name not in builtin_scene_names():
         name = str(relative_to / name)

@@ -203,8 +203,9 @@ def prepare(sweep: Sweep, skip_invalid: bool = False) -> dict[int, str]:
         SweepError: a point's scene is invalid (naming the point and the key), unless
             ``skip_invalid``, which records such points as ``invalid`` instead.
     """
-    from billiard import simulate, with_values
-    from billiard.curves import load_curve
+    from billiard.geometry.curves import load_curve
+    from billiard.run.simulate import simulate
+    from billiard.scene.scene import with_values
 
     per_point = any(a.key.startswith(_GEOMETRY_PREFIXES) for a in sweep.axes)
     checked: OrderedDict[Any, str | None] = OrderedDict()  # a bounded memory of checks
@@ -434,7 +435,7 @@ def _check_new_dir(directory: Path) -> None:
 def _start_dir(directory: Path, sweep: Sweep) -> None:
     _check_new_dir(directory)  # again: the folder may have changed while points were checked
     directory.mkdir(parents=True, exist_ok=True)
-    from billiard.scene import scene_to_toml
+    from billiard.scene.scene import scene_to_toml
 
     scene_text, sweep_text = scene_to_toml(sweep.scene), sweep_to_toml(sweep)
     digest = digest_lines({SWEEP_NAME: sweep_text.encode(), SCENE_NAME: scene_text.encode()})
@@ -565,7 +566,7 @@ def run_sweep(
                 f"done: {len(computed)} points in {elapsed:.2f} s on {where} "
                 f"({progress.impacts / max(elapsed, 1e-9):,.0f} impacts/s)"
             )
-        from billiard.scene import scene_to_toml
+        from billiard.scene.scene import scene_to_toml
 
         outcome = SweepOutcome(directory, directory / RESULT_NAME, computed, where)
         records = _summarised(store.records(), outcome)
@@ -598,7 +599,7 @@ def _summarised(records: Iterable[dict[str, Any]], outcome: SweepOutcome) -> Ite
 def _tasks(sweep: Sweep, store: PointStore) -> Iterator[PointTask]:
     """The points still to compute, in index order, each made when a worker can take it
     (a grid's tasks, scenes included, are never all held)."""
-    from billiard import with_values
+    from billiard.scene.scene import with_values
 
     settings = sweep.settings()
     for index in range(sweep.size):

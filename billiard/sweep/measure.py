@@ -46,8 +46,8 @@ def _rest_height(scene: Any) -> float:
     The engine places a ball without a start position at rest on the bottom when it is
     set up; nothing is simulated (a run from rest under ``contact.model = "phases"`` may
     roll for ever, and the set-up gives the same height a one-impact run reports)."""
-    from billiard import with_values
-    from billiard.simulate import Simulation
+    from billiard.run.simulate import Simulation
+    from billiard.scene.scene import with_values
 
     at_rest = with_values(
         scene,
@@ -101,7 +101,7 @@ def measure_point(task: PointTask) -> dict[str, Any]:
 
 
 def _measure(task: PointTask) -> dict[str, Any]:
-    from billiard import simulate
+    from billiard.run.simulate import simulate
 
     s = task.settings
     scene = task.scene
@@ -160,7 +160,7 @@ def _measure(task: PointTask) -> dict[str, Any]:
         drive_periods = round(float(np.sum(tof[-period:])) * scene.drive.frequency)
     lyap = lyap_s = None
     if s["lyapunov"]:
-        from billiard.analysis import lyapunov_exponent
+        from billiard.analysis.lyapunov import lyapunov_exponent
 
         estimate = lyapunov_exponent(scene, impacts=impacts, transient=transient)
         lyap, lyap_s = _finite(estimate.per_impact), _finite(estimate.per_second)

@@ -1,0 +1,3 @@
+"""Analyses of runs: Lyapunov exponent, calibration, the camera's view, the paper's phase
+point.
+"""

@@ -1,0 +1,15 @@
+"""The engine: one :class:`Simulation` built from a scene, its state, interrupts and
+progress.
+
+:mod:`~billiard.engine.simulation` (the :class:`Simulation`),
+:mod:`~billiard.engine.kernel_engine` (its runs on the compiled kernels),
+:mod:`~billiard.engine.event_step` and :mod:`~billiard.engine.contact_phases` (one event,
+and the contact phases, on the models' classes), :mod:`~billiard.engine.flights` (the
+flights between contact phases on the kernels), :mod:`~billiard.engine.state` (the ball
+and the engine state), :mod:`~billiard.engine.ctx` (the kernels' state vector from a
+simulation), :mod:`~billiard.engine.interrupt` and :mod:`~billiard.engine.progress`.
+"""
+
+from billiard.engine.simulation import Simulation
+
+__all__ = ["Simulation"]

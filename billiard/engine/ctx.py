@@ -1,0 +1,149 @@
+"""The engine state in the state vector ``ctx``, and back.
+
+:func:`state_vector` builds ``ctx`` for a :class:`billiard.engine.simulation.Simulation` (the
+scene's constants, the surfaces, the warm starts and the engine state);
+:func:`write_state` puts an :class:`~billiard.engine.state.EngineState` into an existing
+``ctx`` and :func:`engine_state` reads it back, so a checkpoint written by either engine
+continues bit for bit. Plain Python (not compiled): these run once per run or step.
+
+Slots (``layout.py``): the ball at ``EN_T`` .. ``EN_Q3``; the collapse window as a ring
+of ``RING`` slots at ``RECENT`` (oldest at ``EN_RHEAD``, ``EN_RCOUNT`` of them); the
+regime counters at ``COUNTS`` (stick, slip, elastic, resting); the warm start of
+surface ``j`` in its block (``S_WS``, ``S_WSLOPE``); the flight's step proposal at
+``FL_H``. The locator carries nothing from one flight to the next.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from typing import Any
+
+from billiard.engine.state import BallState, EngineState
+from billiard.geometry.surfaces import FlatLid, OffsetWall
+from billiard.kernels import layout as L
+from billiard.kernels.rules import COLLAPSE_COUNT
+from billiard.models.flight import AdaptiveFlight, ExactFlight, RK4Flight
+
+__all__ = ["COUNT_KEYS", "RING", "engine_state", "state_vector", "write_ball", "write_state"]
+
+#: slots of the collapse window's ring
+RING = COLLAPSE_COUNT + 1
+#: the counters at COUNTS, in order
+COUNT_KEYS = ("stick", "slip", "elastic", "resting")
+_BALL = (L.EN_T, L.EN_THETA, L.EN_Q1, L.EN_Q2, L.EN_U1, L.EN_U2, L.EN_U3, L.EN_Q3)
+
+
+def _ball_values(ball: BallState) -> tuple[float, ...]:
+    return (ball.t, ball.theta, ball.q1, ball.q2, ball.u1, ball.u2, ball.u3, ball.q3)
+
+
+def _flight_constants(ctx: list[float], fl: Any) -> None:
+    if not isinstance(fl, (ExactFlight, AdaptiveFlight, RK4Flight)):
+        raise ValueError(f"the kernels have no flight model {type(fl).__name__}")
+    # the model's constants and step proposal, as its own ctx holds them
+    ctx[L.FL_KIND : L.FL_U3] = fl.ctx[L.FL_KIND : L.FL_U3]
+
+
+def _surface_constants(ctx: list[float], j: int, surface: Any) -> None:
+    if not isinstance(surface, (OffsetWall, FlatLid)):
+        raise ValueError(f"the kernels have no surface {type(surface).__name__}")
+    base = L.SURF + j * L.SURF_STRIDE
+    ctx[base : base + L.S_WS] = surface.block()
+
+
+def state_vector(sim: Any) -> list[float]:
+    """The kernels' ``ctx`` (a list of floats) for ``sim`` in its current engine state.
+
+    Raises:
+        ValueError: a flight model or surface the kernels do not have.
+    """
+    ctx = [0.0] * L.SIZE
+    # the drive and the locator's substep lengths, as the locator's own ctx holds them
+    loc = sim.locator.ctx
+    ctx[L.AMP : L.H_BRACKET + 1] = loc[L.AMP : L.H_BRACKET + 1]
+    if sim.method == "rk4":
+        # the fixed-step detection's constants and memory, as its own ctx holds them
+        ctx[L.RK : L.RK_END] = loc[L.RK : L.RK_END]
+    surfaces = sim.boundary.surfaces
+    ctx[L.NSURF] = float(len(surfaces))
+    _flight_constants(ctx, sim.flight)
+    # Kane and Levinson's law (see supports): its coefficients, as its own ctx holds them
+    ctx[L.IM_M : L.IM_EB + 1] = sim.impact.ctx[L.IM_M : L.IM_EB + 1]
+    for j, surface in enumerate(surfaces):
+        _surface_constants(ctx, j, surface)
+        base = L.SURF + j * L.SURF_STRIDE
+        warm = sim.warm[j]
+        ctx[base + L.S_WS] = float(warm[0])
+        ctx[base + L.S_WSLOPE] = float(warm[1])
+    ctx[L.EN_UNTIL] = sim.end_time
+    write_state(ctx, sim.state)
+    return ctx
+
+
+def write_ball(ctx: Any, ball: BallState) -> None:
+    """Start the event count afresh from ``ball`` (as ``Simulation.reset``): the
+    regime counters, warm starts and the flight's step proposal are kept."""
+    for slot, value in zip(_BALL, _ball_values(ball), strict=True):
+        ctx[slot] = value
+    ctx[L.EN_IMPACTS] = 0.0
+    ctx[L.EN_CLOCK] = ball.t
+    ctx[L.EN_CLOCK_ERR] = 0.0
+    ctx[L.EN_ZERO] = 0.0
+    ctx[L.EN_RCOUNT] = 0.0
+    ctx[L.EN_RHEAD] = 0.0
+    ctx[L.EN_FAULT] = 0.0
+
+
+def write_state(ctx: Any, state: EngineState) -> None:
+    """Put ``state`` into ``ctx`` (the collapse window written oldest first from slot 0;
+    no pending stop). The state's walls are the warm starts of the first surfaces."""
+    for slot, value in zip(_BALL, _ball_values(state.ball), strict=True):
+        ctx[slot] = value
+    ctx[L.EN_IMPACTS] = float(state.impacts)
+    ctx[L.EN_CLOCK] = state.clock
+    ctx[L.EN_CLOCK_ERR] = state.clock_error
+    ctx[L.EN_ZERO] = float(state.zero_flights)
+    recent = tuple(state.recent)
+    if len(recent) > RING:
+        raise ValueError(f"a collapse window of {len(recent)} impacts (at most {RING})")
+    for i, t in enumerate(recent):
+        ctx[L.RECENT + i] = t
+    ctx[L.EN_RCOUNT] = float(len(recent))
+    ctx[L.EN_RHEAD] = 0.0
+    ctx[L.EN_FAULT] = 0.0
+    for i, key in enumerate(COUNT_KEYS):
+        ctx[L.COUNTS + i] = float(state.counts.get(key, 0))
+    for j, (s, slope) in enumerate(state.walls):
+        base = L.SURF + j * L.SURF_STRIDE
+        ctx[base + L.S_WS] = s
+        ctx[base + L.S_WSLOPE] = slope
+    if ctx[L.FL_KIND] == L.FLIGHT_ADAPTIVE and "step" in state.flight:
+        ctx[L.FL_H] = state.flight["step"]
+
+
+def engine_state(ctx: Any, regimes: Sequence[str], walls: int) -> EngineState:
+    """The :class:`EngineState` held by ``ctx`` (flight mode: the impacts model):
+    ``regimes`` name the counters (then ``resting``), ``walls`` is how many surfaces
+    carry a warm start (the offset walls, which come first)."""
+    ball = BallState(*(float(ctx[slot]) for slot in _BALL))
+    head, count = int(ctx[L.EN_RHEAD]), int(ctx[L.EN_RCOUNT])
+    recent = tuple(float(ctx[L.RECENT + (head + i) % RING]) for i in range(count))
+    counts = {key: int(ctx[L.COUNTS + COUNT_KEYS.index(key)]) for key in (*regimes, "resting")}
+    warm = []
+    for j in range(walls):
+        base = L.SURF + j * L.SURF_STRIDE
+        warm.append((float(ctx[base + L.S_WS]), float(ctx[base + L.S_WSLOPE])))
+    adaptive = ctx[L.FL_KIND] == L.FLIGHT_ADAPTIVE
+    return EngineState(
+        ball=ball,
+        impacts=int(ctx[L.EN_IMPACTS]),
+        clock=float(ctx[L.EN_CLOCK]),
+        clock_error=float(ctx[L.EN_CLOCK_ERR]),
+        zero_flights=int(ctx[L.EN_ZERO]),
+        recent=recent,
+        counts=counts,
+        walls=tuple(warm),
+        flight={"step": float(ctx[L.FL_H])} if adaptive else {},
+        locator={},
+        phase_time={"roll": 0.0, "slide": 0.0, "held": 0.0},
+    )

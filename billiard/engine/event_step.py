@@ -1,0 +1,180 @@
+"""One event of the engine on the runtime's classes: locate the next impact, apply the
+impact law, record it, keep the clock and the collapse window (a mixin of
+:class:`billiard.engine.simulation.Simulation`, working on its state).
+
+A run normally makes its impacts with :func:`billiard.kernels.loop.step` on the kernels
+(:mod:`billiard.engine.kernel_engine`; under contact phases the flights between them,
+:mod:`billiard.engine.flights`), the same operations in the same order; this step runs
+when the kernels cannot (trajectory samples, an impact law replaced after construction),
+for :meth:`Simulation.step` under contact phases, and after a contact phase's impact.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+from billiard.engine.contact_phases import (
+    COLLAPSE_COUNT,
+    COLLAPSE_SPAN,
+    ZERO_FLIGHT_LIMIT,
+    compensated_add,
+)
+from billiard.engine.state import BallState
+from billiard.errors import SimulationError
+from billiard.generated import ball as _ball
+from billiard.models.event_locator import Event
+from billiard.models.impact import Contact
+from billiard.runfile.record import COLUMNS, ContactRecord, ImpactRecord
+from billiard.status import Status
+
+__all__ = ["EventStep", "check_finite"]
+
+# Floats of a record, by column name, for naming the culprit of a non-finite state.
+_ROW_FLOATS = tuple(name for name in COLUMNS if name not in ("n", "regime", "wall"))
+
+
+class EventStep:
+    """The engine's one event on the classes (mixed into ``Simulation``)."""
+
+    _impacts: int
+    _ball: BallState
+    _fault: Any
+
+    def _pressing(self, ev: Event) -> bool:
+        """Does the ball's acceleration relative to the boundary push it into the surface
+        it touches (d2G/dt2 < 0)?"""
+        px, py, vx, vy = self.drive.to_boundary_frame(ev.theta, ev.q1, ev.q2, ev.u1, ev.u2)
+        a1, a2 = self.flight.acceleration(ev.u1, ev.u2)
+        ab = self.drive.acceleration(ev.theta)
+        ax, ay = (a1 - ab, a2) if self.drive.horizontal else (a1, a2 - ab)
+        return ev.surface.gap_accel(px, py, vx, vy, ax, ay, self.warm[ev.index]) < 0.0
+
+    def _step(self, until: float) -> ImpactRecord | ContactRecord | None:
+        if self._mode != "flight":
+            return self._contact_step(until)
+        state = self._ball
+        n = self._impacts
+        try:
+            ev = self.locator.locate(state.theta, state.q1, state.q2, state.u1, state.u2, state.u3)
+        except SimulationError as exc:
+            raise SimulationError(
+                f"{exc} after impact {n} (t = {state.t:.9g} s)", exc.status
+            ) from None
+        tau = ev.tau
+        total, error = compensated_add(self._clock, self._clock_error, tau)
+        t = total + error
+        if self.on_sample is not None:
+            self._sample_flight_to(state, min(t, until))
+        if t > until:
+            return None
+        if ev.surface.kind == "escape":
+            raise SimulationError(
+                f"ball escaped above escape_height = {self.scene.boundary.escape_height!r} m "
+                f"at t = {t:.9g} s after impact {n}",
+                Status.ESCAPED,
+            )
+        q3 = state.q3 + state.u3 * tau
+        before = BallState(t, ev.theta, ev.q1, ev.q2, ev.u1, ev.u2, state.u3, q3)
+        vb1, vb2 = self.drive.boundary_velocity(ev.theta)
+        try:
+            res = self.impact.apply(before, Contact(ev.z, vb1, vb2, self._pressing(ev)))
+        except SimulationError as exc:
+            raise SimulationError(f"{exc} at impact {n + 1} (t = {t:.9g} s)", exc.status) from None
+        u4, un = _ball.frame_velocity(res.u1, res.u2, ev.z)
+        energy = _ball.energy(ev.q2, res.u1, res.u2, res.u3, *self._ball_constants)
+        record = ImpactRecord(
+            n + 1,
+            t,
+            ev.q1,
+            ev.q2,
+            res.u1,
+            res.u2,
+            res.u3,
+            u4,
+            un,
+            tau,
+            res.regime,
+            ev.z,
+            energy,
+            ev.surface.label,
+            res.Rt,
+            res.Rn,
+            ev.s,
+            q3,
+        )
+        # a non-finite number is never recorded (the sum of finite numbers of physical
+        # size is finite, so one addition chain tests them all)
+        if not math.isfinite(
+            t + ev.q1 + ev.q2 + res.u1 + res.u2 + res.u3 + u4 + un + tau + ev.z + energy
+            + res.Rt + res.Rn + ev.s + q3
+        ):  # fmt: skip
+            check_finite(record)
+        # commit: from here on nothing can fail, so the state always matches the records
+        self._impacts = n + 1
+        self._last_impact = t
+        self._ball = BallState(t, ev.theta, ev.q1, ev.q2, res.u1, res.u2, res.u3, q3)
+        self._clock, self._clock_error = total, error
+        counts = self._counts
+        counts[res.regime] = counts.get(res.regime, 0) + 1
+        if res.resting:
+            counts["resting"] += 1
+        self._zero_flights = self._zero_flights + 1 if tau == 0.0 else 0
+        # collapse window: the impact times within COLLAPSE_SPAN of this one (the times
+        # are non-decreasing, so those form the deque's tail)
+        recent = self._recent
+        recent.append(t)
+        while t - recent[0] >= COLLAPSE_SPAN:
+            recent.popleft()
+        self.final_time = t
+        if len(recent) > COLLAPSE_COUNT or self._zero_flights >= ZERO_FLIGHT_LIMIT:
+            self._fault = self._collapse(n + 1, t)
+        if self.phases:
+            self._land(ev.index, ev.s, ev.theta, res, t)
+        return record
+
+    def _collapse(self, n: int, t: float) -> SimulationError | None:
+        """The inelastic-collapse stop after impact n, if the impacts have piled up.
+
+        Two criteria, both meaning that the ball has stopped flying and is in sustained
+        contact, which an impact-only model cannot represent:
+
+        * COLLAPSE_COUNT (200) impacts within COLLAPSE_SPAN (1e-6 s) of simulated time:
+          flights of 5e-9 s on average. Under an acceleration a toward the wall (gravity
+          plus the drive's, 10 to 1000 m/s^2) a hop of duration t rises a t^2 / 8, below
+          1e-14 m here, far below the locators' resolution of the gap (1e-12 m): these
+          are no longer flights. This is what an inelastic collapse looks like: the
+          flight times of a ball bouncing on a table with e < 1 form a geometric series
+          (ratio about e^2) whose sum converges to the time the ball comes to rest, so
+          the impacts accumulate at that point; the criterion stops it within a few
+          hundred impacts of the flights falling below 1e-6 s. 1e-6 s is also
+          negligible against any drive period (0.01 to 1 s). The paper scenes never
+          have two impacts within 1e-6 s in 25,000 impacts each (their shortest flights
+          are 5e-6 s, in the wedge's vertex).
+        * ZERO_FLIGHT_LIMIT (1,000) consecutive impacts with a time of flight of
+          exactly zero, which do not advance the clock at all.
+        """
+        if len(self._recent) > COLLAPSE_COUNT:
+            return SimulationError(
+                f"inelastic collapse: {COLLAPSE_COUNT} impacts within "
+                f"{COLLAPSE_SPAN:g} s of simulated time, at impact {n} (t = {t:.9g} s)",
+                Status.COLLAPSE,
+            )
+        if self._zero_flights >= ZERO_FLIGHT_LIMIT:
+            return SimulationError(
+                f"inelastic collapse: {ZERO_FLIGHT_LIMIT} consecutive impacts with "
+                f"zero time of flight, at impact {n} (t = {t:.9g} s)",
+                Status.COLLAPSE,
+            )
+        return None
+
+
+def check_finite(record: ImpactRecord) -> None:
+    """Raise SimulationError naming the first non-finite quantity of an impact's record."""
+    for name in _ROW_FLOATS:
+        value = getattr(record, name)
+        if not math.isfinite(value):
+            raise SimulationError(
+                f"non-finite state at impact {record.n} (t = {record.t:.9g} s): {name} = {value!r}",
+                Status.NON_FINITE,
+            )

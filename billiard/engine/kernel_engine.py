@@ -1,0 +1,452 @@
+""":class:`billiard.engine.simulation.Simulation` on the kernels (:mod:`billiard.kernels`), for
+Kane and Levinson's law with method ``event`` or ``rk4``: the impact model
+(``contact.model = "impacts"``, the four paper scenes), and the flights between contact
+phases (``contact.model = "phases"``, :mod:`billiard.engine.flights`). Compiled by numba
+when it is there, interpreted otherwise (or with ``NUMBA_DISABLE_JIT=1``): one source
+either way.
+
+:class:`KernelEngine` owns the engine state as the state vector ``ctx``
+(:mod:`billiard.engine.ctx`); the warm starts, the flight's step proposal and the
+rk4 locator's memory stay with the ``Simulation``'s objects (``sim.warm``,
+``sim.flight``, ``sim.locator``), which the geometry queries outside the event loop
+share, and are copied into ``ctx`` before and out of it after every call. A fixed-step
+search that needs the curve's global nearest point (``E_FOOT``) is answered here and
+runs again (:func:`billiard.models.rk4_locator.answer_foot`).
+
+A run calls :func:`billiard.kernels.loop.run_chunk` chunk by chunk (64 impacts first,
+doubling to 4096 while a chunk takes under 0.05 s) and hands the rows out as today's loop
+hands out records: to the recorder (as arrays when it takes them), ``on_record`` after
+each, ``progress`` every 100 impacts. A stop request seen after impact K of a chunk stops
+the run there: ``ctx`` goes back to the chunk's start and the chunk runs again up to K,
+which reproduces the state after impact K bit for bit (the run is deterministic).
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from collections.abc import Callable
+from typing import Any
+
+import numpy as np
+
+from billiard import jit as _jit
+from billiard.engine.ctx import COUNT_KEYS, engine_state, state_vector, write_ball, write_state
+from billiard.engine.interrupt import RunInterrupted, StopRequest
+from billiard.engine.progress import report_time
+from billiard.errors import SimulationError
+from billiard.kernels import layout as L
+from billiard.kernels.interpreted import stop_text
+from billiard.models.rk4_locator import answer_foot
+from billiard.runfile.record import MemoryRecorder
+from billiard.runfile.rows import as_block, record_of
+from billiard.runfile.stream import CsvRecorder
+from billiard.status import Status
+
+__all__ = ["FIRST_CHUNK", "LAST_CHUNK", "KernelEngine", "rows_sink", "supports"]
+
+#: impacts of the first chunk of a run, and of the longest
+FIRST_CHUNK = 64
+LAST_CHUNK = 4096
+#: the fixed-step detection's memory between flights: the departures in a row, the feet
+_FIXED_MEMORY = (
+    slice(L.RK_DEPARTURES, L.RK_DEPARTURES + 1),
+    slice(L.RK_FEET, L.RK_FEET + L.MAX_SURFACES),
+)
+#: a chunk that took less wall time (s) than this is followed by one twice as long
+_FAST_CHUNK = 0.05
+_PROGRESS_EVERY = 100
+
+
+def supports(sim: Any, *, flights: bool = False) -> str | None:
+    """None when ``sim`` runs on the kernels (``flights``: its flights between contact
+    phases, under ``contact.model = "phases"``), else why not."""
+    if sim.method not in ("event", "rk4"):
+        return f"method {sim.method!r} (the kernels have the event and rk4 locators only)"
+    if sim.phases and not flights:
+        return "contact.model = 'phases' (the kernels run its flights only)"
+    if len(sim.boundary.surfaces) > L.MAX_SURFACES:
+        return f"more than {L.MAX_SURFACES} surfaces"
+    if type(sim.impact).__name__ != "KaneLevinsonImpact":
+        return "an impact law other than Kane-Levinson"
+    if type(sim.flight).__name__ not in ("ExactFlight", "AdaptiveFlight", "RK4Flight"):
+        return f"the flight model {type(sim.flight).__name__}"
+    return None
+
+
+def rows_sink(recorder: Any) -> Callable[[np.ndarray], None] | None:
+    """``recorder.append_rows`` when the recorder takes rows as arrays (and does not
+    override ``append``, which then has to see every record), else None."""
+    for base in (MemoryRecorder, CsvRecorder):
+        if isinstance(recorder, base) and type(recorder).append is base.append:
+            return recorder.append_rows
+    return None
+
+
+class KernelEngine:
+    """The state vector of one ``Simulation`` and the calls into the kernels."""
+
+    def __init__(self, sim: Any):
+        self.sim = sim
+        #: the impact law the kernels stand for
+        self.law = sim.impact
+        values = state_vector(sim)
+        p = sim.boundary.walls[0].p
+        if _jit.ENABLED:
+            self.ctx: Any = np.array(values, dtype=np.float64)
+            self.params: Any = np.array(p, dtype=np.float64)
+        else:
+            self.ctx, self.params = values, p
+        if sim.phases:
+            # a chunk ends after an impact that settles: the engine lands the ball
+            self.ctx[L.EN_LAND_ON] = 1.0
+            self.ctx[L.EN_LAND_E] = sim.contact_model.e
+            self.ctx[L.EN_LAND_BELOW] = sim.scene.contact.elastic_below
+        self.offsets = len(sim.boundary.offsets)
+        #: when the next checkpoint is due (time.monotonic), as the latest run left it
+        self.next_save = math.inf
+        self.adaptive = self.ctx[L.FL_KIND] == L.FLIGHT_ADAPTIVE
+        #: the paper's fixed-step detection (method rk4): its memory is the locator's
+        self.fixed = sim.method == "rk4"
+        self._buffer: Any = None
+        self._walls: Any = None
+        self._nears: Any = None
+        self._entry: Any = None
+
+    # ------------------------------------------------------------------ state
+
+    def reset(self, ball: Any) -> None:
+        write_ball(self.ctx, ball)
+
+    def restore(self, state: Any) -> None:
+        write_state(self.ctx, state)
+
+    def state(self) -> Any:
+        return engine_state(self.ctx, self.sim.impact.regimes, self.offsets)
+
+    @property
+    def impacts(self) -> int:
+        return int(self.ctx[L.EN_IMPACTS])
+
+    def counts(self) -> dict[str, int]:
+        ctx = self.ctx
+        keys = (*self.sim.impact.regimes, "resting")
+        return {key: int(ctx[L.COUNTS + COUNT_KEYS.index(key)]) for key in keys}
+
+    def set_counts(self, counts: dict[str, int]) -> None:
+        for i, key in enumerate(COUNT_KEYS):
+            self.ctx[L.COUNTS + i] = float(counts.get(key, 0))
+
+    def pending_stop(self) -> SimulationError | None:
+        """The inelastic collapse detected after the last impact, as the engine words it."""
+        ctx = self.ctx
+        if ctx[L.EN_FAULT] == 0.0:
+            return None
+        from billiard.kernels.rules import COLLAPSE_COUNT, COLLAPSE_SPAN, ZERO_FLIGHT_LIMIT
+
+        n, t = int(ctx[L.EN_IMPACTS]), float(ctx[L.EN_T])
+        if ctx[L.EN_RCOUNT] > COLLAPSE_COUNT:
+            return SimulationError(
+                f"inelastic collapse: {COLLAPSE_COUNT} impacts within "
+                f"{COLLAPSE_SPAN:g} s of simulated time, at impact {n} (t = {t:.9g} s)",
+                Status.COLLAPSE,
+            )
+        return SimulationError(
+            f"inelastic collapse: {ZERO_FLIGHT_LIMIT} consecutive impacts with "
+            f"zero time of flight, at impact {n} (t = {t:.9g} s)",
+            Status.COLLAPSE,
+        )
+
+    def _sync_in(self) -> None:
+        """The warm starts and the step proposal, owned by the Simulation's objects."""
+        ctx = self.ctx
+        for j, warm in enumerate(self.sim.warm):
+            base = L.SURF + j * L.SURF_STRIDE
+            ctx[base + L.S_WS] = warm[0]
+            ctx[base + L.S_WSLOPE] = warm[1]
+        if self.adaptive:
+            ctx[L.FL_H] = self.sim.flight._h
+        if self.fixed:
+            for slots in _FIXED_MEMORY:
+                ctx[slots] = self.sim.locator.ctx[slots]
+
+    def _sync_out(self) -> None:
+        ctx = self.ctx
+        for j, warm in enumerate(self.sim.warm):
+            base = L.SURF + j * L.SURF_STRIDE
+            warm[0] = float(ctx[base + L.S_WS])
+            warm[1] = float(ctx[base + L.S_WSLOPE])
+        if self.adaptive:
+            self.sim.flight._h = float(ctx[L.FL_H])
+        if self.fixed:
+            for slots in _FIXED_MEMORY:
+                self.sim.locator.ctx[slots] = [float(x) for x in ctx[slots]]
+
+    # ------------------------------------------------------------------ calls
+
+    def _prepare(self) -> None:
+        from billiard.geometry.wall_functions import near_functions, wall_functions
+
+        _jit.notice()
+        self._walls = wall_functions(self.sim)
+        if self.fixed:
+            self._nears = near_functions(self.sim)
+        if _jit.ENABLED:
+            self._buffer = np.empty(LAST_CHUNK * L.NCOL, dtype=np.float64)
+        else:
+            self._buffer = [0.0] * (LAST_CHUNK * L.NCOL)
+
+    def _call(self, rows: int, first: int = 0) -> tuple[int, int]:
+        """``run_chunk`` (``run_chunk_fixed`` for method rk4) for up to ``rows`` impacts
+        into the row buffer from row ``first`` on; compiled, through the overload's
+        entry point (the dispatcher would type the tuple of wall functions anew on every
+        call, tens of microseconds)."""
+        if self._entry is None:
+            from billiard.kernels.loop import run_chunk, run_chunk_fixed
+
+            if self._walls is None:
+                self._prepare()
+            kernel = run_chunk_fixed if self.fixed else run_chunk
+            args = self._arguments(self._buffer, rows)
+            if not _jit.ENABLED:
+                self._entry = kernel
+            else:
+                from numba import typeof
+
+                signature = tuple(typeof(a) for a in args)
+                kernel.compile(signature)
+                self._entry = kernel.overloads[signature].entry_point
+        out = self._rows_from(first)
+        try:
+            return self._entry(*self._arguments(out, rows))
+        finally:
+            if out is not self._buffer and isinstance(out, list):
+                # interpreted, the rows went into a copy of the list's tail
+                self._buffer[first * L.NCOL :] = out
+
+    def _arguments(self, out: Any, rows: int) -> tuple:
+        if self.fixed:
+            return (self.ctx, self.params, self._walls, self._nears, out, rows)
+        return (self.ctx, self.params, self._walls, out, rows)
+
+    def _chunk(self, rows: int, target: int, until: float) -> tuple[int, int, Exception | None]:
+        """(status, rows written, the stop as a SimulationError or None)."""
+        ctx = self.ctx
+        before = int(ctx[L.EN_IMPACTS])
+        ctx[L.EN_TARGET] = float(target)
+        ctx[L.EN_UNTIL] = until
+        self._sync_in()
+        done = 0
+        try:
+            while True:
+                try:
+                    code, written = self._call(rows - done, done)
+                    done += written
+                    error = None
+                    break
+                except L.KernelError as exc:
+                    if exc.args[0] != L.E_FOOT:
+                        raise
+                    # the fixed-step search asks for the curve's global nearest point:
+                    # answered, the search runs again from its flight's start
+                    done = int(ctx[L.EN_IMPACTS]) - before
+                    answer_foot(ctx, self.sim.boundary)
+        except (L.KernelError, ArithmeticError, ValueError) as exc:
+            code, done = L.DONE, int(ctx[L.EN_IMPACTS]) - before
+            error = self._stop(exc, done)
+        finally:
+            self._sync_out()
+        return code, done, error
+
+    def _rows_from(self, row: int) -> Any:
+        """The row buffer from row ``row`` on."""
+        if row == 0:
+            return self._buffer
+        return self._buffer[row * L.NCOL :]
+
+    def _stop(self, exc: Exception, row: int) -> SimulationError:
+        """The engine's stop for an exception out of the kernels, worded as the
+        interpreted classes worded it (``row``: the row of the impact being made)."""
+        ctx = self.ctx
+        n, t_last, t = int(ctx[L.EN_IMPACTS]), float(ctx[L.EN_T]), float(ctx[L.EN_EVENT_T])
+        if not isinstance(exc, L.KernelError):
+            # only the equations' arithmetic faults are a documented stop (see step)
+            if isinstance(exc, ValueError) and str(exc) != "math domain error":
+                raise exc
+            return SimulationError(
+                f"numerical failure after impact {n} (t = {t_last:.9g} s): "
+                f"{type(exc).__name__}: {exc}",
+                Status.NUMERICAL_FAULT,
+            )
+        code = exc.args[0]
+        if code == L.E_NON_FINITE:
+            from billiard.engine.event_step import check_finite
+
+            try:
+                check_finite(record_of(as_block(self._buffer, row, row + 1)[0].tolist()))
+            except SimulationError as stop:
+                return stop
+            return SimulationError(
+                f"non-finite state at impact {n + 1} (t = {t:.9g} s)", Status.NON_FINITE
+            )
+        if code == L.E_ESCAPED:
+            escape = self.sim.scene.boundary.escape_height
+            return SimulationError(
+                f"ball escaped above escape_height = {escape!r} m "
+                f"at t = {t:.9g} s after impact {n}",
+                Status.ESCAPED,
+            )
+        if code == L.E_COLLAPSE:
+            return self.pending_stop() or SimulationError("inelastic collapse", Status.COLLAPSE)
+        text = stop_text(code, float(ctx[L.EN_ERR_VALUE]))
+        if math.isnan(t):
+            return SimulationError(f"{text} after impact {n} (t = {t_last:.9g} s)")
+        return SimulationError(f"{text} at impact {n + 1} (t = {t:.9g} s)")
+
+    # ------------------------------------------------------------------ step and run
+
+    def step(self, until: float) -> Any:
+        """``Simulation.step``: one impact, its record, or None after ``until``."""
+        fault = self.pending_stop()
+        if fault is not None:
+            raise fault
+        code, done, error = self._chunk(1, self.impacts + 1, until)
+        if error is not None:
+            raise error
+        if done == 0:
+            return None
+        self.sim.final_time = float(self.ctx[L.EN_T])
+        return record_of(as_block(self._buffer, 0, 1)[0].tolist())
+
+    def run(
+        self,
+        collisions: int,
+        recorder: Any,
+        progress: Callable[[int, int], None] | None,
+        checkpoint: Callable[[Any], None] | None,
+        request: StopRequest,
+        until: float,
+        on_record: Callable[[int], None] | None,
+        *,
+        next_save: float | None = None,
+        final_progress: bool = True,
+    ) -> tuple[Status | None, str | None]:
+        """``Simulation.run`` in chunks; returns (status, stop reason). Under contact
+        phases the run also ends after an impact that settles, with status None: the
+        engine puts the ball in contact (and takes no checkpoint before that).
+
+        Args:
+            next_save: when the first checkpoint is due (``time.monotonic``; default a
+                checkpoint interval from now); the run leaves the next in ``next_save``.
+            final_progress: report progress when the run ends.
+        """
+        sim, ctx = self.sim, self.ctx
+        sink = rows_sink(recorder)
+        monotonic = time.monotonic
+        interval = _checkpoint_interval() if checkpoint is not None else math.inf
+        if next_save is None:
+            next_save = monotonic() + interval
+        # chunks end at least as often as checkpoints are asked for (every impact when
+        # the interval is zero): a checkpoint is taken at the end of a chunk
+        fast = min(_FAST_CHUNK, interval)
+        rows = FIRST_CHUNK if fast > 0.0 else 1
+        status, reason = Status.COMPLETE, None
+        try:
+            while self.impacts < collisions:
+                if request.signum:
+                    raise RunInterrupted(request.signum)
+                fault = self.pending_stop()
+                if fault is not None:
+                    raise fault
+                start = self.impacts
+                saved = ctx.copy()
+                began = monotonic()
+                code, done, error = self._chunk(rows, min(collisions, start + rows), until)
+                elapsed = monotonic() - began
+                if done:
+                    sim.final_time = float(ctx[L.EN_T])
+                cut = self._hand_out(
+                    recorder, sink, start, done, collisions, progress, on_record, request
+                )
+                if cut is not None:
+                    # a stop request after impact start + cut: back to the chunk's start
+                    # and up to there again, so that the state matches the records
+                    ctx[:] = saved
+                    self._sync_out()
+                    again, written, error = self._chunk(rows, start + cut, until)
+                    assert error is None and written == cut, (again, written, error)
+                    sim.final_time = float(ctx[L.EN_T])
+                    raise RunInterrupted(request.signum)
+                if error is not None:
+                    raise error
+                if code == L.TIME_LIMIT:
+                    status = Status.TIME_LIMIT
+                    sim.final_time = until
+                    break
+                if code == L.LAND:
+                    status = None
+                    break
+                if checkpoint is not None and monotonic() >= next_save:
+                    checkpoint(sim.state)
+                    next_save = monotonic() + interval
+                fault = self.pending_stop()
+                if fault is not None:
+                    raise fault
+                if elapsed < fast and rows < LAST_CHUNK:
+                    rows *= 2
+        except SimulationError as exc:
+            # a ball at rest ends the run complete: a status, not a stop reason
+            status, reason = exc.status, None if exc.status.finished else str(exc)
+        finally:
+            self.next_save = next_save
+            if progress is not None and final_progress:
+                progress(self.impacts, collisions)
+        return status, reason
+
+    def _hand_out(
+        self,
+        recorder: Any,
+        sink: Callable[[np.ndarray], None] | None,
+        start: int,
+        done: int,
+        collisions: int,
+        progress: Callable[[int, int], None] | None,
+        on_record: Callable[[int], None] | None,
+        request: StopRequest,
+    ) -> int | None:
+        """Give the chunk's rows to the recorder and the hooks, in the order the
+        one-impact loop calls them; returns the row after which a stop was requested
+        (by a hook, before the chunk's last row), else None."""
+        buffer = self._buffer
+        i = 0
+        while i < done:
+            if on_record is not None:
+                j = i + 1
+            elif progress is not None:
+                j = min(
+                    done, (start + i) // _PROGRESS_EVERY * _PROGRESS_EVERY + _PROGRESS_EVERY - start
+                )
+            else:
+                j = done
+            block = as_block(buffer, i, j)
+            if sink is not None:
+                sink(block)
+            else:
+                for row in block.tolist():
+                    recorder.append(record_of(row))
+            n = start + j
+            if on_record is not None:
+                on_record(n)
+            if progress is not None and n % _PROGRESS_EVERY == 0:
+                report_time(progress, float(buffer[(j - 1) * L.NCOL + 1]))  # column 1: t
+                progress(n, collisions)
+            if request.signum and j < done:
+                return j
+            i = j
+        return None
+
+
+def _checkpoint_interval() -> float:
+    from billiard.engine import simulation as engine
+
+    return engine.CHECKPOINT_INTERVAL

@@ -1,0 +1,3 @@
+"""The container: boundary curves, their walls, the drive, and the offset surfaces a ball
+centre stays on.
+"""

@@ -1,0 +1,74 @@
+"""A wall: one smooth piece of a boundary curve, as plain generated functions and the
+parameter array they take (no closures, so compiled code can take the same data).
+
+The generated curve modules (``billiard.generated.curves.*`` and the user's curves) list
+their walls in ``WALLS``; :func:`billiard.geometry.curves.load_curve` binds the parameters into
+:class:`Wall` objects. Every function takes the parameter array ``p`` last:
+``wall.f(x, wall.p)``.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+
+__all__ = ["CURVE_FORMAT", "Wall"]
+
+#: The layout of generated curve modules this runtime reads (their ``FORMAT``).
+CURVE_FORMAT = 6
+
+Params = tuple[float, ...]
+
+
+@dataclass(frozen=True, slots=True)
+class Wall:
+    """One smooth wall of the boundary curve, valid for x in [lo, hi] and extended
+    smoothly beyond (the curve is the maximum of its walls).
+
+    Attributes:
+        index: the wall's number in its curve.
+        lo, hi: the interval of x where this wall is the curve (m).
+        p: the curve's parameter values, in the order of the module's PARAMETER_NAMES.
+        f, df, d2f: height f(x, p) (m), slope, second derivative (1/m).
+        near, dnear: the nearest-point condition g(s, px, py, p) (m) and dg/ds.
+        poly: coefficients (highest power first) of the polynomial whose real roots are
+            the candidate nearest points, poly(px, py, p); None when there is none.
+        d3f: third derivative f'''(x, p) (1/m^2), for the equations of sustained contact
+            (billiard.generated.contact).
+    """
+
+    index: int
+    lo: float
+    hi: float
+    p: Params
+    f: Callable[[float, Params], float]
+    df: Callable[[float, Params], float]
+    d2f: Callable[[float, Params], float]
+    near: Callable[[float, float, float, Params], float]
+    dnear: Callable[[float, float, float, Params], float]
+    poly: Callable[[float, float, Params], tuple[float, ...]] | None
+    d3f: Callable[[float, Params], float]
+
+    def height(self, x: float) -> float:
+        """f(x) (m): not for hot loops, which call ``self.f(x, self.p)`` directly."""
+        return self.f(x, self.p)
+
+
+def nearest_newton(
+    wall: Wall, s: float, px: float, py: float, iterations: int = 50
+) -> tuple[float | None, bool]:
+    """Newton's method on a wall's nearest-point condition
+    g(s) = (s - px) + (f(s) - py) f'(s) = 0 from the start s (m), for the global nearest
+    point: the kernel :func:`billiard.kernels.fixed_step.nearest_newton`, which the
+    fixed-step locator runs, interpreted.
+
+    Returns ``(s, True)`` when a step fell below 1e-15 relative, ``(s, False)`` when the
+    iterations ran out first, and ``(None, False)`` when it met g'(s) <= 0 (a maximum of
+    the distance nearby) or a non-finite s.
+    """
+    from billiard.kernels.interpreted import fixed_step
+
+    s, how = fixed_step.nearest_newton(wall.near, wall.dnear, wall.p, s, px, py, iterations)
+    if how == fixed_step.NEWTON_FAILED:
+        return None, False
+    return s, how == fixed_step.NEWTON_CONVERGED

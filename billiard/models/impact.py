@@ -1,0 +1,208 @@
+"""Impact laws: the jump of the ball's speeds when it hits the moving boundary.
+
+An impact law takes the ball's speeds just before the impact and a :class:`Contact`
+(tangent angle and boundary velocity at the contact point) and returns an
+:class:`ImpactResult`. :class:`KaneLevinsonImpact` is the paper's law; another law only
+needs the same ``apply(state, contact)`` method.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import Any, Protocol
+
+from billiard.kernels.interpreted import ball as _ball
+from billiard.kernels.interpreted import impact as _impact
+from billiard.kernels.interpreted import layout as _L
+
+__all__ = [
+    "IMPACT_LAWS",
+    "Contact",
+    "ImpactLaw",
+    "ImpactResult",
+    "KaneLevinsonImpact",
+    "LowVelocityRule",
+    "REGIME_RTOL",
+    "impact_law",
+]
+
+STICK = "stick"
+SLIP = "slip"
+ELASTIC = "elastic"
+
+#: Relative tolerance of the friction-cone test |Rt| <= mu_s Rn (see
+#: billiard/kernels/impact.py): 16 ulps of the momenta that enter the impulses.
+REGIME_RTOL = _impact.REGIME_RTOL
+
+
+@dataclass(frozen=True, slots=True)
+class Contact:
+    """Where and how the ball touches the boundary.
+
+    Attributes:
+        z: tangent angle of the boundary at the contact point (rad); pi for the lid.
+        vb1, vb2: lab-frame velocity of the boundary (m/s).
+        pressing: the ball's acceleration relative to the boundary points into the
+            surface (it would stay in contact rather than fly off on its own).
+    """
+
+    z: float
+    vb1: float
+    vb2: float
+    pressing: bool = False
+
+
+@dataclass(frozen=True, slots=True)
+class ImpactResult:
+    """Speeds just after an impact and the impulse that produced them.
+
+    Attributes:
+        u1, u2: lab velocity of the centre (m/s); u3: spin (rad/s).
+        Rt, Rn: impulse on the ball along c1 and c2 (N s).
+        regime: ``"stick"``, ``"slip"`` or ``"elastic"`` (the low-velocity rule).
+        wt, wn: velocity of the ball's contact point relative to the boundary just
+            before the impact, along c1 and c2 (m/s; wn < 0 when approaching).
+        resting: the low-velocity rule met a ball lying on the surface (see
+            :class:`KaneLevinsonImpact`).
+    """
+
+    u1: float
+    u2: float
+    u3: float
+    Rt: float
+    Rn: float
+    regime: str
+    wt: float
+    wn: float
+    resting: bool = False
+
+
+class ImpactLaw(Protocol):
+    """What the engine needs of an impact law: the regimes it reports (an open set; the
+    summary, plots and audits read them from here) and the jump of the speeds."""
+
+    regimes: tuple[str, ...]
+
+    def apply(self, state: Any, contact: Contact) -> ImpactResult: ...
+
+
+class LowVelocityRule:
+    """The paper's low-velocity rule, a policy of the impact law (after Luding): an
+    impact whose relative normal speed |wn| is below ``threshold`` (m/s) is elastic
+    (e = 1), which prevents inelastic collapse.
+
+    A ball *lying* on the surface (|wn| below the threshold while its relative
+    acceleration presses it into the surface, e.g. at rest at the bottom of a shaken
+    container) cannot be lifted by any restitution, as there is nothing to reflect. For
+    it the impact is evaluated as if the ball approached at ``threshold``: it leaves at
+    that speed, and the ensuing micro-bounces, each carrying its friction impulse, stand
+    in for the rolling or sliding contact that the impact-only model lacks. The paper's
+    fixed time step plays the same role implicitly. ``threshold = 0`` disables the rule.
+    Applied by :func:`billiard.kernels.impact.kane_levinson`.
+    """
+
+    def __init__(self, threshold: float):
+        self.threshold = float(threshold)
+
+
+def _slot(index: int, doc: str) -> property:
+    """An attribute of the law kept in its state vector's slot ``index``."""
+
+    def get(self: KaneLevinsonImpact) -> float:
+        return self.ctx[index]
+
+    def set(self: KaneLevinsonImpact, value: float) -> None:
+        self.ctx[index] = float(value)
+
+    return property(get, set, doc=doc)
+
+
+class KaneLevinsonImpact:
+    """Kane and Levinson's impact theory with a moving boundary (generated maps).
+
+    Newton restitution on the contact point's normal velocity relative to the boundary.
+    The no-slip solution is tried first and kept if its impulse lies in the static
+    friction cone, |Rt| <= mu_s Rn (up to rounding: :data:`REGIME_RTOL`); otherwise the
+    ball slips with Rt = -mu_k Rn sign(wt).
+    Slow impacts follow the :class:`LowVelocityRule` (regime ``"elastic"``).
+
+    The law is :func:`billiard.kernels.impact.kane_levinson` (run interpreted), its
+    coefficients the slots of a state vector ``ctx`` in the kernels' layout.
+
+    Args:
+        mass, radius, inertia_factor: the ball (kg, m, I / (m r^2)).
+        restitution, mu_static, mu_kinetic: contact coefficients.
+        elastic_below: threshold of the low-velocity rule (m/s); 0 disables it.
+    """
+
+    regimes: tuple[str, ...] = (STICK, SLIP, ELASTIC)
+
+    m = _slot(_L.IM_M, "mass (kg)")
+    r = _slot(_L.IM_R, "radius (m)")
+    k = _slot(_L.IM_K, "inertia factor I / (m r^2)")
+    e = _slot(_L.IM_E, "restitution")
+    mu_s = _slot(_L.IM_MUS, "static friction")
+    mu_k = _slot(_L.IM_MUK, "kinetic friction")
+    elastic_below = _slot(_L.IM_EB, "threshold of the low-velocity rule (m/s)")
+
+    def __init__(
+        self,
+        mass: float,
+        radius: float,
+        inertia_factor: float,
+        restitution: float,
+        mu_static: float,
+        mu_kinetic: float,
+        elastic_below: float,
+    ):
+        self.ctx = [0.0] * (_L.IM_EB + 1)
+        self.m = mass
+        self.r = radius
+        self.k = inertia_factor
+        self.e = restitution
+        self.mu_s = mu_static
+        self.mu_k = mu_kinetic
+        self.elastic_below = elastic_below
+        self.low_velocity = LowVelocityRule(elastic_below)
+
+    @classmethod
+    def from_scene(cls, scene: Any) -> KaneLevinsonImpact:
+        return cls(
+            scene.ball.mass,
+            scene.ball.radius,
+            scene.ball.inertia_factor,
+            scene.contact.restitution,
+            scene.contact.mu_static,
+            scene.contact.mu_kinetic,
+            scene.contact.elastic_below,
+        )
+
+    def apply(self, state: Any, contact: Contact) -> ImpactResult:
+        """Post-impact speeds for a ball with speeds ``state.u1, state.u2, state.u3``."""
+        u1, u2, u3 = state.u1, state.u2, state.u3
+        z, vb1, vb2 = contact.z, contact.vb1, contact.vb2
+        n1, n2, n3, rt, rn, regime, resting = _impact.kane_levinson(
+            self.ctx, u1, u2, u3, z, vb1, vb2, contact.pressing
+        )
+        # the relative velocity before the impact, which the record reports (the law
+        # computes it first from the same generated map)
+        wt, wn = _ball.contact_velocity(u1, u2, u3, z, vb1, vb2, self.ctx[_L.IM_R])
+        return ImpactResult(n1, n2, n3, rt, rn, _L.REGIMES[int(regime)], wt, wn, resting)
+
+
+#: Impact laws by name: each builds the law from a scene.
+IMPACT_LAWS: dict[str, Callable[[Any], ImpactLaw]] = {
+    "kane-levinson": KaneLevinsonImpact.from_scene,
+}
+
+
+def impact_law(scene: Any, name: str = "kane-levinson") -> ImpactLaw:
+    """The impact law ``name`` (a key of :data:`IMPACT_LAWS`) for a scene."""
+    try:
+        make = IMPACT_LAWS[name]
+    except KeyError:
+        raise ValueError(
+            f"unknown impact law {name!r}: choose from {', '.join(IMPACT_LAWS)}"
+        ) from None
+    return make(scene)

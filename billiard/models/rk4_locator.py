@@ -1,0 +1,176 @@
+"""The paper's impact detection, kept as the baseline of ``method = "rk4"``.
+
+Fixed RK4 steps; after each step the Euclidean distance to the curve from Newton-Raphson
+on the nearest-point condition; an impact when distance <= r, located Baraff-style by
+re-integrating from the step start with shorter steps until |gap| <= 1e-12 m. The
+distance is taken negative for a centre below the curve, so that a coarse step cannot
+carry the ball through a wall unnoticed. It can miss an impact that starts and ends
+between two steps (a grazing impact); that is the method's known weakness.
+
+A step too coarse for the scene is detected: when the ball comes back to the wall
+within one step, the search takes the point the ball has just left for the next impact
+(a *departure*: found within a millionth of a step after the previous impact). An
+isolated departure happens at the default step (one in 3,000 impacts of the wedge); a
+chain of :data:`DEPARTURE_LIMIT` in a row means the step cannot resolve the ball's hops
+(with ``run.step = 0.003`` the parabola made 278 such impacts in its first 300, pumping
+the spin to 400 rad/s), and the run stops with a message naming a finer step.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+
+from billiard.geometry.boundary import Boundary
+from billiard.geometry.surfaces import WarmStart
+from billiard.geometry.wall_functions import plain_wall_functions
+from billiard.kernels.interpreted import fixed_step as _fixed_step
+from billiard.kernels.interpreted import layout as _L
+from billiard.kernels.interpreted import stop as _stop
+from billiard.models.event_locator import Event
+from billiard.models.flight import RK4Flight
+
+__all__ = ["DEPARTURE_LIMIT", "FixedStepLocator", "answer_foot", "fixed_step_constants"]
+
+#: Consecutive impacts found at the previous impact's departure point that stop a run:
+#: the fixed step is too coarse for the scene.
+DEPARTURE_LIMIT = _fixed_step.DEPARTURE_LIMIT
+#: An impact found within this fraction of a step after the previous one is a departure.
+DEPARTURE_FRACTION = _fixed_step.DEPARTURE_FRACTION
+
+
+def fixed_step_constants(ctx: list[float], boundary: Boundary, step: float) -> None:
+    """Write the fixed-step locator's constants for ``boundary`` into a state vector
+    (the drive's and the surfaces' are the event locator's): the step (s), the radius,
+    the walls and their intervals, where the lid and the escape level are."""
+    drive = boundary.drive
+    ctx[_L.AMP] = drive.amplitude
+    ctx[_L.OMEGA] = drive.omega
+    ctx[_L.HORIZ] = 1.0 if drive.horizontal else 0.0
+    ctx[_L.DRIVE_ACCEL] = drive.peak_acceleration
+    surfaces = boundary.surfaces
+    ctx[_L.NSURF] = float(len(surfaces))
+    for j, surface in enumerate(surfaces):
+        base = _L.SURF + j * _L.SURF_STRIDE
+        ctx[base : base + _L.S_WS] = surface.block()
+    ctx[_L.RK_H] = float(step)
+    ctx[_L.RK_R] = boundary.radius
+    walls = boundary.walls
+    ctx[_L.RK_NWALLS] = float(len(walls))
+    for i, wall in enumerate(walls):
+        ctx[_L.RK_LO + i] = wall.lo
+        ctx[_L.RK_HI + i] = wall.hi
+    lid, escape = boundary.lid, boundary.escape
+    ctx[_L.RK_LID] = float(surfaces.index(lid)) if lid is not None else -1.0
+    ctx[_L.RK_ESCAPE] = float(surfaces.index(escape)) if escape is not None else -1.0
+    ctx[_L.RK_ANSWERS] = 0.0
+
+
+def answer_foot(ctx: list[float] | object, boundary: Boundary) -> None:
+    """Answer the search's question (``E_FOOT``): the foot on wall ``RK_ASK[2]`` of the
+    curve's global nearest point of (px, py) (``Boundary.nearest_point``, polynomial
+    roots), or the vertical projection when that point is on another wall.
+
+    Raises:
+        SimulationError: the search asked more than ``RK_MAX_ANSWERS`` questions.
+    """
+    from billiard.errors import SimulationError
+
+    n = int(ctx[_L.RK_ANSWERS])  # type: ignore[index]
+    if n >= _L.RK_MAX_ANSWERS:
+        raise SimulationError(
+            f"the fixed-step search needed the global nearest point more than "
+            f"{_L.RK_MAX_ANSWERS} times in one flight"
+        )
+    px, py, i = (float(ctx[_L.RK_ASK + k]) for k in range(3))  # type: ignore[index]
+    wall = boundary.walls[int(i)]
+    near = boundary.nearest_point(px, py)
+    s = near.s if near.wall == int(i) else min(max(px, wall.lo), wall.hi)
+    base = _L.RK_ANSWER + 4 * n
+    for k, value in enumerate((px, py, i, s)):
+        ctx[base + k] = value  # type: ignore[index]
+    ctx[_L.RK_ANSWERS] = float(n + 1)  # type: ignore[index]
+
+
+class FixedStepLocator:
+    """The paper's fixed-step detection for ``method = "rk4"`` (module docstring): the
+    kernels' search (:func:`billiard.kernels.fixed_step.locate`, run interpreted) over a
+    state vector of its own, which also holds its memory between flights."""
+
+    def __init__(
+        self,
+        boundary: Boundary,
+        flight: RK4Flight,
+        gravity: float = 0.0,
+        warm: list[WarmStart] | None = None,
+    ):
+        self.boundary = boundary
+        self.surfaces = boundary.surfaces
+        self.flight = flight
+        self.h = flight.max_step
+        ctx = [0.0] * _L.SIZE
+        ctx[_L.G] = float(gravity)
+        fixed_step_constants(ctx, boundary, self.h)
+        self.ctx = ctx
+        walls = boundary.walls
+        self._p = walls[0].p
+        self._walls = plain_wall_functions(walls)
+        self._nears = (tuple(w.near for w in walls), tuple(w.dnear for w in walls))
+
+    @property
+    def _feet(self) -> list[float]:
+        n = len(self.boundary.walls)
+        return self.ctx[_L.RK_FEET : _L.RK_FEET + n]
+
+    @property
+    def _departures(self) -> int:
+        return int(self.ctx[_L.RK_DEPARTURES])
+
+    @property
+    def theta0(self) -> float:
+        """The drive angle at the start of the latest flight (rad)."""
+        return self.ctx[_L.THETA0]
+
+    def memory(self) -> dict[str, list[float]]:
+        """What the locator carries from one flight to the next, for a checkpoint: the
+        Newton warm starts (feet) of the walls' nearest points and the count of
+        consecutive departures (a one-element list, as the engine state stores lists of
+        floats)."""
+        return {"feet": list(self._feet), "departures": [float(self._departures)]}
+
+    def restore_memory(self, memory: Mapping[str, list[float]]) -> None:
+        # a checkpoint written before departures were counted has only the feet
+        ok = set(memory) in ({"feet"}, {"feet", "departures"})
+        feet = memory.get("feet") if ok else None
+        count = memory.get("departures", [0.0]) if ok else None
+        if not (
+            isinstance(feet, list)
+            and len(feet) == len(self.boundary.walls)
+            and all(isinstance(s, float) and math.isfinite(s) for s in feet)
+            and isinstance(count, list)
+            and len(count) == 1
+            and count[0] in range(DEPARTURE_LIMIT)
+        ):
+            raise ValueError(
+                "FixedStepLocator memory must be {'feet': [s, ...], 'departures': [n]}, "
+                f"got {memory!r}"
+            )
+        self.ctx[_L.RK_FEET : _L.RK_FEET + len(feet)] = feet
+        self.ctx[_L.RK_DEPARTURES] = float(int(count[0]))
+
+    def locate(self, theta0: float, q1: float, q2: float, u1: float, u2: float, u3: float) -> Event:
+        ctx = self.ctx
+        self.flight.begin(q1, q2, u1, u2, u3)
+        flight_slots = slice(_L.FL_KIND, _L.FL_U3)
+        ctx[flight_slots] = self.flight.ctx[flight_slots]
+        while True:
+            try:
+                tau, j, q1, q2, u1, u2, theta, s, z = _fixed_step.locate(
+                    ctx, self._p, self._walls, self._nears, theta0, q1, q2, u1, u2, u3
+                )
+                break
+            except _L.KernelError as exc:
+                if exc.args[0] != _L.E_FOOT:
+                    raise _stop(exc, ctx) from None
+                answer_foot(ctx, self.boundary)
+        return Event(tau, self.surfaces[j], q1, q2, u1, u2, theta, s, z, j)

@@ -1,0 +1,3 @@
+"""The paper's reproduction: calibration, the four runs, the figures and docs/paper-
+reproduction.md.
+"""

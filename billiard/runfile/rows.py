@@ -1,0 +1,181 @@
+"""Impact rows as the kernels write them: ``NCOL`` floats per impact, the columns of
+``collisions.csv`` in order, regime and wall as codes (:mod:`billiard.kernels.layout`).
+
+A run on the kernels hands its rows to the recorders as 2-D float64 arrays, one row per
+impact; these helpers turn them into :class:`~billiard.runfile.record.ImpactRecord` objects,
+into column arrays, and into ``collisions.csv`` lines with exactly the bytes a
+:class:`csv.writer` writes for the records (floats with :func:`repr`).
+
+Compiled, the lines are written by :func:`billiard.kernels.float_text.format_rows`:
+``repr``'s bytes, several times faster than ``repr`` itself (formatting rows took most
+of a compiled run's time). Interpreted, ``repr`` is the faster of the two, and stays.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterable, Sequence
+from typing import Any
+
+import numpy as np
+
+from billiard import jit as _jit
+from billiard.kernels.layout import LID_LABEL, NCOL, REGIMES
+
+__all__ = [
+    "NCOL",
+    "as_block",
+    "column_arrays",
+    "format_rows",
+    "format_rows_bytes",
+    "record_of",
+    "row_of",
+]
+
+_N, _REGIME, _WALL = 0, 10, 13
+
+
+def as_block(buffer: Any, start: int, stop: int) -> np.ndarray:
+    """Rows ``start`` to ``stop`` of a kernel buffer (an array or, interpreted, a list)
+    as a new ``(rows, NCOL)`` float64 array."""
+    if isinstance(buffer, np.ndarray):
+        return buffer[start * NCOL : stop * NCOL].reshape(stop - start, NCOL).copy()
+    values = buffer[start * NCOL : stop * NCOL]
+    return np.array(values, dtype=np.float64).reshape(stop - start, NCOL)
+
+
+def _wall_label(code: float) -> str:
+    return "lid" if code == LID_LABEL else str(int(code))
+
+
+def record_of(row: Sequence[float]) -> Any:
+    """The :class:`~billiard.runfile.record.ImpactRecord` of one row (Python floats)."""
+    from billiard.runfile.record import ImpactRecord
+
+    return ImpactRecord(
+        int(row[0]),
+        *row[1:10],
+        REGIMES[int(row[10])],
+        row[11],
+        row[12],
+        _wall_label(row[13]),
+        *row[14:18],
+    )
+
+
+def row_of(record: Sequence[Any]) -> list[float]:
+    """Inverse of :func:`record_of`."""
+    row = [float(v) if i not in (_REGIME, _WALL) else 0.0 for i, v in enumerate(record)]
+    row[_REGIME] = float(REGIMES.index(record[_REGIME]))
+    wall = record[_WALL]
+    row[_WALL] = LID_LABEL if wall == "lid" else float(int(wall))
+    return row
+
+
+def format_rows(block: np.ndarray, line_end: str) -> str:
+    """``collisions.csv`` lines of the rows of ``block``, each ended by ``line_end``:
+    written by the compiled formatter when the kernels are compiled, with ``repr``
+    otherwise (the same bytes)."""
+    if _jit.ENABLED and len(block):
+        data = _format_rows_compiled(block, line_end)
+        if data is not None:
+            # decoded straight from the buffer (tobytes() would copy it once more)
+            return str(data, "ascii")
+    return _format_rows_repr(block, line_end)
+
+
+def format_rows_bytes(block: np.ndarray, line_end: str) -> bytes:
+    """:func:`format_rows` as the bytes written to the file (ASCII)."""
+    if _jit.ENABLED and len(block):
+        data = _format_rows_compiled(block, line_end)
+        if data is not None:
+            return data.tobytes()
+    return _format_rows_repr(block, line_end).encode("ascii")
+
+
+#: what the compiled formatter is given besides the rows, built on its first call
+_compiled_constants: tuple[np.ndarray, np.ndarray, np.ndarray, int] | None = None
+
+
+def _constants() -> tuple[np.ndarray, np.ndarray, np.ndarray, int]:
+    """The regime labels as one byte array and the offsets of each label in it, the
+    lid's label, and the most bytes a row takes (without its line end): the labels
+    reach the kernel as arrays, built once here."""
+    global _compiled_constants
+    if _compiled_constants is None:
+        from billiard.kernels.float_text import MAX_FLOAT_BYTES, MAX_INT_BYTES
+
+        encoded = [label.encode("ascii") for label in REGIMES]
+        labels = np.frombuffer(b"".join(encoded), dtype=np.uint8)
+        starts = np.cumsum([0] + [len(label) for label in encoded], dtype=np.int64)
+        lid = np.frombuffer(b"lid", dtype=np.uint8)
+        # n and the wall (an int or "lid"), the regime, the other columns as floats,
+        # and the commas between the NCOL columns
+        row_bytes = (
+            2 * max(MAX_INT_BYTES, lid.size)
+            + max(len(label) for label in encoded)
+            + (NCOL - 3) * MAX_FLOAT_BYTES
+            + (NCOL - 1)
+        )
+        _compiled_constants = (labels, starts, lid, row_bytes)
+    return _compiled_constants
+
+
+def _format_rows_compiled(block: np.ndarray, line_end: str) -> memoryview | None:
+    """:func:`format_rows` by :func:`billiard.kernels.float_text.format_rows`; None
+    for a block with a code that formatter leaves to ``repr``'s path (a nan or
+    out-of-range number or regime: that path formats it or raises as it always did)."""
+    from billiard.kernels import float_text
+
+    labels, starts, lid, row_bytes = _constants()
+    block = np.ascontiguousarray(block, dtype=np.float64)
+    end = np.frombuffer(line_end.encode("ascii"), dtype=np.uint8)
+    rows = block.shape[0]
+    out = np.empty(rows * (row_bytes + end.size), dtype=np.uint8)
+    size = float_text.format_rows(block, rows, out, labels, starts, lid, end)
+    if size < 0:
+        return None
+    return out[:size].data
+
+
+def _format_rows_repr(block: np.ndarray, line_end: str) -> str:
+    """:func:`format_rows` with ``repr``: the reference the compiled formatter equals,
+    and the faster of the two interpreted."""
+    lines = []
+    for row in block.tolist():
+        lines.append(
+            f"{int(row[0])},{','.join(map(repr, row[1:10]))},{REGIMES[int(row[10])]},"
+            f"{row[11]!r},{row[12]!r},{_wall_label(row[13])},{','.join(map(repr, row[14:18]))}"
+        )
+    if not lines:
+        return ""
+    return line_end.join(lines) + line_end
+
+
+def _labels(codes: np.ndarray, label: Any) -> np.ndarray:
+    """String array of ``label(code)`` per entry, as narrow as ``np.array(list, str)``."""
+    if codes.size == 0:
+        return np.array([], dtype=str)
+    unique, inverse = np.unique(codes, return_inverse=True)
+    names = np.array([label(code) for code in unique.tolist()], dtype=str)
+    return names[inverse.reshape(codes.shape)]
+
+
+def column_arrays(names: Sequence[str], blocks: Iterable[np.ndarray]) -> dict[str, np.ndarray]:
+    """Column name -> array over the rows of ``blocks``, with the dtypes of
+    :func:`billiard.runfile.record.read_collisions` (one column built at a time)."""
+    blocks = list(blocks)
+    out: dict[str, np.ndarray] = {}
+    for index, name in enumerate(names):
+        if blocks:
+            column = np.concatenate([block[:, index] for block in blocks])
+        else:
+            column = np.empty(0, dtype=np.float64)
+        if index == _N:
+            out[name] = column.astype(np.int64)
+        elif index == _REGIME:
+            out[name] = _labels(column, lambda code: REGIMES[int(code)])
+        elif index == _WALL:
+            out[name] = _labels(column, _wall_label)
+        else:
+            out[name] = column
+    return out

@@ -1,0 +1,155 @@
+"""The side files of a streamed run with ``contact.model = "phases"`` or ``--sample``:
+``contacts.csv`` (one row per finished contact phase) and ``trajectory.csv`` (one row
+per sample). Each grows by whole rows; a checkpoint records their sizes, and a resumed
+run cuts them back to those sizes and writes on, so that they end up byte for byte as
+an uninterrupted run writes them.
+"""
+
+from __future__ import annotations
+
+import os
+import zlib
+from collections.abc import Sequence
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from billiard.runfile.checkpoint import CheckpointError
+from billiard.runfile.csvfile import prefix_crc32
+from billiard.runfile.record import _format
+from billiard.scene.userfile import FileRefused, open_regular, read_limited
+
+__all__ = ["CONTACTS_NAME", "TRAJECTORY_NAME", "SideCsv", "check_side", "read_side_csv"]
+
+CONTACTS_NAME = "contacts.csv"
+TRAJECTORY_NAME = "trajectory.csv"
+_TEXT = frozenset({"wall", "mode", "end"})
+#: Characters of rows collected before they are written (not synced) whatever the time
+#: to the next flush: a long flight sampled finely makes millions of rows between two
+#: impacts, which would otherwise all wait in memory.
+SPILL_CHARS = 1 << 22
+
+
+class SideCsv:
+    """A CSV file written by whole rows, buffered until :meth:`flush`, with the CRC-32 of
+    what it holds (:attr:`crc32`, for a checkpoint).
+
+    Args:
+        path: the file.
+        columns: its header.
+        size: None to start the file afresh; else the size (bytes) a checkpoint
+            recorded, to which the file is cut back before writing on.
+        crc32: with ``size``, the CRC-32 of the file's first ``size`` bytes, already
+            checked (:func:`check_side`); None to compute it here.
+    """
+
+    def __init__(
+        self,
+        path: Path,
+        columns: Sequence[str],
+        size: int | None = None,
+        crc32: int | None = None,
+    ):
+        self.path = Path(path)
+        self._pending: list[str] = []
+        self._pending_chars = 0
+        if size is None:
+            self._file = open(self.path, "wb")  # noqa: SIM115 - closed by close()
+            header = (",".join(columns) + "\n").encode()
+            self._file.write(header)
+            self.crc32 = zlib.crc32(header)
+        else:
+            try:
+                self._file = open(self.path, "r+b")  # noqa: SIM115
+            except FileNotFoundError:
+                raise CheckpointError(f"{self.path} is missing") from None
+            if os.fstat(self._file.fileno()).st_size < size:
+                self._file.close()
+                raise CheckpointError(f"{self.path} is shorter than its checkpoint says")
+            if crc32 is None:
+                crc32, _ = prefix_crc32(self._file.fileno(), size)
+            self.crc32 = crc32
+            self._file.truncate(size)
+            self._file.seek(size)
+
+    def append(self, row: Sequence[Any]) -> None:
+        line = ",".join(_format(v) for v in row) + "\n"
+        self._pending.append(line)
+        self._pending_chars += len(line)
+        if self._pending_chars >= SPILL_CHARS:
+            # written, not synced: a resume cuts the file back to its checkpoint's size
+            self._write()
+
+    def _write(self) -> None:
+        if self._pending:
+            data = "".join(self._pending).encode()
+            self._file.write(data)
+            self.crc32 = zlib.crc32(data, self.crc32)
+            self._pending.clear()
+            self._pending_chars = 0
+
+    def flush(self) -> int:
+        """Write the buffered rows; returns the file's size (bytes)."""
+        self._write()
+        self._file.flush()
+        os.fsync(self._file.fileno())
+        return self._file.tell()
+
+    def close(self) -> None:
+        if not self._file.closed:
+            self.flush()
+            self._file.close()
+
+
+def check_side(path: Path, size: int, crc32: int | None) -> int:
+    """Check, before a run resumes, that the side file ``path`` still holds the
+    ``size`` bytes its checkpoint recorded, unchanged (their CRC-32 is ``crc32``; None:
+    not recorded, by an earlier version), without changing it.
+
+    Returns:
+        The number of rows (line ends after the header's) in those bytes.
+
+    Raises:
+        CheckpointError: the file is missing, not a regular file, shorter than ``size``,
+            or its first ``size`` bytes were changed.
+    """
+    try:
+        fd = open_regular(path)
+    except FileNotFoundError:
+        raise CheckpointError(f"{path} is missing") from None
+    except FileRefused as exc:
+        raise CheckpointError(f"{path} {exc.reason}") from None
+    except OSError as exc:
+        raise CheckpointError(f"{path} cannot be read: {exc.strerror or exc}") from None
+    try:
+        info = os.fstat(fd)
+        if info.st_size < size:
+            raise CheckpointError(f"{path} is shorter than its checkpoint says")
+        crc, lines = prefix_crc32(fd, size)
+    finally:
+        os.close(fd)
+    if crc32 is not None and crc != crc32:
+        raise CheckpointError(
+            f"{path} does not match the checkpoint (its rows before it were changed "
+            f"since: their CRC-32 differs; was the file edited?)"
+        )
+    return lines - 1
+
+
+def read_side_csv(path: str | os.PathLike[str]) -> dict[str, np.ndarray]:
+    """Column name -> numpy array of a side file (text columns as str).
+
+    Raises:
+        OSError: the file cannot be read, or is not a regular file
+            (:class:`~billiard.scene.userfile.FileRefused`: a device or a pipe never ends).
+        UnicodeDecodeError: the file is not UTF-8 text.
+    """
+    lines = read_limited(path, None).decode("utf-8").splitlines()
+    names = lines[0].split(",")
+    rows = [line.split(",") for line in lines[1:] if line]
+    out: dict[str, np.ndarray] = {}
+    for i, name in enumerate(names):
+        values = [row[i] for row in rows]
+        out[name] = np.array(values, dtype=str if name in _TEXT else np.float64)
+    return out
