@@ -107,9 +107,9 @@ def million(points: int, impacts: int) -> dict:
 _MEMORY = """
 import sys, tracemalloc, billiard
 scene = billiard.load_scene("wedge-6.6hz", overrides=["air.drag=none"])
-billiard.run.simulate(scene, collisions=100)
+billiard.simulate(scene, collisions=100)
 tracemalloc.start()
-billiard.run.simulate(scene, collisions=int(sys.argv[1])).columns
+billiard.simulate(scene, collisions=int(sys.argv[1])).columns
 print(tracemalloc.get_traced_memory()[1] // 1024)
 """
 

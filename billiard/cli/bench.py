@@ -22,7 +22,7 @@ import tomllib
 from pathlib import Path
 from types import ModuleType
 
-from billiard.cli import UserError
+from billiard.cli.common import UserError
 
 #: The sections of the performance page, in order (bench/run.py measures them; they are
 #: checked here, before the checkout's bench package is imported).

@@ -4,9 +4,10 @@ impact law, record it, keep the clock and the collapse window (a mixin of
 
 A run normally makes its impacts with :func:`billiard.kernels.loop.step` on the kernels
 (:mod:`billiard.engine.kernel_engine`; under contact phases the flights between them,
-:mod:`billiard.engine.flights`), the same operations in the same order; this step runs
-when the kernels cannot (trajectory samples, an impact law replaced after construction),
-for :meth:`Simulation.step` under contact phases, and after a contact phase's impact.
+:meth:`billiard.engine.simulation.Simulation._fly`), the same operations in the same
+order; this step runs when the kernels cannot (trajectory samples, an impact law
+replaced after construction), for :meth:`Simulation.step` under contact phases, and
+after a contact phase's impact.
 """
 
 from __future__ import annotations

@@ -1,9 +1,9 @@
-""":class:`billiard.engine.simulation.Simulation` on the kernels (:mod:`billiard.kernels`), for
-Kane and Levinson's law with method ``event`` or ``rk4``: the impact model
+""":class:`billiard.engine.simulation.Simulation` on the kernels (:mod:`billiard.kernels`),
+for Kane and Levinson's law with method ``event`` or ``rk4``: the impact model
 (``contact.model = "impacts"``, the four paper scenes), and the flights between contact
-phases (``contact.model = "phases"``, :mod:`billiard.engine.flights`). Compiled by numba
-when it is there, interpreted otherwise (or with ``NUMBA_DISABLE_JIT=1``): one source
-either way.
+phases (``contact.model = "phases"``,
+:meth:`billiard.engine.simulation.Simulation._fly`). Compiled by numba when it is there,
+interpreted otherwise (or with ``NUMBA_DISABLE_JIT=1``): one source either way.
 
 :class:`KernelEngine` owns the engine state as the state vector ``ctx``
 (:mod:`billiard.engine.ctx`); the warm starts, the flight's step proposal and the
@@ -38,8 +38,8 @@ from billiard.errors import SimulationError
 from billiard.kernels import layout as L
 from billiard.kernels.interpreted import stop_text
 from billiard.models.rk4_locator import answer_foot
-from billiard.runfile.record import MemoryRecorder
-from billiard.runfile.rows import as_block, record_of
+from billiard.runfile.record import MemoryRecorder, record_of
+from billiard.runfile.rows import as_block
 from billiard.runfile.stream import CsvRecorder
 from billiard.status import Status
 
@@ -329,6 +329,7 @@ class KernelEngine:
         on_record: Callable[[int], None] | None,
         *,
         next_save: float | None = None,
+        interval: float = 1.0,
         final_progress: bool = True,
     ) -> tuple[Status | None, str | None]:
         """``Simulation.run`` in chunks; returns (status, stop reason). Under contact
@@ -336,6 +337,7 @@ class KernelEngine:
         engine puts the ball in contact (and takes no checkpoint before that).
 
         Args:
+            interval: wall-clock seconds between two checkpoints.
             next_save: when the first checkpoint is due (``time.monotonic``; default a
                 checkpoint interval from now); the run leaves the next in ``next_save``.
             final_progress: report progress when the run ends.
@@ -343,7 +345,7 @@ class KernelEngine:
         sim, ctx = self.sim, self.ctx
         sink = rows_sink(recorder)
         monotonic = time.monotonic
-        interval = _checkpoint_interval() if checkpoint is not None else math.inf
+        interval = interval if checkpoint is not None else math.inf
         if next_save is None:
             next_save = monotonic() + interval
         # chunks end at least as often as checkpoints are asked for (every impact when
@@ -444,9 +446,3 @@ class KernelEngine:
                 return j
             i = j
         return None
-
-
-def _checkpoint_interval() -> float:
-    from billiard.engine import simulation as engine
-
-    return engine.CHECKPOINT_INTERVAL

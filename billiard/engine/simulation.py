@@ -21,7 +21,7 @@ import math
 import time
 from collections import deque
 from collections.abc import Callable
-from typing import Any
+from typing import Any, NamedTuple
 
 from billiard.engine.contact_phases import (
     COLLAPSE_COUNT,
@@ -30,7 +30,6 @@ from billiard.engine.contact_phases import (
     ContactPhases,
 )
 from billiard.engine.event_step import EventStep
-from billiard.engine.flights import fly
 from billiard.engine.interrupt import RunInterrupted, StopRequest
 from billiard.engine.kernel_engine import KernelEngine, supports
 from billiard.engine.progress import Progress, report_time
@@ -38,6 +37,7 @@ from billiard.engine.state import BallState, EngineState
 from billiard.errors import GeometryError, SimulationError
 from billiard.geometry.boundary import Boundary, Drive
 from billiard.geometry.curves import load_curve
+from billiard.kernels import layout as L
 from billiard.models.contact import ContactModel
 from billiard.models.flight import flight_model
 from billiard.models.hold import VertexHold
@@ -53,6 +53,16 @@ __all__ = ["COLLAPSE_COUNT", "COLLAPSE_SPAN", "ZERO_FLIGHT_LIMIT", "Simulation"]
 _PROGRESS_EVERY = 100
 #: Wall-clock seconds between two checkpoints (and CSV flushes) of a streamed run.
 CHECKPOINT_INTERVAL = 1.0
+
+
+class Settled(NamedTuple):
+    """What landing needs of the impact that settles (``ImpactResult``'s fields)."""
+
+    u1: float
+    u2: float
+    u3: float
+    regime: str
+    wn: float
 
 
 class Simulation(ContactPhases, EventStep):
@@ -399,8 +409,9 @@ class Simulation(ContactPhases, EventStep):
         if kernel is not None:
             self.status = None
             self.status, reason = kernel.run(
-                collisions, recorder, progress, checkpoint, request, until, on_record
-            )
+                collisions, recorder, progress, checkpoint, request, until, on_record,
+                interval=CHECKPOINT_INTERVAL,
+            )  # fmt: skip
             return reason
         monotonic = time.monotonic
         next_save = monotonic() + CHECKPOINT_INTERVAL if checkpoint is not None else math.inf
@@ -420,9 +431,9 @@ class Simulation(ContactPhases, EventStep):
                 if request.signum:
                     raise RunInterrupted(request.signum)
                 if flights is not None and self._mode == "flight" and self._fault is None:
-                    ended = fly(
-                        self, flights, collisions, recorder, progress, checkpoint, request,
-                        until, on_record, next_save,
+                    ended = self._fly(
+                        flights, collisions, recorder, progress, checkpoint, request,
+                        until, on_record, next_save, CHECKPOINT_INTERVAL,
                     )  # fmt: skip
                     next_save = flights.next_save
                     if ended is not None:
@@ -479,3 +490,52 @@ class Simulation(ContactPhases, EventStep):
             return False
 
         return pause
+
+    # ------------------------------------------------------------------ flights on the kernels
+    def _fly(
+        self,
+        flights: Any,
+        collisions: int,
+        recorder: Any,
+        progress: Callable[[int, int], None] | None,
+        checkpoint: Callable[[Any], None] | None,
+        request: StopRequest,
+        until: float,
+        on_record: Callable[[int], None] | None,
+        next_save: float,
+        interval: float,
+    ) -> tuple[Status, str | None] | None:
+        """Fly the ball (in flight, no pending stop) on its kernels ``flights`` (a
+        :class:`billiard.engine.kernel_engine.KernelEngine`) until an impact settles or the run
+        ends; the arguments are :meth:`run`'s. Returns None when the run goes on
+        (the ball landed, or flies on when the wall does not press it), else the run's
+        (status, stop reason). The next checkpoint's time is left in ``flights.next_save``.
+        """
+        flights.restore(self._python_state())
+        ctx = flights.ctx
+        ctx[L.EN_SETTLES] = 0.0
+        # while the kernels fly, the engine's state is theirs (hooks and checkpoints see it)
+        self._kernel = flights
+        impacts = self._impacts
+        try:
+            status, reason = flights.run(
+                collisions, recorder, progress, checkpoint, request, until, on_record,
+                next_save=next_save, interval=interval, final_progress=False,
+            )  # fmt: skip
+        finally:
+            self._kernel = None
+            state = dataclasses.replace(flights.state(), **self._held_state())
+            fault, final_time = flights.pending_stop(), self.final_time
+            self.restore(state)
+            self._fault, self.final_time = fault, final_time
+            if self._impacts > impacts:
+                # the kernels stop after an impact (or leave the state at the last one)
+                self._last_impact = self._ball.t
+        if ctx[L.EN_SETTLES] != 0.0:
+            ball = self._ball
+            settled = Settled(
+                ball.u1, ball.u2, ball.u3, L.REGIMES[int(ctx[L.EN_LAST_REGIME])],
+                float(ctx[L.EN_LAST_WN]),
+            )  # fmt: skip
+            self._land(int(ctx[L.EN_LAST_J]), float(ctx[L.EN_LAST_S]), ball.theta, settled, ball.t)
+        return None if status is None else (status, reason)

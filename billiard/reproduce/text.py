@@ -16,7 +16,7 @@ from billiard.analysis.phase import (
     phase_scales,
     zero_height,
 )
-from billiard.reproduce.paper import CAMERA_FRAME, DIAGONAL_TOL, PhasesCalibration, RunStats
+from billiard.reproduce.runs import CAMERA_FRAME, DIAGONAL_TOL, PhasesCalibration, RunStats
 from billiard.scene.scene import load_scene
 
 
@@ -66,7 +66,7 @@ _CANDIDATE_HEADER = (
 )
 
 
-def _markdown(
+def markdown(
     cal: Calibration,
     stats: list[RunStats],
     parabola,
@@ -289,7 +289,7 @@ Model with the camera filter beside it:
 """
 
 
-_ENDING = """
+ENDING = """
 What we cannot compare: the experiment's data are not available to us, so agreement with
 the experiment is judged only through the paper's statements above.
 """
@@ -338,7 +338,7 @@ def _maps_text(stats: list[RunStats], phases: list[RunStats]) -> str:
     return " ".join(parts)
 
 
-def _models_section(
+def models_section(
     stats: list[RunStats],
     phases: list[RunStats],
     cal: Calibration,

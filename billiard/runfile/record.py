@@ -38,10 +38,12 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
-from billiard.runfile.rows import column_arrays, format_rows, row_of
+from billiard.kernels.layout import REGIMES
+from billiard.runfile.rows import column_arrays, format_rows, row_of, wall_label
 from billiard.scene.userfile import FileRefused, check_regular
 
 __all__ = [
+    "record_of",
     "COLUMNS",
     "CONTACT_COLUMNS",
     "TRAJECTORY_COLUMNS",
@@ -371,3 +373,16 @@ def write_collisions(path: str | os.PathLike[str], columns: Mapping[str, Sequenc
         for row in zip(*(columns[name] for name in names), strict=True):
             writer.writerow([_format(v) for v in row])
     return path
+
+
+def record_of(row: Sequence[float]) -> Any:
+    """The :class:`~billiard.runfile.record.ImpactRecord` of one row (Python floats)."""
+    return ImpactRecord(
+        int(row[0]),
+        *row[1:10],
+        REGIMES[int(row[10])],
+        row[11],
+        row[12],
+        wall_label(row[13]),
+        *row[14:18],
+    )

@@ -27,11 +27,16 @@ __all__ = [
     "column_arrays",
     "format_rows",
     "format_rows_bytes",
-    "record_of",
     "row_of",
+    "wall_label",
 ]
 
 _N, _REGIME, _WALL = 0, 10, 13
+
+
+def wall_label(code: float) -> str:
+    """The ``wall`` column's text of a wall code: ``lid`` or the wall's index."""
+    return "lid" if code == LID_LABEL else str(int(code))
 
 
 def as_block(buffer: Any, start: int, stop: int) -> np.ndarray:
@@ -43,27 +48,8 @@ def as_block(buffer: Any, start: int, stop: int) -> np.ndarray:
     return np.array(values, dtype=np.float64).reshape(stop - start, NCOL)
 
 
-def _wall_label(code: float) -> str:
-    return "lid" if code == LID_LABEL else str(int(code))
-
-
-def record_of(row: Sequence[float]) -> Any:
-    """The :class:`~billiard.runfile.record.ImpactRecord` of one row (Python floats)."""
-    from billiard.runfile.record import ImpactRecord
-
-    return ImpactRecord(
-        int(row[0]),
-        *row[1:10],
-        REGIMES[int(row[10])],
-        row[11],
-        row[12],
-        _wall_label(row[13]),
-        *row[14:18],
-    )
-
-
 def row_of(record: Sequence[Any]) -> list[float]:
-    """Inverse of :func:`record_of`."""
+    """Inverse of :func:`billiard.runfile.record.record_of`."""
     row = [float(v) if i not in (_REGIME, _WALL) else 0.0 for i, v in enumerate(record)]
     row[_REGIME] = float(REGIMES.index(record[_REGIME]))
     wall = record[_WALL]
@@ -144,7 +130,7 @@ def _format_rows_repr(block: np.ndarray, line_end: str) -> str:
     for row in block.tolist():
         lines.append(
             f"{int(row[0])},{','.join(map(repr, row[1:10]))},{REGIMES[int(row[10])]},"
-            f"{row[11]!r},{row[12]!r},{_wall_label(row[13])},{','.join(map(repr, row[14:18]))}"
+            f"{row[11]!r},{row[12]!r},{wall_label(row[13])},{','.join(map(repr, row[14:18]))}"
         )
     if not lines:
         return ""
@@ -175,7 +161,7 @@ def column_arrays(names: Sequence[str], blocks: Iterable[np.ndarray]) -> dict[st
         elif index == _REGIME:
             out[name] = _labels(column, lambda code: REGIMES[int(code)])
         elif index == _WALL:
-            out[name] = _labels(column, _wall_label)
+            out[name] = _labels(column, wall_label)
         else:
             out[name] = column
     return out

@@ -51,8 +51,9 @@ from billiard.runfile.record import (
     _format,
     _header_line,
     read_collisions,
+    record_of,
 )
-from billiard.runfile.rows import format_rows_bytes, record_of
+from billiard.runfile.rows import format_rows_bytes
 
 __all__ = ["CsvMark", "CsvRecorder", "RowMismatchError", "RunBusyError", "Truncation"]
 

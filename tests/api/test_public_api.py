@@ -40,7 +40,7 @@ def test_exports_are_the_functions_every_time():
         scene = billiard.load_scene("parabola-5.4hz")
         for _ in range(2):
             try:
-                billiard.analysis.calibrate(scene, "drive.amplitude", -1.0)
+                billiard.calibrate(scene, "drive.amplitude", -1.0)
             except Exception as exc:
                 assert type(exc).__name__ == "CalibrationError", exc
         print("ok")

@@ -1,7 +1,7 @@
 """Contact phases with the flights between them on the kernels
-(:mod:`billiard.engine.flights`): the same records, phases, times and engine state as
-the one-event step on the classes, and interrupted runs that resume to the same bytes.
-"""
+(:meth:`billiard.engine.simulation.Simulation._fly`): the same records, phases, times
+and engine state as the one-event step on the classes, and interrupted runs that resume
+to the same bytes."""
 
 from __future__ import annotations
 

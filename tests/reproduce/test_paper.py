@@ -11,7 +11,7 @@ import pytest
 from matplotlib.image import imread
 
 from billiard.analysis.camera import camera_filter
-from billiard.reproduce.paper import (
+from billiard.reproduce.runs import (
     CAMERA_FRAME,
     DIAGONAL_TOL,
     PHASES_IMPACT_CAP,
@@ -19,7 +19,7 @@ from billiard.reproduce.paper import (
     _hop_time,
     compare_models,
 )
-from billiard.reproduce.text import _maps_text, _models_section
+from billiard.reproduce.text import _maps_text, models_section
 from billiard.runfile.record import read_collisions
 from billiard.runfile.sidecsv import read_side_csv
 
@@ -95,7 +95,7 @@ def test_side_by_side_section_reports_the_computed_numbers(compared, tmp_path):
         error = "no orbit (test)"
         wall_time = 1.0
 
-    text = _models_section([imp], [ph], Cal(), PhCal(), tmp_path, fig)
+    text = models_section([imp], [ph], Cal(), PhCal(), tmp_path, fig)
     rows = [line for line in text.splitlines() if line.startswith("| wedge-6.6hz |")]
     assert rows[0].startswith(f"| wedge-6.6hz | impacts | {imp.impacts} |")
     assert rows[1].startswith(f"| wedge-6.6hz | phases | {ph.impacts} |")

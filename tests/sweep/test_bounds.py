@@ -422,7 +422,7 @@ def test_sweep_file_that_is_not_a_regular_file_is_refused(tmp_path, capsys):
 
 def test_sweep_refuses_a_folder_holding_a_run(tmp_path, capsys):
     run_dir = tmp_path / "run"
-    billiard.run.simulate(load_scene("parabola-5.4hz"), collisions=5, out_dir=run_dir)
+    billiard.simulate(load_scene("parabola-5.4hz"), collisions=5, out_dir=run_dir)
     capsys.readouterr()  # a first streamed run may print the kernels' compile notice
     scene_bytes = (run_dir / "scene.toml").read_bytes()
     before = sorted(p.name for p in run_dir.iterdir())
