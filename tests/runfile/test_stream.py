@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 
 from billiard.runfile import record
-from billiard.runfile.rows import record_of
+from billiard.runfile.record import record_of
 from billiard.scene.scene import load_scene
 
 engine = importlib.import_module("billiard.engine.simulation")
