@@ -1,4 +1,4 @@
-"""Synthetic runs and checks shared by the plotting tests (tests/test_plot_*.py).
+"""Synthetic runs and checks shared by the plotting tests (tests/plot/).
 
 The main synthetic run is physically consistent: a ball bouncing vertically at the vertex
 x = 0 of the parabola f(x) = 26 x^2 + 0.0063 (m) while the boundary is shaken vertically,
