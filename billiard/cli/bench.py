@@ -64,7 +64,7 @@ def find_checkout(start: Path | None = None) -> Path | None:
     for root in (here, *here.parents):
         if _is_checkout(root):
             return root
-    beside = Path(__file__).resolve().parent.parent
+    beside = Path(__file__).resolve().parents[2]
     return beside if _is_checkout(beside) else None
 
 

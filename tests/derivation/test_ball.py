@@ -406,9 +406,9 @@ def test_bench_finds_the_checkout_from_inside_it(tmp_path, monkeypatch, capsys):
 
     from billiard.cli import bench
 
-    root = Path(bench.__file__).resolve().parent.parent
+    root = Path(bench.__file__).resolve().parents[2]
     # as after a non-editable install: nothing beside the installed package
-    monkeypatch.setattr(bench, "__file__", str(tmp_path / "site" / "billiard" / "bench.py"))
+    monkeypatch.setattr(bench, "__file__", str(tmp_path / "site" / "billiard" / "cli" / "bench.py"))
     assert bench.find_checkout(root / "docs") == root
     path = list(sys.path)
     run = bench._bench_package(root)

@@ -9,6 +9,7 @@ point at all.
 from __future__ import annotations
 
 import gc
+import importlib
 import io
 import json
 import os
@@ -69,9 +70,10 @@ ROLLING = ["contact.model=phases", "drive.amplitude=0.005"]
 
 @pytest.fixture
 def bounded_simulate(monkeypatch):
-    """billiard.run.simulate, refusing any call without a finite duration (the durations
+    """billiard.run.simulate.simulate, refusing any call without a finite duration (the durations
     asked for are recorded)."""
-    real = billiard.run.simulate
+    module = importlib.import_module("billiard.run.simulate")
+    real = module.simulate
     asked: list[float] = []
 
     def simulate(scene, **kwargs):
@@ -83,7 +85,7 @@ def bounded_simulate(monkeypatch):
         asked.append(float(duration))
         return real(scene, **kwargs)
 
-    monkeypatch.setattr(billiard, "simulate", simulate)
+    monkeypatch.setattr(module, "simulate", simulate)
     return asked
 
 
