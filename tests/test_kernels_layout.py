@@ -7,7 +7,9 @@ from __future__ import annotations
 import pytest
 
 from billiard import kernels_python as twin
+from billiard.engine_kernels import supports
 from billiard.engine_phases import COLLAPSE_COUNT
+from billiard.impact import KaneLevinsonImpact
 from billiard.kernels import layout as L
 from billiard.record import MemoryRecorder
 from billiard.scene import load_scene, with_values
@@ -114,3 +116,29 @@ def test_quantities_are_read_by_name_from_a_run():
     assert [L.CTX.read(ctx, f"engine.{n}") for n in names] == [getattr(ball, n) for n in names]
     keys = ("stick", "slip", "elastic", "resting")
     assert L.CTX.read(ctx, "engine.counts") == tuple(float(state.counts[k]) for k in keys)
+
+
+def test_landing_reads_the_impact_laws_slots():
+    """Under contact.model = "phases" the landing test reads the law's restitution and
+    elastic_below: the flights run on the kernels only while they are the scene's."""
+    scene = _scene("phases")
+    sim = Simulation(scene)
+    assert supports(sim, flights=True) is None
+    sim.run(300, MemoryRecorder())
+    ctx = sim._flights.ctx
+    assert L.CTX.read(ctx, "engine.land_on") == 1.0
+    assert L.CTX.read(ctx, "impact.restitution") == 0.8125
+    assert L.CTX.read(ctx, "impact.elastic_below") == 0.0375
+    for restitution, below in ((0.5, 0.0375), (0.8125, 0.05)):
+        law = KaneLevinsonImpact(
+            scene.ball.mass,
+            scene.ball.radius,
+            scene.ball.inertia_factor,
+            restitution,
+            scene.contact.mu_static,
+            scene.contact.mu_kinetic,
+            below,
+        )
+        other = Simulation(scene, law=law)
+        assert "restitution or elastic_below" in supports(other, flights=True)
+        assert other._flights is None

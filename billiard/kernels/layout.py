@@ -18,7 +18,10 @@ read; :data:`CTX` is the declaration, by which a reader finds a quantity by name
 
 Each model (flight, impact law, locator, contact phase, hold) keeps its coefficients in
 its own block, and the interpreted models keep their own ``ctx`` in this layout; the
-engine's is assembled from theirs (``kernels/state.py``). No file stores a slot number.
+engine's is assembled from theirs (``kernels/state.py``). ``contact.restitution`` and
+``contact.elastic_below`` have one slot each, the impact law's (``IM_E``, ``IM_EB``),
+which the landing test of ``contact.model = "phases"`` reads too. No file stores a slot
+number.
 
 Also the codes the kernels use for surfaces, regimes, statuses and errors.
 """
@@ -182,6 +185,8 @@ FLIGHT_ADAPTIVE = 1.0
 FLIGHT_RK4 = 2.0  # the paper's fixed-step RK4 (method "rk4"; kernels: fixed_step.py)
 
 # --- impact law and ball ------------------------------------------------------------
+# contact.restitution and contact.elastic_below: the impact law's, and the landing test's
+# of contact.model = "phases" (loop.settles)
 CTX.begin("impact")
 IM_M = _ctx("IM_M", "mass", 1, "kg", "mass")
 IM_R = _ctx("IM_R", "radius", 1, "m", "radius")
@@ -189,7 +194,7 @@ IM_K = _ctx("IM_K", "inertia_factor", 1, "", "inertia factor I / (m r^2)")
 IM_E = _ctx("IM_E", "restitution", 1, "", "Newton's coefficient of restitution")
 IM_MUS = _ctx("IM_MUS", "mu_static", 1, "", "static friction")
 IM_MUK = _ctx("IM_MUK", "mu_kinetic", 1, "", "kinetic friction")
-IM_EB = _ctx("IM_EB", "elastic_below", 1, "m/s", "low-velocity threshold")
+IM_EB = _ctx("IM_EB", "elastic_below", 1, "m/s", "low-velocity threshold; the landing speed")
 
 # --- engine state -------------------------------------------------------------------
 CTX.begin("engine")
@@ -217,10 +222,9 @@ EN_ERR_VALUE = _ctx("EN_ERR_VALUE", "error_value", 1, "", "the value a stop name
 EN_EVENT_T = _ctx("EN_EVENT_T", "event_t", 1, "s", "time of the impact being made")
 COUNTS = _ctx("COUNTS", "counts", 4, "", "impacts: stick, slip, elastic, resting")
 # landing (contact.model = "phases"): after an impact on a wall whose rebound settles, the
-# chunk ends (status LAND) so that the engine can put the ball in contact
+# chunk ends (status LAND) so that the engine can put the ball in contact; the test
+# reads IM_E and IM_EB
 EN_LAND_ON = _ctx("EN_LAND_ON", "land_on", 1, "", "1.0: watch for landings; 0.0: impacts only")
-EN_LAND_E = _ctx("EN_LAND_E", "land_restitution", 1, "", "the contact model's restitution")
-EN_LAND_BELOW = _ctx("EN_LAND_BELOW", "land_below", 1, "m/s", "the landing speed")
 EN_SETTLES = _ctx("EN_SETTLES", "settles", 1, "", "1.0: the last impact settles (status LAND)")
 EN_LAST_J = _ctx("EN_LAST_J", "last_surface", 1, "", "the last impact: its surface, ...")
 EN_LAST_S = _ctx("EN_LAST_S", "last_s", 1, "m", "... the contact point's parameter s ...")
