@@ -71,6 +71,13 @@ def supports(sim: Any, *, flights: bool = False) -> str | None:
         return "an impact law other than Kane-Levinson"
     if type(sim.flight).__name__ not in ("ExactFlight", "AdaptiveFlight", "RK4Flight"):
         return f"the flight model {type(sim.flight).__name__}"
+    if sim.phases and (sim.impact.e, sim.impact.elastic_below) != (
+        sim.contact_model.e,
+        sim.scene.contact.elastic_below,
+    ):
+        # the kernels' landing test reads the law's IM_E and IM_EB, the one-event step's
+        # (ContactPhases._settles) the scene's: another law's flights stay on the classes
+        return "an impact law whose restitution or elastic_below is not the scene's"
     return None
 
 
@@ -98,10 +105,9 @@ class KernelEngine:
         else:
             self.ctx, self.params = values, p
         if sim.phases:
-            # a chunk ends after an impact that settles: the engine lands the ball
+            # a chunk ends after an impact that settles: the engine lands the ball (the
+            # landing test reads the law's restitution and elastic_below, IM_E and IM_EB)
             self.ctx[L.EN_LAND_ON] = 1.0
-            self.ctx[L.EN_LAND_E] = sim.contact_model.e
-            self.ctx[L.EN_LAND_BELOW] = sim.scene.contact.elastic_below
         self.offsets = len(sim.boundary.offsets)
         #: when the next checkpoint is due (time.monotonic), as the latest run left it
         self.next_save = math.inf

@@ -3,113 +3,260 @@ constants, the flight's and the locator's working state, the engine state and on
 per surface. One array, so that a kernel call passes one reference (numba counts
 references on every array argument of a call it does not inline).
 
+Every quantity is declared once, in order, with its name, size, unit and meaning::
+
+    IM_E = _ctx("IM_E", "restitution", 1, "", "Newton's coefficient of restitution")
+
+gives ``IM_E`` the next free slot: the slots are consecutive, none is numbered by hand
+(the constant's name is declared with it, and ``CTX.mismatches(globals())``, which the
+tests run, lists any constant not bound to its declared slot). The constants stay plain
+module-level integers (numba compiles them in as constants) and are what the kernels
+read; :data:`CTX` is the declaration, by which a reader finds a quantity by name:
+``CTX.slot("impact.restitution")`` (a :class:`Slot`: index, size, unit, meaning),
+``CTX.read(ctx, "engine.t")`` and ``print(describe())``. A block of a surface (offsets
+``S_*``, :data:`SURFACE`) is declared the same way.
+
+Each model (flight, impact law, locator, contact phase, hold) keeps its coefficients in
+its own block, and the interpreted models keep their own ``ctx`` in this layout; the
+engine's is assembled from theirs (``kernels/state.py``). ``contact.restitution`` and
+``contact.elastic_below`` have one slot each, the impact law's (``IM_E``, ``IM_EB``),
+which the landing test of ``contact.model = "phases"`` reads too. No file stores a slot
+number.
+
 Also the codes the kernels use for surfaces, regimes, statuses and errors.
 """
 
 from __future__ import annotations
 
-# --- drive and locator ------------------------------------------------------------
-AMP = 0  # drive amplitude (m)
-OMEGA = 1  # drive angular frequency (rad/s)
-HORIZ = 2  # 1.0: horizontal drive, 0.0: vertical
-DRIVE_ACCEL = 3  # A w^2 (m/s^2)
-G = 4  # gravity (m/s^2)
-H_FIRST = 5  # first substep of a flight (s)
-H_LONGEST = 6  # longest proven-clear substep (s)
-TURN = 7  # rho / 2 of the offset curves (m)
-H_BRACKET = 8  # longest root bracket of the current substep (s)
-SPLIT = 9  # 1.0 when a substep had to be split
-THETA0 = 10  # drive angle at the start of the flight (rad)
-NSURF = 11  # number of surfaces
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+
+
+@dataclass(frozen=True)
+class Slot:
+    """One quantity: ``size`` consecutive floats of a layout from ``index``."""
+
+    #: the module-level constant that holds ``index`` (e.g. ``"IM_E"``)
+    constant: str
+    #: ``block.quantity`` (e.g. ``"impact.restitution"``)
+    name: str
+    index: int
+    size: int
+    #: SI unit ("" for a number without unit, a code or a flag)
+    unit: str
+    meaning: str
+
+    @property
+    def stop(self) -> int:
+        """The slot after the quantity's last."""
+        return self.index + self.size
+
+
+class Layout:
+    """Quantities declared one after the other, in blocks; each takes the next free
+    slots, so the layout has neither gaps nor overlaps."""
+
+    def __init__(self, title: str):
+        self.title = title
+        self.slots: list[Slot] = []
+        #: (name, start, stop) of each block, in order
+        self.blocks: list[tuple[str, int, int]] = []
+        self._block: str | None = None
+        self._start = 0
+        self._lookup: dict[str, Slot] = {}
+
+    @property
+    def size(self) -> int:
+        """Slots declared so far: the length of a vector in this layout."""
+        return self.slots[-1].stop if self.slots else 0
+
+    def begin(self, block: str) -> int:
+        """Open ``block`` (its quantities are named ``block.name``) at the next free
+        slot, which is returned; an open block is closed first."""
+        self.end()
+        self._block, self._start = block, self.size
+        return self._start
+
+    def end(self) -> int:
+        """Close the open block, if any; returns the slot after it."""
+        if self._block is not None:
+            self.blocks.append((self._block, self._start, self.size))
+            self._block = None
+        return self.size
+
+    def add(self, constant: str, name: str, size: int, unit: str, meaning: str) -> int:
+        """Declare a quantity of ``size`` slots at the next free slot, which is
+        returned (the value of ``constant``)."""
+        if size < 1:
+            raise ValueError(f"{constant}: a quantity of {size} slots")
+        full = name if self._block is None else f"{self._block}.{name}"
+        for key in (constant, full):
+            if key in self._lookup:
+                raise ValueError(f"{key} declared twice in the {self.title} layout")
+        slot = Slot(constant, full, self.size, size, unit, meaning)
+        self.slots.append(slot)
+        self._lookup[constant] = self._lookup[full] = slot
+        return slot.index
+
+    def slot(self, name: str) -> Slot:
+        """The quantity called ``name`` (``"impact.restitution"``) or held by the
+        constant ``name`` (``"IM_E"``).
+
+        Raises:
+            KeyError: no such quantity.
+        """
+        try:
+            return self._lookup[name]
+        except KeyError:
+            raise KeyError(f"no quantity {name!r} in the {self.title} layout") from None
+
+    def read(self, vector: Sequence[float], name: str) -> float | tuple[float, ...]:
+        """The value of the quantity ``name`` in ``vector`` (a tuple when it has more
+        than one slot)."""
+        slot = self.slot(name)
+        if slot.size == 1:
+            return float(vector[slot.index])
+        return tuple(float(x) for x in vector[slot.index : slot.stop])
+
+    def describe(self) -> str:
+        """The layout as a table: index, size, constant, name, unit, meaning."""
+        lines = [f"{'index':>5} {'size':>4}  {'constant':<16} {'name':<32} {'unit':<8} meaning"]
+        for s in self.slots:
+            unit = s.unit or "-"
+            lines.append(
+                f"{s.index:>5} {s.size:>4}  {s.constant:<16} {s.name:<32} {unit:<8} {s.meaning}"
+            )
+        return "\n".join(lines)
+
+    def mismatches(self, namespace: Mapping[str, object]) -> list[str]:
+        """The declared constants that ``namespace`` (a module's globals) does not
+        bind to their index."""
+        return [
+            f"{s.constant} = {namespace.get(s.constant)!r}, declared {s.index}"
+            for s in self.slots
+            if type(namespace.get(s.constant)) is not int or namespace[s.constant] != s.index
+        ]
+
+
+#: the state vector ``ctx``
+CTX = Layout("ctx")
+#: one surface's block of ``ctx`` (offsets from the block's start)
+SURFACE = Layout("surface")
+_ctx = CTX.add
+_surface = SURFACE.add
+
+# --- drive ------------------------------------------------------------------------
+CTX.begin("drive")
+AMP = _ctx("AMP", "amplitude", 1, "m", "drive amplitude")
+OMEGA = _ctx("OMEGA", "omega", 1, "rad/s", "drive angular frequency")
+HORIZ = _ctx("HORIZ", "horizontal", 1, "", "1.0: horizontal drive, 0.0: vertical")
+DRIVE_ACCEL = _ctx("DRIVE_ACCEL", "peak_acceleration", 1, "m/s^2", "A w^2")
+
+# --- locator ----------------------------------------------------------------------
+CTX.begin("locator")
+G = _ctx("G", "gravity", 1, "m/s^2", "gravity (the flight's too)")
+H_FIRST = _ctx("H_FIRST", "first_substep", 1, "s", "first substep of a flight")
+H_LONGEST = _ctx("H_LONGEST", "longest_substep", 1, "s", "longest proven-clear substep")
+TURN = _ctx("TURN", "turn", 1, "m", "rho / 2 of the offset curves")
+H_BRACKET = _ctx("H_BRACKET", "longest_bracket", 1, "s", "longest root bracket of the substep")
+SPLIT = _ctx("SPLIT", "split", 1, "", "1.0 when a substep had to be split")
+THETA0 = _ctx("THETA0", "theta0", 1, "rad", "drive angle at the start of the flight")
+NSURF = _ctx("NSURF", "surfaces", 1, "", "number of surfaces")
 
 # --- flight -------------------------------------------------------------------------
-FL_KIND = 16  # FLIGHT_EXACT or FLIGHT_ADAPTIVE
-FL_M = 17  # mass (kg)
-FL_CLIN = 18  # Fowles linear drag (N s/m)
-FL_CQUAD = 19  # Fowles quadratic drag (N s^2/m^2)
-FL_CMAG = 20  # Magnus coefficient (kg)
-FL_RTOL = 21  # Dormand-Prince tolerance
-FL_H = 22  # step proposal, carried from flight to flight (s)
-FL_U3 = 23  # spin of the current flight (rad/s)
-FL_TA = 24  # start of the current step (s)
-FL_TB = 25  # end of the current step (s)
-FL_YA = 26  # (q1, q2, u1, u2) at FL_TA: 26..29
-FL_YB = 30  # (q1, q2, u1, u2) at FL_TB: 30..33
-FL_KA = 34  # acceleration at FL_TA: 34, 35
-FL_KB = 36  # acceleration at FL_TB: 36, 37
+CTX.begin("flight")
+FL_KIND = _ctx("FL_KIND", "kind", 1, "", "FLIGHT_EXACT, FLIGHT_ADAPTIVE or FLIGHT_RK4")
+FL_M = _ctx("FL_M", "mass", 1, "kg", "mass")
+FL_CLIN = _ctx("FL_CLIN", "c_lin", 1, "N s/m", "Fowles linear drag")
+FL_CQUAD = _ctx("FL_CQUAD", "c_quad", 1, "N s^2/m^2", "Fowles quadratic drag")
+FL_CMAG = _ctx("FL_CMAG", "c_magnus", 1, "kg", "Magnus coefficient")
+FL_RTOL = _ctx("FL_RTOL", "rtol", 1, "", "Dormand-Prince tolerance")
+FL_H = _ctx("FL_H", "step", 1, "s", "step proposal, carried from flight to flight")
+FL_U3 = _ctx("FL_U3", "u3", 1, "rad/s", "spin of the current flight")
+FL_TA = _ctx("FL_TA", "ta", 1, "s", "start of the current step")
+FL_TB = _ctx("FL_TB", "tb", 1, "s", "end of the current step")
+FL_YA = _ctx("FL_YA", "ya", 4, "m, m/s", "(q1, q2, u1, u2) at FL_TA")
+FL_YB = _ctx("FL_YB", "yb", 4, "m, m/s", "(q1, q2, u1, u2) at FL_TB")
+FL_KA = _ctx("FL_KA", "ka", 2, "m/s^2", "acceleration at FL_TA")
+FL_KB = _ctx("FL_KB", "kb", 2, "m/s^2", "acceleration at FL_TB")
 
 FLIGHT_EXACT = 0.0
 FLIGHT_ADAPTIVE = 1.0
 FLIGHT_RK4 = 2.0  # the paper's fixed-step RK4 (method "rk4"; kernels: fixed_step.py)
 
 # --- impact law and ball ------------------------------------------------------------
-IM_M = 40  # mass (kg)
-IM_R = 41  # radius (m)
-IM_K = 42  # inertia factor
-IM_E = 43  # restitution
-IM_MUS = 44  # static friction
-IM_MUK = 45  # kinetic friction
-IM_EB = 46  # low-velocity threshold (m/s)
+# contact.restitution and contact.elastic_below: the impact law's, and the landing test's
+# of contact.model = "phases" (loop.settles)
+CTX.begin("impact")
+IM_M = _ctx("IM_M", "mass", 1, "kg", "mass")
+IM_R = _ctx("IM_R", "radius", 1, "m", "radius")
+IM_K = _ctx("IM_K", "inertia_factor", 1, "", "inertia factor I / (m r^2)")
+IM_E = _ctx("IM_E", "restitution", 1, "", "Newton's coefficient of restitution")
+IM_MUS = _ctx("IM_MUS", "mu_static", 1, "", "static friction")
+IM_MUK = _ctx("IM_MUK", "mu_kinetic", 1, "", "kinetic friction")
+IM_EB = _ctx("IM_EB", "elastic_below", 1, "m/s", "low-velocity threshold; the landing speed")
 
 # --- engine state -------------------------------------------------------------------
-EN_T = 50  # ball: t, theta, q1, q2, u1, u2, u3, q3 at 50..57
-EN_THETA = 51
-EN_Q1 = 52
-EN_Q2 = 53
-EN_U1 = 54
-EN_U2 = 55
-EN_U3 = 56
-EN_Q3 = 57
-EN_CLOCK = 58  # compensated clock: sum ...
-EN_CLOCK_ERR = 59  # ... and its running error
-EN_ZERO = 60  # consecutive zero flights
-EN_IMPACTS = 61  # impacts so far
-EN_UNTIL = 62  # simulated time at which the run ends (inf: none)
-EN_RCOUNT = 63  # impacts in the collapse window (ring at RECENT)
-EN_RHEAD = 64  # ring index of the oldest of them
-EN_TARGET = 65  # impact number to stop at
-EN_FAULT = 66  # 1.0: a collapse was detected after the last impact
+CTX.begin("engine")
+EN_T = _ctx("EN_T", "t", 1, "s", "the ball: time")
+EN_THETA = _ctx("EN_THETA", "theta", 1, "rad", "... drive angle")
+EN_Q1 = _ctx("EN_Q1", "q1", 1, "m", "... position x")
+EN_Q2 = _ctx("EN_Q2", "q2", 1, "m", "... position y")
+EN_U1 = _ctx("EN_U1", "u1", 1, "m/s", "... velocity x")
+EN_U2 = _ctx("EN_U2", "u2", 1, "m/s", "... velocity y")
+EN_U3 = _ctx("EN_U3", "u3", 1, "rad/s", "... spin")
+EN_Q3 = _ctx("EN_Q3", "q3", 1, "rad", "... rotation angle")
+EN_CLOCK = _ctx("EN_CLOCK", "clock", 1, "s", "compensated clock: sum ...")
+EN_CLOCK_ERR = _ctx("EN_CLOCK_ERR", "clock_error", 1, "s", "... and its running error")
+EN_ZERO = _ctx("EN_ZERO", "zero_flights", 1, "", "consecutive zero flights")
+EN_IMPACTS = _ctx("EN_IMPACTS", "impacts", 1, "", "impacts so far")
+EN_UNTIL = _ctx("EN_UNTIL", "until", 1, "s", "simulated time at which the run ends (inf: none)")
+EN_RCOUNT = _ctx("EN_RCOUNT", "recent_count", 1, "", "impacts in the collapse window")
+EN_RHEAD = _ctx("EN_RHEAD", "recent_head", 1, "", "ring index of the oldest of them")
+EN_TARGET = _ctx("EN_TARGET", "target", 1, "", "impact number to stop at")
+EN_FAULT = _ctx("EN_FAULT", "fault", 1, "", "1.0: a collapse after the last impact")
 # for the message of a stop: the value it names (tau_a of a failed step-size control, x
 # of a failed offset inversion) and the time of the impact being made (nan while the
 # next impact is searched for)
-EN_ERR_VALUE = 67
-EN_EVENT_T = 68
-COUNTS = 70  # stick, slip, elastic, resting: 70..73
+EN_ERR_VALUE = _ctx("EN_ERR_VALUE", "error_value", 1, "", "the value a stop names")
+EN_EVENT_T = _ctx("EN_EVENT_T", "event_t", 1, "s", "time of the impact being made")
+COUNTS = _ctx("COUNTS", "counts", 4, "", "impacts: stick, slip, elastic, resting")
 # landing (contact.model = "phases"): after an impact on a wall whose rebound settles, the
-# chunk ends (status LAND) so that the engine can put the ball in contact
-EN_LAND_ON = 74  # 1.0: watch for landings; 0.0: impacts only
-EN_LAND_E = 75  # the contact model's restitution
-EN_LAND_BELOW = 76  # the landing speed, contact.elastic_below (m/s)
-EN_SETTLES = 77  # 1.0: the last impact settles (the chunk ended with LAND)
-EN_LAST_J = 78  # the last impact: its surface, ...
-EN_LAST_S = 79  # ... the contact point's parameter s (m) ...
-EN_LAST_WN = 80  # ... the relative normal speed before it (m/s) ...
-EN_LAST_REGIME = 81  # ... and its regime (STICK, SLIP, ELASTIC)
+# chunk ends (status LAND) so that the engine can put the ball in contact; the test
+# reads IM_E and IM_EB
+EN_LAND_ON = _ctx("EN_LAND_ON", "land_on", 1, "", "1.0: watch for landings; 0.0: impacts only")
+EN_SETTLES = _ctx("EN_SETTLES", "settles", 1, "", "1.0: the last impact settles (status LAND)")
+EN_LAST_J = _ctx("EN_LAST_J", "last_surface", 1, "", "the last impact: its surface, ...")
+EN_LAST_S = _ctx("EN_LAST_S", "last_s", 1, "m", "... the contact point's parameter s ...")
+EN_LAST_WN = _ctx("EN_LAST_WN", "last_wn", 1, "m/s", "... the normal speed before it ...")
+EN_LAST_REGIME = _ctx("EN_LAST_REGIME", "last_regime", 1, "", "... and its regime")
+CTX.end()
 
 # --- surfaces -----------------------------------------------------------------------
-SURF = 100
-SURF_STRIDE = 16
-MAX_SURFACES = 16
-# offsets in a surface's block
-S_KIND = 0
-S_WALL = 1  # wall index (curved and straight walls)
-S_A = 2  # curved: r;          line: b;         lid, escape: level
-S_B = 3  # curved: bend_bound; line: intercept
-S_C = 4  # curved: bend_abs;   line: shift
-S_D = 5  # line: z
-S_E = 6  # line: cos z
+# a surface's block, SURF_STRIDE slots: offsets from its start
+SURFACE.begin("surface")
+S_KIND = _surface("S_KIND", "kind", 1, "", "CURVED, LINE, LID or ESCAPE")
+S_WALL = _surface("S_WALL", "wall", 1, "", "wall index (curved and straight walls)")
+S_A = _surface("S_A", "a", 1, "", "curved: r (m); line: b; lid, escape: level (m)")
+S_B = _surface("S_B", "b", 1, "", "curved: bend_bound (1/m); line: intercept (m)")
+S_C = _surface("S_C", "c", 1, "", "curved: bend_abs (1/m); line: shift (m)")
+S_D = _surface("S_D", "d", 1, "rad", "line: z")
+S_E = _surface("S_E", "e", 1, "", "line: cos z")
 # curved: the slope memo, f'(s) at s = S_SLOPE_AT as S_SLOPE (nan: none), so that an
 # inversion starting where the last one ended does not call f' there again; a block copied
 # from a surface (Surface.block) carries no memo
-S_SLOPE_AT = 7
-S_WS = 8  # warm start: s
-S_WSLOPE = 9  # warm start: slope
-S_GA = 10  # G, dG/dtau at the substep's start
-S_DGA = 11
-S_GB = 12  # G, dG/dtau at its end
-S_DGB = 13
-S_LEAVING = 14  # 1.0: the ball is separating from it
-S_SLOPE = 15
+S_SLOPE_AT = _surface("S_SLOPE_AT", "slope_at", 1, "m", "the slope memo: s (nan: none)")
+S_WS = _surface("S_WS", "warm_s", 1, "m", "warm start: s")
+S_WSLOPE = _surface("S_WSLOPE", "warm_slope", 1, "", "warm start: slope")
+S_GA = _surface("S_GA", "ga", 1, "m", "G at the substep's start")
+S_DGA = _surface("S_DGA", "dga", 1, "m/s", "dG/dtau at the substep's start")
+S_GB = _surface("S_GB", "gb", 1, "m", "G at its end")
+S_DGB = _surface("S_DGB", "dgb", 1, "m/s", "dG/dtau at its end")
+S_LEAVING = _surface("S_LEAVING", "leaving", 1, "", "1.0: the ball is separating from it")
+S_SLOPE = _surface("S_SLOPE", "slope", 1, "", "the slope memo: f'(S_SLOPE_AT)")
+SURF_STRIDE = SURFACE.end()
+MAX_SURFACES = 16
+SURF = _ctx("SURF", "surfaces", MAX_SURFACES * SURF_STRIDE, "", "one block per surface")
 
 CURVED = 0.0
 LINE = 1.0
@@ -117,67 +264,70 @@ LID = 2.0
 ESCAPE = 3.0
 
 # --- collapse window ----------------------------------------------------------------
-RECENT = 400  # ring of the latest impact times (COLLAPSE_COUNT + 1 slots)
+#: slots of the ring: billiard.engine_phases.COLLAPSE_COUNT + 1 (a test checks it)
+RECENT_SLOTS = 201
+RECENT = _ctx("RECENT", "recent", RECENT_SLOTS, "s", "ring of the latest impact times")
 
 # --- the locator's pending substeps (the right halves still to scan) ---------------
-STACK = 640
 STACK_ENTRY = 7  # ta, G(ta), dG(ta), tb, G(tb), dG(tb), splits
 STACK_DEPTH = 24
+STACK = _ctx("STACK", "stack", STACK_ENTRY * STACK_DEPTH, "", "pending substeps")
 
 # --- a contact phase (rolling or sliding on one wall) -----------------------------
 # The phase's constants, its Dormand-Prince state between calls (a phase is resumable:
 # it returns at every sample time and goes on from there), the step's dense output, and
 # the transition functions ("conditions") at the step's ends. Kernels: contact.py.
-PH = STACK + STACK_ENTRY * STACK_DEPTH
-PH_M = PH  # mass (kg)
-PH_R = PH + 1  # radius (m)
-PH_K = PH + 2  # inertia factor
-PH_G = PH + 3  # gravity (m/s^2)
-PH_CLIN = PH + 4  # Fowles linear drag (N s/m)
-PH_CQUAD = PH + 5  # Fowles quadratic drag (N s^2/m^2)
-PH_MUS = PH + 6  # static friction
-PH_MUK = PH + 7  # kinetic friction
-PH_RTOL = PH + 8  # the step's relative tolerance
-PH_WALL = PH + 9  # index of the phase's wall in the wall functions
-PH_SURF = PH + 10  # index of the phase's wall among the surfaces (not watched)
-PH_LO = PH + 11  # the wall's interval (m)
-PH_HI = PH + 12
-PH_MODE = PH + 13  # ROLL or SLIDE
-PH_SGN = PH + 14  # sign of the slip while sliding
-PH_THETA0 = PH + 15  # drive angle at the phase's start (rad)
-PH_LIMIT = PH + 16  # longest duration (s; inf: none)
-PH_STAGE = PH + 17  # where the phase goes on: STAGE_STEP, STAGE_EMIT, STAGE_SKIP
-PH_TAU = PH + 18  # time since the phase's start (s)
-PH_H = PH + 19  # step proposal (s)
-PH_STEPS = PH + 20  # accepted steps
-PH_HMAX = PH + 21  # longest step (s)
-PH_RSPAN = PH + 22  # rest span: a drive period (0 on a static boundary)
-PH_RSINCE = PH + 23  # at rest relative to the boundary since (s; inf: moving)
-PH_NEXT = PH + 24  # next sample time (s; inf: none)
-PH_ERR = PH + 25  # scaled error of the last step
-PH_TA = PH + 26  # the last step: its start (s), length (s), end (s)
-PH_HSTEP = PH + 27
-PH_TB = PH + 28
-PH_END_T = PH + 29  # the end found in the last step: time (s), condition (-1: none)
-PH_END_I = PH + 30
-PH_SAMPLE_T = PH + 31  # a sample handed out: time (s)
-PH_Y = PH + 32  # y = (s, s_dot, u3) at PH_TAU: 32..34 (u3 unused while rolling)
-PH_YB = PH + 35  # y at the last step's end: 35..37
-PH_YI = PH + 38  # a stage's argument: 38..40
-PH_YD = PH + 41  # the dense output at a root candidate: 41..43
-PH_END_Y = PH + 44  # y at the end found: 44..46
-PH_SAMPLE_Y = PH + 47  # y of the sample handed out: 47..49
-PH_KS = PH + 50  # the seven stages' derivatives, 3 per stage: 50..70
+PH = CTX.begin("phase")
+PH_M = _ctx("PH_M", "mass", 1, "kg", "mass")
+PH_R = _ctx("PH_R", "radius", 1, "m", "radius")
+PH_K = _ctx("PH_K", "inertia_factor", 1, "", "inertia factor")
+PH_G = _ctx("PH_G", "gravity", 1, "m/s^2", "gravity")
+PH_CLIN = _ctx("PH_CLIN", "c_lin", 1, "N s/m", "Fowles linear drag")
+PH_CQUAD = _ctx("PH_CQUAD", "c_quad", 1, "N s^2/m^2", "Fowles quadratic drag")
+PH_MUS = _ctx("PH_MUS", "mu_static", 1, "", "static friction")
+PH_MUK = _ctx("PH_MUK", "mu_kinetic", 1, "", "kinetic friction")
+PH_RTOL = _ctx("PH_RTOL", "rtol", 1, "", "the step's relative tolerance")
+PH_WALL = _ctx("PH_WALL", "wall", 1, "", "index of the phase's wall in the wall functions")
+PH_SURF = _ctx("PH_SURF", "surface", 1, "", "... among the surfaces (not watched)")
+PH_LO = _ctx("PH_LO", "lo", 1, "m", "the wall's interval: start")
+PH_HI = _ctx("PH_HI", "hi", 1, "m", "... end")
+PH_MODE = _ctx("PH_MODE", "mode", 1, "", "ROLL or SLIDE")
+PH_SGN = _ctx("PH_SGN", "slip_sign", 1, "", "sign of the slip while sliding")
+PH_THETA0 = _ctx("PH_THETA0", "theta0", 1, "rad", "drive angle at the phase's start")
+PH_LIMIT = _ctx("PH_LIMIT", "limit", 1, "s", "longest duration (inf: none)")
+PH_STAGE = _ctx("PH_STAGE", "stage", 1, "", "STAGE_STEP, STAGE_EMIT or STAGE_SKIP")
+PH_TAU = _ctx("PH_TAU", "tau", 1, "s", "time since the phase's start")
+PH_H = _ctx("PH_H", "step", 1, "s", "step proposal")
+PH_STEPS = _ctx("PH_STEPS", "steps", 1, "", "accepted steps")
+PH_HMAX = _ctx("PH_HMAX", "longest_step", 1, "s", "longest step")
+PH_RSPAN = _ctx("PH_RSPAN", "rest_span", 1, "s", "a drive period (0 on a static boundary)")
+PH_RSINCE = _ctx("PH_RSINCE", "rest_since", 1, "s", "at rest since (inf: moving)")
+PH_NEXT = _ctx("PH_NEXT", "next_sample", 1, "s", "next sample time (inf: none)")
+PH_ERR = _ctx("PH_ERR", "error", 1, "", "scaled error of the last step")
+PH_TA = _ctx("PH_TA", "ta", 1, "s", "the last step: its start, ...")
+PH_HSTEP = _ctx("PH_HSTEP", "h", 1, "s", "... length ...")
+PH_TB = _ctx("PH_TB", "tb", 1, "s", "... and end")
+PH_END_T = _ctx("PH_END_T", "end_t", 1, "s", "the end found in the last step: time ...")
+PH_END_I = _ctx("PH_END_I", "end_condition", 1, "", "... and condition (-1: none)")
+PH_SAMPLE_T = _ctx("PH_SAMPLE_T", "sample_t", 1, "s", "a sample handed out: time")
+# y = (s, s_dot, u3) (m, m/s, rad/s; u3 unused while rolling)
+PH_Y = _ctx("PH_Y", "y", 3, "m, m/s, rad/s", "y at PH_TAU")
+PH_YB = _ctx("PH_YB", "yb", 3, "m, m/s, rad/s", "y at the last step's end")
+PH_YI = _ctx("PH_YI", "yi", 3, "m, m/s, rad/s", "a stage's argument")
+PH_YD = _ctx("PH_YD", "yd", 3, "m, m/s, rad/s", "the dense output at a root candidate")
+PH_END_Y = _ctx("PH_END_Y", "end_y", 3, "m, m/s, rad/s", "y at the end found")
+PH_SAMPLE_Y = _ctx("PH_SAMPLE_Y", "sample_y", 3, "m, m/s, rad/s", "y of the sample handed out")
+PH_KS = _ctx("PH_KS", "stages", 21, "", "the seven stages' derivatives, 3 per stage")
 PH_NCOND = 20  # conditions: normal force, two wall ends, friction, one per other surface
-PH_CPREV = PH + 71  # conditions at the step's start
-PH_CNEW = PH_CPREV + PH_NCOND  # ... at its end
-PH_CTMP = PH_CNEW + PH_NCOND  # ... at a root candidate
+PH_CPREV = _ctx("PH_CPREV", "conditions_start", PH_NCOND, "", "conditions at the step's start")
+PH_CNEW = _ctx("PH_CNEW", "conditions_end", PH_NCOND, "", "... at its end")
+PH_CTMP = _ctx("PH_CTMP", "conditions_candidate", PH_NCOND, "", "... at a root candidate")
 # the phase pauses between two steps (PHASE_PAUSE), its state untouched, once it has
 # taken PH_PAUSE steps or reached the time PH_PAUSE_T: the caller looks at its stop
 # request and its progress, then goes on (or stops the phase where it is)
-PH_PAUSE = PH_CTMP + PH_NCOND  # accepted steps at which to pause
-PH_PAUSE_T = PH_PAUSE + 1  # time since the phase's start (s) at which to pause (inf: none)
-PH_END = PH_PAUSE_T + 1
+PH_PAUSE = _ctx("PH_PAUSE", "pause_steps", 1, "", "accepted steps at which to pause")
+PH_PAUSE_T = _ctx("PH_PAUSE_T", "pause_t", 1, "s", "time since the start to pause at (inf: none)")
+PH_END = CTX.end()
 
 ROLL = 0.0
 SLIDE = 1.0
@@ -189,50 +339,56 @@ STAGE_SKIP = 2.0  # hand out the samples of skipped drive periods at rest
 # Its inputs, the hold's state between calls (resumable at sample times, as a phase),
 # and what the last step found. The constants are the phase's (PH_M .. PH_MUK) and the
 # drive's. Kernels: vertex.py.
-VX = PH_END
-VX_ZA = VX  # tangent angles (rad) of the two walls at their contact points
-VX_ZB = VX + 1
-VX_THETA0 = VX + 2  # drive angle at the hold's start (rad)
-VX_LIMIT = VX + 3  # longest duration (s; inf: none)
-VX_STAGE = VX + 4  # where the hold goes on: STAGE_STEP, STAGE_EMIT, STAGE_SKIP
-VX_TAU = VX + 5  # time since the hold's start (s)
-VX_W = VX + 6  # spin u3 at VX_TAU (rad/s); the spin at the start before begin()
-VX_SIGMA = VX + 7  # its sign (0: no spin, no kinetic friction)
-VX_H = VX + 8  # longest step: 1/64 drive period (inf on a static boundary)
-VX_RSPAN = VX + 9  # rest span: a drive period (0 on a static boundary)
-VX_RSINCE = VX + 10  # without spin since (s; inf: spinning)
-VX_NEXT = VX + 11  # next sample time (s; inf: none)
-VX_STOPS = VX + 12  # the last step: when a static boundary stops the spin (s; inf: no)
-VX_END_T = VX + 13  # ... its end (s): a release, the time limit or the step's end
-VX_KEEPS = VX + 14  # ... the wall still pressing after a release (0, 1; -1 neither;
-#                        -2: no release)
-VX_W_END = VX + 15  # ... the spin at VX_END_T (rad/s)
-VX_SAMPLE_T = VX + 16  # a sample handed out: time (s) and spin (rad/s)
-VX_SAMPLE_W = VX + 17
-VX_END = VX + 18
+VX = CTX.begin("hold")
+VX_ZA = _ctx("VX_ZA", "za", 1, "rad", "tangent angle of the first wall at its contact point")
+VX_ZB = _ctx("VX_ZB", "zb", 1, "rad", "... of the second")
+VX_THETA0 = _ctx("VX_THETA0", "theta0", 1, "rad", "drive angle at the hold's start")
+VX_LIMIT = _ctx("VX_LIMIT", "limit", 1, "s", "longest duration (inf: none)")
+VX_STAGE = _ctx("VX_STAGE", "stage", 1, "", "STAGE_STEP, STAGE_EMIT or STAGE_SKIP")
+VX_TAU = _ctx("VX_TAU", "tau", 1, "s", "time since the hold's start")
+VX_W = _ctx("VX_W", "spin", 1, "rad/s", "spin u3 at VX_TAU; the spin at the start before begin")
+VX_SIGMA = _ctx("VX_SIGMA", "spin_sign", 1, "", "its sign (0: no spin, no kinetic friction)")
+VX_H = _ctx("VX_H", "step", 1, "s", "longest step: 1/64 drive period (inf: static)")
+VX_RSPAN = _ctx("VX_RSPAN", "rest_span", 1, "s", "a drive period (0 on a static boundary)")
+VX_RSINCE = _ctx("VX_RSINCE", "rest_since", 1, "s", "without spin since (inf: spinning)")
+VX_NEXT = _ctx("VX_NEXT", "next_sample", 1, "s", "next sample time (inf: none)")
+VX_STOPS = _ctx("VX_STOPS", "stops", 1, "s", "the last step: a static boundary stops the spin")
+VX_END_T = _ctx("VX_END_T", "end_t", 1, "s", "... its end: a release, the limit, the step's end")
+# 0, 1: the wall still pressing after a release; -1: neither; -2: no release
+VX_KEEPS = _ctx("VX_KEEPS", "keeps", 1, "", "... the wall still pressing after a release")
+VX_W_END = _ctx("VX_W_END", "end_spin", 1, "rad/s", "... the spin at VX_END_T")
+VX_SAMPLE_T = _ctx("VX_SAMPLE_T", "sample_t", 1, "s", "a sample handed out: time ...")
+VX_SAMPLE_W = _ctx("VX_SAMPLE_W", "sample_spin", 1, "rad/s", "... and spin")
+VX_END = CTX.end()
 
 # --- the paper's fixed-step detection (method "rk4") --------------------------------
 # The step, the locator's memory between flights (the Newton starts of the walls'
 # nearest points, the departures in a row), the walls' intervals, and the global nearest
 # points the Python side computed for the search under way (kernels: fixed_step.py).
-RK = VX_END
-RK_H = RK  # the fixed step (s)
-RK_R = RK + 1  # the ball's radius (m)
-RK_NWALLS = RK + 2  # walls of the curve (the first surfaces)
-RK_LID = RK + 3  # the lid's index among the surfaces (-1: none)
-RK_ESCAPE = RK + 4  # the escape level's index (-1: none)
-RK_DEPARTURES = RK + 5  # impacts in a row found where the ball had just left the wall
-RK_ANSWERS = RK + 6  # global nearest points answered for the search under way
-RK_ASK = RK + 7  # the one asked for (E_FOOT): px, py (m), wall: 7..9
-RK_FEET = RK + 10  # Newton start of each wall's nearest point (m): MAX_SURFACES slots
-RK_FEET0 = RK_FEET + 16  # ... as the search under way found them
-RK_LO = RK_FEET0 + 16  # each wall's interval (m)
-RK_HI = RK_LO + 16
-RK_ANSWER = RK_HI + 16  # answers: px, py, wall, s; RK_MAX_ANSWERS of them
 RK_MAX_ANSWERS = 64
-RK_END = RK_ANSWER + 4 * RK_MAX_ANSWERS
+RK = CTX.begin("rk4")
+RK_H = _ctx("RK_H", "step", 1, "s", "the fixed step")
+RK_R = _ctx("RK_R", "radius", 1, "m", "the offset radius (the ball's)")
+RK_NWALLS = _ctx("RK_NWALLS", "walls", 1, "", "walls of the curve (the first surfaces)")
+RK_LID = _ctx("RK_LID", "lid", 1, "", "the lid's index among the surfaces (-1: none)")
+RK_ESCAPE = _ctx("RK_ESCAPE", "escape", 1, "", "the escape level's index (-1: none)")
+RK_DEPARTURES = _ctx("RK_DEPARTURES", "departures", 1, "", "impacts in a row just after leaving")
+RK_ANSWERS = _ctx("RK_ANSWERS", "answers", 1, "", "nearest points answered for this search")
+RK_ASK = _ctx("RK_ASK", "ask", 3, "m, m, -", "the one asked for (E_FOOT): px, py, wall")
+RK_FEET = _ctx("RK_FEET", "feet", MAX_SURFACES, "m", "Newton start of each wall's nearest point")
+RK_FEET0 = _ctx("RK_FEET0", "feet_start", MAX_SURFACES, "m", "... as the search under way found")
+RK_LO = _ctx("RK_LO", "lo", MAX_SURFACES, "m", "each wall's interval: start")
+RK_HI = _ctx("RK_HI", "hi", MAX_SURFACES, "m", "... end")
+RK_ANSWER = _ctx("RK_ANSWER", "answer", 4 * RK_MAX_ANSWERS, "", "answers: px, py (m), wall, s (m)")
+RK_END = CTX.end()
 
-SIZE = RK_END
+SIZE = CTX.size
+
+
+def describe() -> str:
+    """The state vector's layout and a surface block's, as tables."""
+    return f"{CTX.describe()}\n\n{SURFACE.describe()}"
+
 
 # --- rows ---------------------------------------------------------------------------
 # one row per impact, the columns of collisions.csv in order; regime and wall as codes

@@ -26,8 +26,6 @@ from .layout import (
     EN_EVENT_T,
     EN_FAULT,
     EN_IMPACTS,
-    EN_LAND_BELOW,
-    EN_LAND_E,
     EN_LAND_ON,
     EN_LAST_J,
     EN_LAST_REGIME,
@@ -50,6 +48,8 @@ from .layout import (
     ESCAPE,
     FULL,
     HORIZ,
+    IM_E,
+    IM_EB,
     IM_K,
     IM_M,
     IM_R,
@@ -218,16 +218,16 @@ def settles(ctx, j, kind, s, u1, u2, u3, z, vb1, vb2, regime):
     """After an impact on surface j at s with speeds (u1, u2, u3) before it: does the
     chattering it starts settle (``ContactPhases._settles``: an inelastic contact with a
     wall whose rebound speed e |wn| is at most the landing speed, or the low-velocity
-    rule applied)? Sets EN_SETTLES and the impact's EN_LAST_J, EN_LAST_S, EN_LAST_WN,
-    EN_LAST_REGIME."""
+    rule applied; e and the landing speed are the impact law's IM_E and IM_EB)? Sets
+    EN_SETTLES and the impact's EN_LAST_J, EN_LAST_S, EN_LAST_WN, EN_LAST_REGIME."""
     wt, wn = contact_velocity(u1, u2, u3, z, vb1, vb2, ctx[IM_R])
-    e = ctx[EN_LAND_E]
+    e = ctx[IM_E]
     ctx[EN_LAST_J] = j
     ctx[EN_LAST_S] = s
     ctx[EN_LAST_WN] = wn
     ctx[EN_LAST_REGIME] = regime
     ctx[EN_SETTLES] = 0.0
-    if kind != LID and rebound_settles(e, ctx[EN_LAND_BELOW], wn, regime == ELASTIC):
+    if kind != LID and rebound_settles(e, ctx[IM_EB], wn, regime == ELASTIC):
         ctx[EN_SETTLES] = 1.0
 
 
