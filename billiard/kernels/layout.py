@@ -264,7 +264,7 @@ LID = 2.0
 ESCAPE = 3.0
 
 # --- collapse window ----------------------------------------------------------------
-#: slots of the ring: billiard.engine_phases.COLLAPSE_COUNT + 1 (a test checks it)
+#: slots of the ring: billiard.kernels.rules.COLLAPSE_COUNT + 1 (a test checks it)
 RECENT_SLOTS = 201
 RECENT = _ctx("RECENT", "recent", RECENT_SLOTS, "s", "ring of the latest impact times")
 

@@ -6,14 +6,14 @@ from __future__ import annotations
 
 import pytest
 
-from billiard import kernels_python as twin
-from billiard.engine_kernels import supports
-from billiard.engine_phases import COLLAPSE_COUNT
-from billiard.impact import KaneLevinsonImpact
+from billiard.engine.kernel_engine import supports
+from billiard.engine.simulation import Simulation
+from billiard.kernels import interpreted as twin
 from billiard.kernels import layout as L
-from billiard.record import MemoryRecorder
-from billiard.scene import load_scene, with_values
-from billiard.simulate import Simulation
+from billiard.kernels.rules import COLLAPSE_COUNT
+from billiard.models.impact import KaneLevinsonImpact
+from billiard.runfile.record import MemoryRecorder
+from billiard.scene.scene import load_scene, with_values
 
 LAYOUTS = {"ctx": L.CTX, "surface": L.SURFACE}
 
