@@ -514,6 +514,8 @@ def section_throughput(t: dict, command: str) -> str:
             "i.e. of the benchmark process that forked it; `VmHWM` from `/proc/self/status` "
             "is the peak of the process's own address space.\n"
         )
+    if t.get("baseline"):
+        parts.append(report_throughput.section_baseline(t["baseline"]))
     return "\n".join(parts)
 
 

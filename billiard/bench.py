@@ -121,6 +121,13 @@ def add_bench_arguments(parser: argparse.ArgumentParser) -> None:
         help="measure nothing: redraw the figures and rewrite the page from the saved results",
     )
     parser.add_argument(
+        "--baseline",
+        metavar="REF",
+        help="with the throughput section: measure start-up and time per impact of the git "
+        "commit REF too (checked out in a temporary worktree), alternately with this "
+        "checkout's: before and after, side by side",
+    )
+    parser.add_argument(
         "--out",
         metavar="DIR",
         help="where performance.md and figures/performance/ go (default docs, "
@@ -142,6 +149,8 @@ def bench_argv(args: argparse.Namespace) -> list[str]:
         argv += ["--only", ",".join(args.only)]
     if args.render:
         argv.append("--render")
+    if args.baseline is not None:
+        argv += ["--baseline", args.baseline]
     if args.out:
         argv += ["--out", args.out]
     return argv
@@ -186,6 +195,24 @@ def _saved_results(out: Path) -> Path:
     return out / "figures" / "performance" / "results.json"
 
 
+def resolve_baseline(root: Path, ref: str, only: tuple[str, ...]) -> dict[str, str]:
+    """The commit ``--baseline REF`` names (see ``bench.baseline.resolve``), checked before
+    anything is measured: REF must be a commit of the checkout's repository, git must
+    run, and the throughput section, which compares the two, must be measured."""
+    if not only:
+        raise BenchError("bench --baseline measures; --render measures nothing: use one of them")
+    if "throughput" not in only:
+        raise BenchError(
+            "bench --baseline compares the throughput section: measure it "
+            "(`--only throughput`, or no --only)"
+        )
+    baseline = importlib.import_module("bench.baseline")
+    try:
+        return baseline.resolve(root, ref)
+    except baseline.TreeError as exc:
+        raise BenchError(f"bench --baseline: {exc}") from None
+
+
 def run_bench(args: argparse.Namespace) -> int:
     root = find_checkout()
     if root is not None and not runs_checkout(root):
@@ -202,7 +229,15 @@ def run_bench(args: argparse.Namespace) -> int:
             f"(`billiard bench{' --quick' if args.quick else ''}"
             f"{f' --out {shlex.quote(args.out)}' if args.out else ''}`)"
         )
-    path = run.main(cfg, out, only)
+    baseline = None
+    if args.baseline is not None:
+        assert root is not None  # else _bench_package raised
+        baseline = resolve_baseline(root, args.baseline, only)
+    tree_error = importlib.import_module("bench.baseline").TreeError
+    try:
+        path = run.main(cfg, out, only, baseline)
+    except tree_error as exc:  # the commit's worktree or one of its processes failed
+        raise BenchError(f"bench --baseline: {exc}") from None
     print(f"wrote {path} and {out / 'figures' / 'performance'}")
     return 0
 
