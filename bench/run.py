@@ -1,4 +1,5 @@
-"""Run the measurements, save them, draw the figures and write performance.md.
+"""Run the measurements, save them, draw the figures and write performance.md and its
+appendix of full tables, performance-tables.md.
 
 Results are kept in ``FIGURES/results.json``; ``--only`` re-measures some sections and
 takes the others from that file.
@@ -14,7 +15,7 @@ import time
 from pathlib import Path
 
 from bench import baseline as baseline_bench
-from bench import charts, contact, failures, ladder, report, throughput, workprecision
+from bench import charts, contact, failures, ladder, page, report, throughput, workprecision
 from bench import sweep as sweep_bench
 from bench.common import Config, start_scene
 from billiard.bench import SECTIONS as BENCH_SECTIONS
@@ -176,8 +177,8 @@ def code_version() -> str:
 def main(
     cfg: Config, out: Path, only: tuple[str, ...] = SECTIONS, baseline: dict | None = None
 ) -> Path:
-    """Measure the sections in ``only``, then write ``out/performance.md`` and its
-    figures in ``out/figures/performance``; ``baseline``: the
+    """Measure the sections in ``only``, then write ``out/performance.md``, its appendix
+    of full tables and its figures in ``out/figures/performance``; ``baseline``: the
     commit the throughput section is compared with (bench.baseline)."""
     figures = out / "figures" / "performance"
     figures.mkdir(parents=True, exist_ok=True)
@@ -207,7 +208,8 @@ def main(
         print(baseline_bench.summary(results["sections"]["throughput"]["baseline"]), flush=True)
     draw(results, figures, command)
     path = out / "performance.md"
-    path.write_text(report.render(results, command))
+    path.write_text(page.render(results, command))
+    (out / page.TABLES).write_text(report.render_tables(results, command))
     # the page is written whole: put the sweep section back (measured again if asked)
     sweep_bench.publish(out, sweep_bench.measure(cfg.quick) if "sweep" in only else None)
     return path

@@ -1,5 +1,6 @@
 """``billiard bench``: speed against accuracy, where methods fail, the model ladder,
-throughput; writes ``performance.md`` and its figures.
+throughput; writes ``performance.md``, its appendix of full tables
+(``performance-tables.md``) and its figures.
 
 The measurements live in the ``bench/`` folder of a source checkout (they are not part
 of the installed package); this module is the command's entry point. They measure the
@@ -118,7 +119,7 @@ def add_bench_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "--render",
         action="store_true",
-        help="measure nothing: redraw the figures and rewrite the page from the saved results",
+        help="measure nothing: redraw the figures and rewrite the pages from the saved results",
     )
     parser.add_argument(
         "--baseline",
@@ -130,8 +131,8 @@ def add_bench_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "--out",
         metavar="DIR",
-        help="where performance.md and figures/performance/ go (default docs, "
-        "or runs/bench-quick with --quick)",
+        help="where performance.md, performance-tables.md and figures/performance/ go "
+        "(default docs, or runs/bench-quick with --quick)",
     )
 
 

@@ -16,7 +16,7 @@ from pathlib import Path
 
 import pytest
 
-from bench import baseline, report_throughput
+from bench import baseline, page, report_throughput
 from billiard import bench
 from billiard.cli import main
 
@@ -98,8 +98,13 @@ def test_each_tree_runs_its_own_package(tmp_path):
     assert "\n" not in str(caught.value) and str(tmp_path) in str(caught.value)
 
 
-def test_the_tables_and_the_terminal_show_both_columns(measured):
+def test_the_page_the_tables_and_the_terminal_show_both_columns(measured):
     [rate] = measured["rates"]
+    short = page.section_baseline(measured)
+    for value in (rate["new"]["per_impact"], rate["old"]["per_impact"]):
+        assert f"| {value * 1e6:.2f} |" in short
+    assert f"| {rate['ratio']:.2f}x |" in short
+    assert f"--baseline {measured['ref']}" in short and measured["short"] in short
     full = report_throughput.section_baseline(measured)
     for name in ("new", "old"):
         runs = ", ".join(report_throughput._us(x / IMPACTS) for x in rate[name]["loops"])
