@@ -73,7 +73,8 @@ def speed_ratios(wp: dict) -> list[dict]:
     return out
 
 
-def targets(results: dict, command: str) -> str:
+def target_rows(results: dict) -> list[list[str]]:
+    """The targets table's rows: target, what was measured, verdict ("-": none)."""
     s = results["sections"]
     rows = []
     if "throughput" in s:
@@ -85,7 +86,11 @@ def targets(results: dict, command: str) -> str:
         ratios = speed_ratios(s["workprecision"])
         for method in dict.fromkeys(r["method"] for r in ratios):
             rows.append(speed_target(method, [r for r in ratios if r["method"] == method]))
-    return table(["target", "measured", "verdict"], rows)
+    return rows
+
+
+def targets(results: dict) -> str:
+    return table(["target", "measured", "verdict"], target_rows(results))
 
 
 def old_throughput_targets(t: dict) -> list[list[str]]:
@@ -128,7 +133,7 @@ def speed_verdict(r: dict) -> str:
     return f"{r['ratio']:.1f}x"
 
 
-def _like_for_like(r: dict) -> dict:
+def like_for_like(r: dict) -> dict:
     """The ratio of like to like: against the compiled default method for a method that
     ran compiled (rk4), else against the default method interpreted too, when that was
     measured (an earlier bench's results have no interpreted costs: nan)."""
@@ -138,7 +143,7 @@ def _like_for_like(r: dict) -> dict:
     return {**r, "event": slow, "ratio": r["ratio_interpreted"]}
 
 
-def _how(r: dict) -> str:
+def compared_how(r: dict) -> str:
     return "both compiled" if r.get("compiled") else "both interpreted"
 
 
@@ -146,7 +151,7 @@ def speed_target(method: str, ratios: list[dict]) -> list[str]:
     """A targets-table row: the ratio per scene and drag setting, methods compared like
     for like (the default method interpreted as the others are, when measured), and the
     verdict."""
-    ratios = [_like_for_like(r) for r in ratios]
+    ratios = [like_for_like(r) for r in ratios]
     cases = [
         f"{r['scene']} {'on' if r['drag'] == 'fowles' else 'off'}: {speed_verdict(r)}"
         for r in ratios
@@ -163,7 +168,7 @@ def speed_target(method: str, ratios: list[dict]) -> list[str]:
             f"{min(short):.1f}x to {max(short):.1f}x, up to {SPEED_TARGET / min(short):.0f}x"
             " short"
         )
-    how = _how(ratios[0]) if ratios else "both interpreted"
+    how = compared_how(ratios[0]) if ratios else "both interpreted"
     return [
         f">= 30x faster than {method} at equal accuracy (1e-9 s), {how}",
         "; ".join(cases),
@@ -235,7 +240,7 @@ def section_workprecision(wp: dict, command: str) -> str:
                 f"{num(slow['cost'], 3)}",
                 f"{num(r['other']['cost'], 3)} ({r['other']['kind']})",
                 speed_verdict(r),
-                f"{speed_verdict(_like_for_like(r))} ({_how(r)})",
+                f"{speed_verdict(like_for_like(r))} ({compared_how(r)})",
             ]
         )
     parts.append("### Cost at equal accuracy\n")
@@ -401,6 +406,7 @@ def section_ladder(lad: dict, command: str) -> str:
 
 
 def recommendations(lad: dict) -> str:
+    """Per scene, the terms whose removal changes nothing (or little) of what is reported."""
     rows = lad["rows"]
     lines = []
     for name in dict.fromkeys(r["scene"] for r in rows):
@@ -514,6 +520,8 @@ def section_throughput(t: dict, command: str) -> str:
             "i.e. of the benchmark process that forked it; `VmHWM` from `/proc/self/status` "
             "is the peak of the process's own address space.\n"
         )
+    if t.get("baseline"):
+        parts.append(report_throughput.section_baseline(t["baseline"]))
     return "\n".join(parts)
 
 
@@ -546,8 +554,9 @@ def section_profile(p: dict) -> str:
     return "\n".join(parts)
 
 
-def render(results: dict, command: str) -> str:
-    """The whole of performance.md (the prose lives in bench/text.py)."""
+def render_tables(results: dict, command: str) -> str:
+    """The whole of performance-tables.md, the appendix of full tables (the prose lives
+    in bench/text.py; performance.md is bench/page.py's)."""
     from bench import text
 
     s = results["sections"]
@@ -566,7 +575,7 @@ def render(results: dict, command: str) -> str:
             "states); the prose between the tables describes the full run's findings.\n"
         )
     out.append(loads(results))
-    out.append("## Targets\n\n" + targets(results, command) + "\n\n" + text.TARGETS)
+    out.append("## Targets\n\n" + targets(results) + "\n\n" + text.TARGETS)
     if "workprecision" in s:
         out.append(text.WORKPRECISION + "\n" + section_workprecision(s["workprecision"], command))
     if "failures" in s:
@@ -578,26 +587,18 @@ def render(results: dict, command: str) -> str:
             + text.FAILURES_AFTER
         )
     if "ladder" in s:
-        out.append(
-            text.LADDER
-            + "\n"
-            + section_ladder(s["ladder"], command)
-            + "\n### Recommendation\n\n"
-            + RECOMMENDATION_INTRO
-            + recommendations(s["ladder"])
-            + "\n\n"
-            + text.LADDER_AFTER
-        )
+        out.append(text.LADDER + "\n" + section_ladder(s["ladder"], command))
     if "throughput" in s:
         out.append(text.THROUGHPUT + "\n" + section_throughput(s["throughput"], command))
     if "profile" in s:
-        out.append(text.PROFILE + "\n" + section_profile(s["profile"]) + "\n" + text.PROFILE_AFTER)
+        out.append(text.PROFILE + "\n" + section_profile(s["profile"]))
     if "contact" in s:
         out.append(text.CONTACT + "\n" + section_contact(s["contact"], command))
     return "\n".join(out).rstrip() + "\n"
 
 
-def _ratio(x) -> str:
+def ratio_text(x) -> str:
+    """A ratio for a table: 'inf', '1,234x' or three significant digits."""
     if x is None:
         return "-"
     if math.isinf(x):
@@ -611,7 +612,7 @@ def _rate(x: float) -> str:
 
 def _paired(row: dict) -> str:
     pairs = contact_mod.paired_ratios(row)
-    return f"{_ratio(min(pairs))} to {_ratio(max(pairs))}" if pairs else "-"
+    return f"{ratio_text(min(pairs))} to {ratio_text(max(pairs))}" if pairs else "-"
 
 
 def contact_target(c: dict) -> list[str]:
@@ -619,7 +620,7 @@ def contact_target(c: dict) -> list[str]:
     rows = c["rows"]
     v = contact_mod.verdict(rows)
     chatter = [r for r in rows if r["case"] in v["compared"]]
-    measured = "; ".join(f"{r['case']}: {_ratio(r['ratio'])}" for r in chatter)
+    measured = "; ".join(f"{r['case']}: {ratio_text(r['ratio'])}" for r in chatter)
     if v["not_compared"]:
         measured += "; not compared: " + ", ".join(v["not_compared"])
     if not v["compared"]:
@@ -683,7 +684,7 @@ def section_contact(c: dict, command: str) -> str:
                     m["phases"],
                     _times(m),
                     _ended(m),
-                    _ratio(r.get("ratio")) if model == "phases" else "",
+                    ratio_text(r.get("ratio")) if model == "phases" else "",
                     _paired(r) if model == "phases" else "",
                 ]
             )
@@ -723,7 +724,7 @@ def contact_findings(c: dict) -> str:
     by = {r["case"]: r for r in c["rows"]}
 
     def listed(names: list[str]) -> str:
-        return ", ".join(f"{n} {_ratio(by[n]['ratio'])}" for n in names)
+        return ", ".join(f"{n} {ratio_text(by[n]['ratio'])}" for n in names)
 
     lines = []
     if v["compared"]:
@@ -732,7 +733,7 @@ def contact_findings(c: dict) -> str:
         lines.append(
             f"- **Target ({c['target']:g}x where chatter dominates) {state}**: "
             f"{len(v['compared']) - len(v['short'])} of {len(v['compared'])} such cases reach "
-            f"it (ratios {_ratio(min(ratios))} to {_ratio(max(ratios))})"
+            f"it (ratios {ratio_text(min(ratios))} to {ratio_text(max(ratios))})"
             + (f"; short: {listed(v['short'])}" if v["short"] else "")
             + "."
         )
@@ -752,7 +753,7 @@ def contact_findings(c: dict) -> str:
     for name in v["slower"]:
         a, b = by[name]["impacts"], by[name]["phases"]
         lines.append(
-            f"- **{name}**: phases are slower ({_ratio(by[name]['ratio'])}; the repeats' "
+            f"- **{name}**: phases are slower ({ratio_text(by[name]['ratio'])}; the repeats' "
             f"pairs {_paired(by[name])}): the ball is in "
             f'contact {100 * _in_contact(b):.1f} % of the time; "phases" makes '
             f'{b["impacts"]:,} impacts and {b["phases"]} contact phases where "impacts" makes '
@@ -765,11 +766,6 @@ def text_contact_after() -> str:
     from bench import text
 
     return text.CONTACT_AFTER
-
-
-RECOMMENDATION_INTRO = (
-    "Terms whose removal changes nothing (or little) in what the paper reports, per scene:\n\n"
-)
 
 
 def _machine(m: dict) -> str:

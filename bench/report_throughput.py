@@ -231,3 +231,64 @@ def section_throughput(t: dict, command: str) -> str:
         "array's references).\n"
     )
     return "\n".join(parts)
+
+
+def section_baseline(b: dict) -> str:
+    """The full before-and-after tables of ``--baseline``: every run of both trees."""
+    drag = {"fowles": "on", "none": "off"}
+    parts = [
+        "### Before and after\n",
+        f"`--baseline {b['ref']}`: this code ({b['new']}) against commit {b['short']} "
+        f"({b['subject']}), checked out in a temporary git worktree. Both run in fresh "
+        "processes of the same Python, each tree alone on `PYTHONPATH` (every process "
+        "checks that the billiard modules it loaded are its tree's), through the public "
+        "API (`simulate`, `load_scene`, `with_values`) and `python -m billiard.cli run`; "
+        "the two trees alternate, the order swapped each round, so that the machine's load "
+        "falls on both. Engine: "
+        + ("compiled" if b["engine"].get("compiled") else f"interpreted ({b['engine']['problem']})")
+        + ".\n",
+        f"Start-up, {b['startup_rounds']} rounds (seconds):\n",
+    ]
+    rows = [
+        [
+            r["what"],
+            r["scene"],
+            ", ".join(f"{x:.3f}" for x in r["new"]["times"]),
+            f"{r['new']['median']:.3f}",
+            ", ".join(f"{x:.3f}" for x in r["old"]["times"]),
+            f"{r['old']['median']:.3f}",
+            f"{r['ratio']:.2f}x",
+        ]
+        for r in b["startup"]
+    ]
+    header = ["what", "scene", "new, runs", "new, median", "old, runs", "old, median"]
+    parts.append(_table([*header, "new / old"], rows) + "\n")
+    parts.append(
+        f"Time per impact: the run loop of `simulate()`, records in memory "
+        f"(`Result.wall_time`), {b['rounds']} rounds of one fresh process per tree, each "
+        "making a short run to load the kernels and then the timed runs; the median of all "
+        "runs. The CPU time of the whole `simulate()` call (building the simulation "
+        "included) gives the last column:\n"
+    )
+    rows = []
+    for r in b["rates"]:
+        pairs = r["round_ratios"]
+        rows.append(
+            [
+                r["scene"],
+                drag[r["drag"]],
+                f"{r['impacts']:,} x {r['repeats']}",
+                ", ".join(_us(x / r["impacts"]) for x in r["new"]["loops"]),
+                _us(r["new"]["per_impact"]),
+                ", ".join(_us(x / r["impacts"]) for x in r["old"]["loops"]),
+                _us(r["old"]["per_impact"]),
+                f"{r['ratio']:.2f}x",
+                f"{min(pairs):.2f}x to {max(pairs):.2f}x",
+                f"{r['cpu_ratio']:.2f}x",
+            ]
+        )
+    header = ["scene", "drag", "impacts x runs per process", "new, us/impact (runs)"]
+    header += ["new, median (us)", "old, us/impact (runs)", "old, median (us)", "new / old"]
+    header += ["new / old, each round", "new / old, CPU of the call"]
+    parts.append(_table(header, rows) + "\n")
+    return "\n".join(parts)

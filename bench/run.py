@@ -1,4 +1,5 @@
-"""Run the measurements, save them, draw the figures and write performance.md.
+"""Run the measurements, save them, draw the figures and write performance.md and its
+appendix of full tables, performance-tables.md.
 
 Results are kept in ``FIGURES/results.json``; ``--only`` re-measures some sections and
 takes the others from that file.
@@ -13,7 +14,8 @@ import subprocess
 import time
 from pathlib import Path
 
-from bench import charts, contact, failures, ladder, report, throughput, workprecision
+from bench import baseline as baseline_bench
+from bench import charts, contact, failures, ladder, page, report, throughput, workprecision
 from bench import sweep as sweep_bench
 from bench.common import Config, start_scene
 from billiard.cli.bench import SECTIONS as BENCH_SECTIONS
@@ -35,7 +37,9 @@ class Starts(dict):
         return self[name]
 
 
-def measure(section: str, cfg: Config, starts: Starts) -> dict:
+def measure(section: str, cfg: Config, starts: Starts, baseline: dict | None = None) -> dict:
+    """One section's measurements; ``baseline`` (a commit, see bench.baseline.resolve)
+    adds the throughput section's before and after."""
     if section == "workprecision":
         return {"scenes": [workprecision.measure_scene(n, cfg) for n in cfg.scenes]}
     if section == "failures":
@@ -48,12 +52,26 @@ def measure(section: str, cfg: Config, starts: Starts) -> dict:
             rows += ladder.measure_scene(name, cfg.ladder_impacts, starts[name])
         return {"rows": rows}
     if section == "throughput":
+        # first: a commit that cannot be checked out or run fails the section early
+        before = (
+            baseline_bench.measure(
+                Path(__file__).resolve().parent.parent,
+                baseline,
+                cfg.scenes,
+                cfg.throughput_impacts,
+                cfg.throughput_repeats,
+                cfg.throughput_repeats,
+                cfg.startup_repeats,
+            )
+            if baseline
+            else None
+        )
         rates = [
             throughput.impact_rate(n, cfg.throughput_impacts, cfg.throughput_repeats, drag)
             for drag in ("fowles", "none")
             for n in cfg.scenes
         ]
-        return {
+        section = {
             "engine": throughput.engine_info(),
             "rates": rates,
             "bytecode": throughput.bytecode_state(),
@@ -64,6 +82,9 @@ def measure(section: str, cfg: Config, starts: Starts) -> dict:
             "startup": throughput.startup(cfg.startup_repeats),
             "memory": throughput.memory("wedge-6.6hz", cfg.memory_sizes),
         }
+        if before:
+            section["baseline"] = before
+        return section
     if section == "profile":
         return {"profiles": [throughput.profile(n, cfg.profile_impacts) for n in cfg.scenes]}
     if section == "contact":
@@ -141,7 +162,7 @@ def code_version() -> str:
                 "billiard",
                 "derivation",
                 "generated",
-                ":!billiard/bench.py",
+                ":!billiard/cli/bench.py",
             ],
             cwd=root,
             capture_output=True,
@@ -153,9 +174,12 @@ def code_version() -> str:
     return f"commit {head}" + (" with local changes to the engine" if dirty else "")
 
 
-def main(cfg: Config, out: Path, only: tuple[str, ...] = SECTIONS) -> Path:
-    """Measure the sections in ``only``, then write ``out/performance.md`` and its
-    figures in ``out/figures/performance``."""
+def main(
+    cfg: Config, out: Path, only: tuple[str, ...] = SECTIONS, baseline: dict | None = None
+) -> Path:
+    """Measure the sections in ``only``, then write ``out/performance.md``, its appendix
+    of full tables and its figures in ``out/figures/performance``; ``baseline``: the
+    commit the throughput section is compared with (bench.baseline)."""
     figures = out / "figures" / "performance"
     figures.mkdir(parents=True, exist_ok=True)
     saved = figures / "results.json"
@@ -174,15 +198,18 @@ def main(cfg: Config, out: Path, only: tuple[str, ...] = SECTIONS) -> Path:
             continue  # measured after the page is written, into its own section
         began = time.perf_counter()
         print(f"bench: {section} ...", flush=True)
-        results["sections"][section] = measure(section, cfg, starts)
+        results["sections"][section] = measure(section, cfg, starts, baseline)
         results["sections"][section]["elapsed"] = time.perf_counter() - began
         results["sections"][section]["mode"] = results["mode"]
         results["sections"][section]["load"] = list(os.getloadavg())
         print(f"bench: {section} took {time.perf_counter() - began:.0f} s", flush=True)
         saved.write_text(json.dumps(results, indent=1, default=_plain))
+    if baseline and "throughput" in only:
+        print(baseline_bench.summary(results["sections"]["throughput"]["baseline"]), flush=True)
     draw(results, figures, command)
     path = out / "performance.md"
-    path.write_text(report.render(results, command))
+    path.write_text(page.render(results, command))
+    (out / page.TABLES).write_text(report.render_tables(results, command))
     # the page is written whole: put the sweep section back (measured again if asked)
     sweep_bench.publish(out, sweep_bench.measure(cfg.quick) if "sweep" in only else None)
     return path

@@ -1,83 +1,35 @@
-"""The prose of performance.md; the numbers and tables come from bench/report.py."""
+"""The prose of performance-tables.md, the appendix of full tables: how each section is
+measured, and the notes that explain its tables; the numbers and tables come from
+bench/report.py. The prose of performance.md is in bench/page.py."""
 
-INTRO = """# Performance: speed against accuracy
+INTRO = """# Performance: the full tables
 
-Everything on this page, every number, table and figure, is written by one command:
+The tables behind [performance.md](performance.md), which has the charts and what they
+mean; each section here says how its tables are measured. Written by `{command}` ({mode}
+mode, {date}, {elapsed:.0f} s of measurements) from the raw results in
+[`figures/performance/results.json`](figures/performance/results.json).
 
-```bash
-{command}            # this page: {mode} mode, {date}, {elapsed:.0f} s of measurements
-billiard bench --quick     # the same measurements, smaller (under 2 minutes), in runs/bench-quick/
-billiard bench --only workprecision,failures   # measure some sections again, keep the rest
-billiard bench --render    # redraw figures and rewrite this page from the saved results
-```
-
-The raw results are in [`figures/performance/results.json`](figures/performance/results.json).
-Machine: {machine}. The machine is shared and noisy: a time is the median of
-several runs, speed comparisons are ratios of times measured in the same run, and single
-times can be off by tens of percent. Work is CPU time of the run loop alone
+Machine: {machine}. The machine is shared and noisy: a time is the median of several
+runs, speed comparisons are ratios of times measured in the same run, and single times
+can be off by tens of per cent. Work is CPU time of the run loop alone
 (`time.process_time`, building the simulation excluded) in sections 1 and 2, wall time
-in sections 3 and 4.
-
-Methods compared:
-
-* **event**, the default method: exact parabolic flights with drag off; with drag on an
-  error-controlled Dormand-Prince 5(4) flight (`run.rtol`); impacts located on the
-  offset-curve gap with proven no-contact intervals (`billiard/events.py`).
-* **rk4**, the paper's scheme: fixed-step classical Runge-Kutta (`run.step`), Euclidean
-  distance from Newton's method after each step, impacts refined Baraff-style.
-* **DOP853**, the peer a typical user writes: `scipy.integrate.solve_ivp(method="DOP853")`
-  per flight, one terminal event function per surface (the engine's offset-curve gap,
-  falling through zero), `atol = rtol`, then the same impact law
-  (`billiard.models.impact.KaneLevinsonImpact`). **DOP853 careful** adds `max_step = T/20`
-  (T the drive period) and `first_step = 1e-6 s` (`bench/peer.py`).
+in sections 3 and 4. The methods compared are described in
+[performance.md](performance.md#what-is-measured-and-on-what).
 """
 
 TARGETS = """The compiled-engine targets (CPU per impact, whole runs, 10^6 impacts, start-up,
-compile) are measured in section 4, each interpreted baseline in the same bench run; the
+compile) are measured in section 4, each interpreted figure in the same bench run; the
 machine is shared, so a ratio near 30x can fall on either side of it from one run to
 the next (the interpreted medians move by a third between runs).
 
 The method speed-up targets compare the CPU time at which each method reaches an
-impact-time error of 1e-9 s after 50 impacts (section 1, "Cost at equal accuracy"),
-like for like: rk4 runs on the compiled kernels as the default method does, so that
-ratio is of two compiled methods; the solve_ivp peer is scipy's integrator, interpreted,
-so it is compared with the default method's kernels interpreted too. Where only the
-default method reaches that accuracy (the other one fails or stalls above it in every
-setting of its ladder) there is no ratio; the verdict counts the cases where both reach
-it.
-
-What limits the speed now: compiled, an impact costs 0.8-4 us of arithmetic (section 5:
-libm's sine and cosine of the drive angle in the wedge; in the curved scenes the
-square-root and division chains of the offset-curve foot's Newton iterations and, with
-drag, of the Dormand-Prince stages). The curved scenes with drag off are nearly all
-foot iterations, each calling the curve's f' and f'' through function pointers (one
-compiled engine for every curve, so LLVM cannot share the square root the two have in
-common); there the ratio to the interpreted kernels is lowest (26-36x over four bench
-runs). A run of 25,000 impacts takes 0.45-0.67 s of wall time over those runs (this
-machine's speed moves by a fifth from one half hour to the next), about two thirds of
-it start-up: Python and numpy, numba and llvmlite (together about 0.3 s), billiard's
-own modules, loading the cached kernels, and the command line's files; the impacts
-take under 0.1 s. The parabola with drag costs 2.8-3.6 us per impact from one fresh
-process to the next, on either side of its 3 us bound. Start-up was 0.8-0.95 s until
-five changes, each measured alone: numba is imported before
-billiard's own modules (after them, numba's set-up of its casting rules took 0.11-0.17
-s instead of 0.01 s: the same code, in another order), the objects of the imports go to
-the collector's oldest generation without a pass over them (`billiard/__init__.py`),
-numba's runtime is read from the cache instead of being compiled in every process (25
-ms, `billiard/jit.py`), the scan for the resting position runs compiled (10-20 ms,
-`billiard/kernels/rest.py`), and Ryu's tables for writing floats are built without
-decimal strings of 2,000 powers (10 ms, `billiard/kernels/ryu.py`). A streamed run of
-many impacts formats its rows (about 1 us per row, compiled) on a thread of its own
-while the engine makes the next ones, so on two free cores it costs little more than
-the impacts. A run kept in memory makes
-10^6 wedge impacts in under a second and holds them as 144 MB of rows (18 float64 per
-impact), next to the 125-150 MB a process with numba's LLVM takes before its first
-impact: the 200 MB bound holds for the streamed run, as `billiard run` runs (section 4,
-"Memory").
-Between methods, both compiled, the default method is 2-14x cheaper than rk4 at equal
-accuracy: rk4's coarsest step in the ladder (3 ms) already reaches 1e-9 s after 50
-impacts in most cases, so its cost there is a floor, not an interpolation; its real
-advantage is in section 2: it is the only method without failures.
+impact-time error of 1e-9 s after the first checkpoint (section 1, "Cost at equal
+accuracy"), like for like: rk4 runs on the compiled kernels as the default method does,
+so that ratio is of two compiled methods; the solve_ivp peer is scipy's integrator,
+interpreted, so it is compared with the default method's kernels interpreted too. Where
+only the default method reaches that accuracy (the other one fails or stalls above it in
+every setting of its ladder) there is no ratio; the verdict counts the cases where both
+reach it.
 """
 
 WORKPRECISION = """## 1. Work against precision
@@ -195,31 +147,6 @@ contact point. The verdict "no change" means: a locked orbit within 0.5 mm, or e
 statistic within twice the combined standard error or within 1 %.
 """
 
-LADDER_AFTER = """Reading the ladder:
-
-* **Air drag** is the only term that changes nothing measurable in the chaotic scenes
-  (wedge 6.6 Hz, hyperbola 5.8 Hz: every statistic within its noise), and it is the only
-  term with a cost: drag off runs in about half the wall time (exact parabolic
-  flights instead of error-controlled integration). In the periodic scenes it moves
-  the period-one orbit by 0.1 to 0.5 %: below what the paper measures ("about
-  0.075 m"), but the drive amplitude of every built-in scene was calibrated on the
-  parabola with drag on, so switching drag off in the parabola means calibrating again
-  (the orbit would be 0.35 mm higher).
-* **Friction and spin** (mu = 0, or k = 0.01) change everything: the parabola's orbit
-  doubles in height, the hyperbola at 4.5 Hz loses its period-one lock, the chaotic
-  scenes' statistics move by 8 to 20 %. They cost nothing (the impact map is the same
-  few lines either way).
-* **The finite radius** changes the parabola's orbit by 7 % (5.5 mm, more than the
-  1.55 mm offset of the centre), the hyperbola's at 4.5 Hz by 3 % and the wedge's mean
-  height by 29 %; only the hyperbola at 5.8 Hz does not notice it. It costs nothing.
-* **The low-velocity rule** cannot be switched off: every scene collapses from rest.
-
-Recommendation: switch air drag off (`air.drag = "none"`) in `wedge-6.6hz` and
-`hyperbola-5.8hz`; keep it in `parabola-5.4hz` (the calibration scene) and in
-`hyperbola-4.5hz` unless the amplitude is calibrated again without drag. Keep spin,
-friction, the finite radius and the low-velocity rule everywhere.
-"""
-
 THROUGHPUT = """## 4. Throughput, start-up and memory
 
 The compiled engine (numba) against the interpreted one (the same kernels run by
@@ -236,43 +163,13 @@ grow): what the profiler sees apart from it is the Python around the kernels, bu
 the simulation and handing out the rows. Shares are of the profiled total.
 """
 
-PROFILE_AFTER = """Where the time goes now, and what would make it shorter:
-
-1. **Inside the kernels** (measured by timing the kernels alone and from machine-code
-   samples, `python -m bench.compiled --no-startup`): in the wedge about 40 % of the time
-   is libm's `sin` and `cos` of the drive angle, which the same bits require (LLVM does
-   not merge the separate `sin` and `cos` calls of one angle that sit in different
-   blocks); in the parabola the time waits on chains of square roots and divisions: the
-   offset-curve foot's Newton iteration (about 39 per impact, each a square root, three
-   divisions and two wall-function calls) and the Dormand-Prince stages with drag (about
-   66 evaluations of the drag per impact, each with a square root). Carrying the drive's
-   sine and cosine and the last slope from one kernel to the next would save a few per
-   cent; fewer foot iterations (a better warm start) is the larger gain left.
-2. **Start-up** is most of a short run: a fresh process reaches its first impact in
-   about 0.35 s, most of it importing numpy and numba, then loading the cached kernels
-   and the curve's wall functions (a few milliseconds each, the run loop's about 30 ms:
-   numba reads its 0.5 MB cache file and parses the kernel's LLVM bitcode, kept for
-   linking). numba's cache would first load its typing and target registries (every
-   implementation it can compile, 0.35 s and 20 MB more); the kernels' caches load only
-   numba's runtime, itself read from the cache (`billiard/jit.py`), as the machine code
-   needs nothing else.
-3. **Writing rows**: a streamed run formats its rows compiled (`kernels/ryu.py`,
-   Ryu's shortest digits laid out as `repr` lays them out, byte for byte), about 1 us
-   per row against 12-16 us for `repr`: about as long as the compiled wedge takes to
-   compute the impact; then the file's write.
-4. **Building the simulation** (`Boundary`: the radius check and the offset-curve bounds
-   sampled interpreted, the resting position's scan compiled): 2-17 ms, once per run;
-   it matters only for runs of a few hundred impacts, such as the work-precision
-   settings of section 1.
-"""
-
 CONTACT = """## 6. Contact phases against the hops they replace
 
 `contact.model = "impacts"` (the paper's model) has no contact: a ball lying on a wall is
 relaunched at `contact.elastic_below` (0.01 m/s) by every impact and hops, about 500
 times per simulated second on a flat bottom. `contact.model = "phases"` replaces the
 hops by rolling and sliding phases, integrated as one smooth motion
-(`billiard/contact_phase.py`). This section measures what a simulated second costs under each
+(`billiard/models/contact.py`). This section measures what a simulated second costs under each
 model (`bench/contact.py`): every case is built twice, differing only in
 `contact.model`, started from the same state and run for the same simulated time
 (`run.duration`); the two models are run alternately and the CPU time of the run loop
@@ -311,8 +208,8 @@ settles on a wall, and each rolling or sliding phase and each hold in a vertex i
 compiled call of its own (`kernels/contact.py`, `kernels/vertex.py`, once per phase and
 per sample). What runs between those calls is Python: landing and lift-off, the
 phase's start and end, handing the state to the kernels and back
-(`billiard/engine_flights.py`, `docs/compiled-engine.md`, "What remains"): about 0.3 ms
-a phase.
+(`Simulation._fly` in `billiard/engine/simulation.py`; `docs/compiled-engine.md`,
+"Contact phases and holds"): about 0.3 ms a phase.
 
 * **A ball at rest** (bowl at rest, the floor after the drop, the vertex): the impact
   model relaunches it about 490 times per simulated second, each hop a located flight.

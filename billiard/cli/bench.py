@@ -1,5 +1,6 @@
 """``billiard bench``: speed against accuracy, where methods fail, the model ladder,
-throughput; writes ``performance.md`` and its figures.
+throughput; writes ``performance.md``, its appendix of full tables
+(``performance-tables.md``) and its figures.
 
 The measurements live in the ``bench/`` folder of a source checkout (they are not part
 of the installed package); this module is the command's entry point. They measure the
@@ -118,13 +119,20 @@ def add_bench_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "--render",
         action="store_true",
-        help="measure nothing: redraw the figures and rewrite the page from the saved results",
+        help="measure nothing: redraw the figures and rewrite the pages from the saved results",
+    )
+    parser.add_argument(
+        "--baseline",
+        metavar="REF",
+        help="with the throughput section: measure start-up and time per impact of the git "
+        "commit REF too (checked out in a temporary worktree), alternately with this "
+        "checkout's: before and after, side by side",
     )
     parser.add_argument(
         "--out",
         metavar="DIR",
-        help="where performance.md and figures/performance/ go (default docs, "
-        "or runs/bench-quick with --quick)",
+        help="where performance.md, performance-tables.md and figures/performance/ go "
+        "(default docs, or runs/bench-quick with --quick)",
     )
 
 
@@ -142,6 +150,8 @@ def bench_argv(args: argparse.Namespace) -> list[str]:
         argv += ["--only", ",".join(args.only)]
     if args.render:
         argv.append("--render")
+    if args.baseline is not None:
+        argv += ["--baseline", args.baseline]
     if args.out:
         argv += ["--out", args.out]
     return argv
@@ -186,6 +196,24 @@ def _saved_results(out: Path) -> Path:
     return out / "figures" / "performance" / "results.json"
 
 
+def resolve_baseline(root: Path, ref: str, only: tuple[str, ...]) -> dict[str, str]:
+    """The commit ``--baseline REF`` names (see ``bench.baseline.resolve``), checked before
+    anything is measured: REF must be a commit of the checkout's repository, git must
+    run, and the throughput section, which compares the two, must be measured."""
+    if not only:
+        raise BenchError("bench --baseline measures; --render measures nothing: use one of them")
+    if "throughput" not in only:
+        raise BenchError(
+            "bench --baseline compares the throughput section: measure it "
+            "(`--only throughput`, or no --only)"
+        )
+    baseline = importlib.import_module("bench.baseline")
+    try:
+        return baseline.resolve(root, ref)
+    except baseline.TreeError as exc:
+        raise BenchError(f"bench --baseline: {exc}") from None
+
+
 def run_bench(args: argparse.Namespace) -> int:
     root = find_checkout()
     if root is not None and not runs_checkout(root):
@@ -202,7 +230,15 @@ def run_bench(args: argparse.Namespace) -> int:
             f"(`billiard bench{' --quick' if args.quick else ''}"
             f"{f' --out {shlex.quote(args.out)}' if args.out else ''}`)"
         )
-    path = run.main(cfg, out, only)
+    baseline = None
+    if args.baseline is not None:
+        assert root is not None  # else _bench_package raised
+        baseline = resolve_baseline(root, args.baseline, only)
+    tree_error = importlib.import_module("bench.baseline").TreeError
+    try:
+        path = run.main(cfg, out, only, baseline)
+    except tree_error as exc:  # the commit's worktree or one of its processes failed
+        raise BenchError(f"bench --baseline: {exc}") from None
     print(f"wrote {path} and {out / 'figures' / 'performance'}")
     return 0
 

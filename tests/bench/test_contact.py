@@ -9,7 +9,7 @@ import statistics
 import pytest
 
 from bench import contact
-from bench.report import _ratio, section_contact
+from bench.report import ratio_text, section_contact
 from billiard.status import Status
 
 DURATION = 0.2  # s of simulated time
@@ -134,5 +134,5 @@ def test_the_report_shows_the_measured_case(bowl):
     }
     text = section_contact(result, "billiard bench")
     assert "| bowl at rest | impacts |" in text
-    assert _ratio(bowl["ratio"]) in text  # as the report formats a ratio
+    assert ratio_text(bowl["ratio"]) in text  # as the report formats a ratio
     assert "billiard bench --only contact" in text
