@@ -331,7 +331,7 @@ def measure(
     drags: tuple[str, ...] = ("fowles", "none"),
 ) -> dict:
     """This checkout (``root``, as it is) against ``commit`` (from :func:`resolve`)."""
-    from bench.run import code_version
+    from bench.version import code_version
 
     print(f"  baseline: {commit['short']} ({commit['ref']}) in a temporary worktree", flush=True)
     with worktree(root, commit["commit"]) as old:

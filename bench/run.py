@@ -10,7 +10,6 @@ from __future__ import annotations
 import json
 import os
 import platform
-import subprocess
 import time
 from pathlib import Path
 
@@ -18,6 +17,7 @@ from bench import baseline as baseline_bench
 from bench import charts, contact, failures, ladder, page, report, throughput, workprecision
 from bench import sweep as sweep_bench
 from bench.common import Config, start_scene
+from bench.version import code_version
 from billiard.cli.bench import SECTIONS as BENCH_SECTIONS
 
 #: The sections of the page (``sweep`` keeps its own results, docs/figures/sweeps/bench.json,
@@ -141,37 +141,6 @@ def machine() -> dict:
         "load": load,
         "code": code_version(),
     }
-
-
-def code_version() -> str:
-    """The git commit of the checkout, and whether the engine differs from it."""
-    root = Path(__file__).resolve().parent.parent
-    try:
-        head = subprocess.run(
-            ["git", "rev-parse", "--short", "HEAD"],
-            cwd=root,
-            capture_output=True,
-            text=True,
-            check=True,
-        ).stdout.strip()
-        dirty = subprocess.run(
-            [
-                "git",
-                "status",
-                "--porcelain",
-                "billiard",
-                "derivation",
-                "generated",
-                ":!billiard/cli/bench.py",
-            ],
-            cwd=root,
-            capture_output=True,
-            text=True,
-            check=True,
-        ).stdout.strip()
-    except (OSError, subprocess.CalledProcessError):
-        return "unknown"
-    return f"commit {head}" + (" with local changes to the engine" if dirty else "")
 
 
 def main(
