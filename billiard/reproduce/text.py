@@ -172,7 +172,7 @@ The four built-in scenes use A = {parabola.drive.amplitude} m (one apparatus).
 
 The paper defines q2max and u4max as the height and the speed the ball would have if all
 its energy were potential or kinetic, but says neither where the potential energy is
-zero nor whether the spin's kinetic energy counts. `billiard/phase.py` names every
+zero nor whether the spin's kinetic energy counts. `billiard/analysis/phase.py` names every
 combination (`PHASE_REFERENCES`). With h0 the zero, E the mechanical energy after the
 impact (translation, spin and m g q2) and E0 = E - m g h0, minus I omega^2/2 when the spin
 is left out: q2max = E0/(m g), u4max = sqrt(2 E0/m) and the point is
