@@ -31,6 +31,7 @@ _UNITS = {
     "run.step": "s",
     "run.gravity": "m/s^2",
     "run.duration": "s",
+    "run.contact_span": "s",
 }
 
 
