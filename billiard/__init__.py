@@ -98,7 +98,7 @@ _collecting = gc.isenabled()
 gc.disable()
 try:
     # numba before billiard's own modules: imported after them, numba's set-up of its
-    # casting rules (numba.core.typeconv.rules) took 0.11-0.17 s instead of 0.01 s
+    # type-conversion rules took 0.11-0.17 s instead of 0.01 s
     # (measured with python -X importtime; the same code, in another order)
     from billiard import jit  # noqa: F401
     from billiard.analysis.calibrate import calibrate

@@ -204,26 +204,20 @@ class KernelEngine:
 
     def _call(self, rows: int, first: int = 0) -> tuple[int, int]:
         """``run_chunk`` (``run_chunk_fixed`` for method rk4) for up to ``rows`` impacts
-        into the row buffer from row ``first`` on; compiled, through the overload's
-        entry point (the dispatcher would type the tuple of wall functions anew on every
-        call, tens of microseconds)."""
-        if self._entry is None:
+        into the row buffer from row ``first`` on; compiled, through numba's dispatcher,
+        whose first call in the run may compile (:func:`billiard.jit.compiling`)."""
+        first_call = self._entry is None
+        if first_call:
             from billiard.kernels.loop import run_chunk, run_chunk_fixed
 
             if self._walls is None:
                 self._prepare()
-            kernel = run_chunk_fixed if self.fixed else run_chunk
-            args = self._arguments(self._buffer, rows)
-            if not _jit.ENABLED:
-                self._entry = kernel
-            else:
-                from numba import typeof
-
-                signature = tuple(typeof(a) for a in args)
-                kernel.compile(signature)
-                self._entry = kernel.overloads[signature].entry_point
+            self._entry = run_chunk_fixed if self.fixed else run_chunk
         out = self._rows_from(first)
         try:
+            if first_call:
+                with _jit.compiling(self._entry):
+                    return self._entry(*self._arguments(out, rows))
             return self._entry(*self._arguments(out, rows))
         finally:
             if out is not self._buffer and isinstance(out, list):

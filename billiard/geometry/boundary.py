@@ -333,10 +333,10 @@ class Boundary:
             ctx[base + _L.S_WS] = warm[j][0]
         try:
             if _jit.ENABLED:
-                from billiard.geometry.wall_functions import WallFunction
+                from billiard.geometry.wall_functions import WallFunction, WallTable
                 from billiard.kernels.rest import offset_heights
 
-                walls = tuple(
+                walls = WallTable(
                     tuple(WallFunction(getattr(w, name)) for w in self.walls)
                     for name in ("f", "df", "d2f")
                 )
@@ -344,7 +344,9 @@ class Boundary:
                 out = np.empty(len(xs), dtype=np.float64)
                 p = np.array(ps[0], dtype=np.float64)
                 try:
-                    offset_heights(state, p, walls, len(self.offsets), xs, out)
+                    # once per scene: its call may compile, within the compile notices
+                    with _jit.compiling(offset_heights):
+                        offset_heights(state, p, walls, len(self.offsets), xs, out)
                 finally:
                     ctx = state.tolist()
                 heights: Sequence[float] = out

@@ -1,8 +1,8 @@
 """A curve's wall functions as the kernels take them: ``walls = (fs, dfs, d2fs)``, one
-entry per wall, each a first-class function value of one numba type,
-``float64(float64, float64[::1])`` (:class:`WallFunction`), so that the kernels are
-compiled once for every curve, and cached. Interpreted, the generated functions
-themselves.
+entry per wall, each compiled by ``numba.cfunc`` for one signature,
+``float64(float64, float64[::1])`` (:func:`WallFunction`): a first-class function value
+that numba types by its signature alone, so that the kernels are compiled once for
+every curve, and cached. Interpreted, the generated functions themselves.
 """
 
 from __future__ import annotations
@@ -11,7 +11,13 @@ from typing import Any
 
 from billiard import jit as _jit
 
-__all__ = ["WallFunction", "near_functions", "plain_wall_functions", "wall_functions"]
+__all__ = [
+    "WallFunction",
+    "WallTable",
+    "near_functions",
+    "plain_wall_functions",
+    "wall_functions",
+]
 
 _SIGNATURES: dict[int, Any] = {}
 _compiled_walls: dict[Any, Any] = {}
@@ -27,57 +33,52 @@ def _wall_signature(args: int = 1) -> Any:
     return _SIGNATURES[args]
 
 
-def _wall_function_class() -> type:
-    import numba.experimental.function_type  # noqa: F401  (typeof of the protocol)
-    from numba.core.types import WrapperAddressProtocol
+class WallTable(tuple):
+    """Rows of compiled wall functions (``(fs, dfs, d2fs)``, one entry per wall) as the
+    kernels take them, with their numba type worked out once: numba types a plain tuple
+    item by item on every call of a compiled kernel, some microseconds per function,
+    which a contact phase, called once or more per impact, would pay each time. The
+    type is given to numba by its documented typing hook
+    (``numba.extending.typeof_impl``)."""
 
-    class _WallFunction(WrapperAddressProtocol):
-        """A generated wall function, compiled for its signature, as a first-class
-        function value: numba types it by its signature alone, so a kernel taking it is
-        compiled (and cached) once for every curve."""
+    numba_type: Any
 
-        def __init__(self, fn: Any, args: int):
-            self.sig = _wall_signature(args)
-            self.dispatcher = _jit.jit(fn)
-            self.dispatcher.compile(self.sig.args)
-            result = self.dispatcher.get_compile_result(self.sig)
-            self.address = result.library.get_pointer_to_function(
-                result.fndesc.llvm_cfunc_wrapper_name
-            )
+    def __new__(cls, rows: Any) -> WallTable:
+        import numba
 
-        def __wrapper_address__(self) -> int:
-            return self.address
-
-        def signature(self) -> Any:
-            return self.sig
-
-    return _WallFunction
+        table = super().__new__(cls, (tuple(row) for row in rows))
+        table.numba_type = numba.typeof(tuple(table))
+        return table
 
 
-_WallFunctionClass: type | None = None
+if _jit.ENABLED:
+    from numba.extending import typeof_impl
+
+    @typeof_impl.register(WallTable)
+    def _typeof_wall_table(table: WallTable, context: Any) -> Any:
+        return table.numba_type
 
 
 def WallFunction(fn: Any, args: int = 1) -> Any:  # noqa: N802  (a factory standing for a class)
-    """``fn`` as the kernels take it: a compiled first-class function value of ``args``
-    float arguments and the parameter array, or ``fn`` itself when the kernels run
-    interpreted."""
-    global _WallFunctionClass
+    """``fn`` as the kernels take it: compiled (``numba.cfunc``, cached) for ``args``
+    float arguments and the parameter array, once per process, or ``fn`` itself when
+    the kernels run interpreted."""
     if not _jit.ENABLED:
         return fn
     if fn not in _compiled_walls:
-        if _WallFunctionClass is None:
-            _WallFunctionClass = _wall_function_class()
-        _compiled_walls[fn] = _WallFunctionClass(fn, args)
+        _compiled_walls[fn] = _jit.cfunc(fn, _wall_signature(args))
     return _compiled_walls[fn]
 
 
 def wall_functions(sim: Any) -> tuple[tuple[Any, ...], ...]:
     """(f, df, d2f): one tuple per function, one entry per wall of the curve."""
     walls = sim.boundary.walls
-    return (
-        tuple(WallFunction(w.f) for w in walls),
-        tuple(WallFunction(w.df) for w in walls),
-        tuple(WallFunction(w.d2f) for w in walls),
+    return _table(
+        (
+            tuple(WallFunction(w.f) for w in walls),
+            tuple(WallFunction(w.df) for w in walls),
+            tuple(WallFunction(w.d2f) for w in walls),
+        )
     )
 
 
@@ -85,10 +86,18 @@ def near_functions(sim: Any) -> tuple[tuple[Any, ...], ...]:
     """(near, dnear): the walls' nearest-point conditions g(s, px, py, p) and dg/ds, for
     the fixed-step detection (method ``rk4``)."""
     walls = sim.boundary.walls
-    return (
-        tuple(WallFunction(w.near, 3) for w in walls),
-        tuple(WallFunction(w.dnear, 3) for w in walls),
+    return _table(
+        (
+            tuple(WallFunction(w.near, 3) for w in walls),
+            tuple(WallFunction(w.dnear, 3) for w in walls),
+        )
     )
+
+
+def _table(rows: tuple[tuple[Any, ...], ...]) -> tuple[tuple[Any, ...], ...]:
+    """``rows`` as a :class:`WallTable` when compiled (the interpreted functions as they
+    are)."""
+    return WallTable(rows) if _jit.ENABLED else rows
 
 
 def plain_wall_functions(walls: Any) -> tuple[tuple[Any, ...], ...]:

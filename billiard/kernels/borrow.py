@@ -1,36 +1,21 @@
-"""What the compiled kernels do at their call boundaries: ``borrow(array)``, the same
-array without its reference count, for the entry of a compiled loop; ``inline(fn)``,
-a kernel compiled into its compiled callers; and ``ulp(x)``, ``math.ulp`` for the
-compiled kernels.
-
-numba counts references on every array passed to a call it does not inline: an
-atomic increment and decrement per array per call, on the hot path of every gap
-evaluation. The kernels' arrays are owned by the caller (:mod:`billiard.run.compiled`) for
-the whole call of :func:`billiard.kernels.loop.run_chunk`, so inside it they can be
-borrowed: a view with no memory-info pointer, whose reference counting is a test of a
-null pointer. Interpreted, ``borrow`` is the identity.
+"""What the compiled kernels share at their call boundaries: ``jit(fn)``, a kernel;
+``inline(fn)``, a kernel compiled into its compiled callers; and ``ulp(x)``,
+``math.ulp`` for the compiled kernels.
 
 A call between two compiled kernels passes every array as its seven fields and the
 wall functions' tuple as twelve words, through memory, and counts references on the
 arrays: more than the few operations of a gap, a relative position or a flight state
 cost. ``inline`` compiles a kernel with numba's ``forceinline`` option (LLVM's
 ``alwaysinline``): LLVM inlines it into every compiled caller, so ``run_chunk`` is one
-function in which the borrowed arrays' reference counting folds away and values stay in
-registers. Inlining moves no operation: the same IEEE operations run in the same order,
-without fast-math. Every kernel of ``flight``, ``surfaces``, ``locate``, ``impact`` and
-``loop`` except ``run_chunk`` is marked, because numba otherwise inherits the option
-from whichever caller compiles a kernel first (a kernel first compiled from Python would
-not be inlined later: its cached code would be reused). numba's own
-``inline="always"`` (inlining numba IR before typing) ran about as fast but took five
-times longer to compile. Each function stays a kernel of its own, callable from Python.
-Interpreted, ``inline`` is the identity.
+function in which values stay in registers. Inlining moves no operation: the same IEEE
+operations run in the same order, without fast-math. Every kernel of ``flight``,
+``surfaces``, ``locate``, ``impact`` and ``loop`` except ``run_chunk`` is marked, each
+with the option from its own decorator, whichever caller compiles it first. Each
+function stays a kernel of its own, callable from Python. Interpreted, ``inline`` is
+the identity.
 
-``ulp``: numba has no ``math.ulp``; compiled, it is read from the exponent bits (one
-shift and a select, instead of ``frexp`` and ``ldexp`` calls into numba's helpers);
-interpreted, it is ``math.ulp``. Both give the exact power of two, so the results agree.
-
-``jit``: :func:`billiard.jit.jit`, for the kernels that are not inlined (``run_chunk``,
-the generated ball equations).
+``ulp``: numba has no ``math.ulp``. Compiled, it is computed with floating-point
+operations only (:func:`_ulp_compiled`), exactly; interpreted, it is ``math.ulp``.
 
 The same files also load as the interpreted twin :mod:`billiard.kernels_py`
 (:mod:`billiard.kernels.interpreted`), whose functions the runtime's classes call one gap at a
@@ -45,14 +30,19 @@ import math
 
 from billiard import jit as _jit
 
-__all__ = ["COMPILED", "borrow", "inline", "jit", "ulp"]
+__all__ = ["COMPILED", "inline", "jit", "ulp"]
 
 #: compiled by numba: the package billiard.kernels with numba enabled (never the twin)
 COMPILED = _jit.ENABLED and __package__ == "billiard.kernels"
 
-
-def _identity(array):
-    return array
+# the constants of _ulp_compiled: Rump's phi = 2**52 + 1 and 1 - 2**-53, the scalings
+# that keep phi * x finite and normal, and the results outside the finite numbers
+_PHI = 2.0**52 + 1.0
+_ONE_LESS = 1.0 - 2.0**-53
+_LARGE = 2.0**970
+_SMALL = 2.0**-969
+_TINY = 2.0**-1074
+_NOT_FINITE = 2.0**972
 
 
 def jit(fn):
@@ -61,12 +51,34 @@ def jit(fn):
 
 
 def inline(fn):
-    """``jit(fn)``, inlined into every compiled caller."""
-    kernel = jit(fn)
-    if COMPILED:
-        # the decorator's options, and LLVM's alwaysinline on the compiled function
-        kernel.targetoptions["forceinline"] = True
-    return kernel
+    """``jit(fn)``, inlined into every compiled caller (numba's ``forceinline``)."""
+    return _jit.jit(fn, inline=True) if COMPILED else fn
+
+
+@inline
+def _ufp(x):
+    """The unit in the first place of a positive float whose product with 2**52 + 1
+    is finite and normal: the power of two 2**e with 2**e <= x < 2**(e + 1), from
+    three rounded operations (S. M. Rump, T. Ogita, S. Oishi, "Accurate floating-point
+    summation part I", SIAM J. Sci. Comput. 31(1), 2008, Algorithm 3.5)."""
+    q = _PHI * x
+    return abs(q - _ONE_LESS * q)
+
+
+@inline
+def _ulp_compiled(x):
+    """math.ulp(x) of a finite x, exactly, from floating-point operations: the ulp of
+    a normal number is its unit in the first place times 2**-52, that of a subnormal
+    (and of zero) the smallest subnormal. The scalings by powers of two are exact. A
+    non-finite x gives 2**972 (the exponent field of all ones read as a finite one)."""
+    y = abs(x)
+    if not y <= 1.7976931348623157e308:  # inf, nan
+        return _NOT_FINITE
+    if y >= _LARGE:
+        return _ufp(y * 2.0**-110) * 2.0**58
+    if y < _SMALL:
+        return max(_ufp(y * 2.0**110) * 2.0**-162, _TINY)
+    return _ufp(y) * 2.0**-52
 
 
 def _ulp(x):
@@ -74,59 +86,4 @@ def _ulp(x):
     return math.ulp(x)
 
 
-if COMPILED:
-    from llvmlite import ir
-    from numba.core import types
-    from numba.extending import intrinsic
-
-    @intrinsic
-    def borrow(typingctx, array):
-        if not isinstance(array, types.Array):
-            return None
-
-        def codegen(context, builder, signature, args):
-            # imported when compiling, not when loading from the cache (30 ms)
-            from numba.np.arrayobj import make_array, populate_array
-
-            source = make_array(array)(context, builder, args[0])
-            view = make_array(array)(context, builder)
-            populate_array(
-                view,
-                data=source.data,
-                shape=source.shape,
-                strides=source.strides,
-                itemsize=source.itemsize,
-                meminfo=None,
-            )
-            return view._getvalue()
-
-        return array(array), codegen
-
-    @intrinsic
-    def _ulp_bits(typingctx, x):
-        """math.ulp of a finite float64, from its exponent field: 2**(e - 1075) for a
-        biased exponent e >= 53, the subnormal 2**(e - 1075) = bit e - 1 for
-        1 <= e <= 52, and the smallest subnormal for e = 0 (zero and subnormals)."""
-        if not isinstance(x, types.Float) or x.bitwidth != 64:
-            return None
-
-        def codegen(context, builder, signature, args):
-            i64 = ir.IntType(64)
-            bits = builder.bitcast(args[0], i64)
-            e = builder.and_(builder.lshr(bits, i64(52)), i64(0x7FF))
-            normal = builder.shl(builder.sub(e, i64(52)), i64(52))
-            low = builder.shl(i64(1), builder.sub(e, i64(1)))
-            result = builder.select(
-                builder.icmp_unsigned(">=", e, i64(53)),
-                normal,
-                builder.select(builder.icmp_unsigned("==", e, i64(0)), i64(1), low),
-            )
-            return builder.bitcast(result, ir.DoubleType())
-
-        return types.float64(types.float64), codegen
-
-    ulp = _ulp_bits
-
-else:
-    borrow = _identity
-    ulp = _ulp
+ulp = _ulp_compiled if COMPILED else _ulp

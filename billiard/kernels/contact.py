@@ -23,7 +23,7 @@ from __future__ import annotations
 
 import math
 
-from .borrow import borrow, inline, jit
+from .borrow import inline, jit
 from .contact_forces import at_rest, conditions, n_conditions, n_y, rhs
 from .illinois import narrow, secant_point
 from .layout import (
@@ -361,9 +361,6 @@ def run_phase(ctx, p, walls, start):
     """:func:`begin` (when ``start``) and :func:`advance` as one compiled function: the
     entry :class:`billiard.models.contact.ContactModel` calls, once per phase and once
     per sample, when the kernels are compiled."""
-    # the caller owns the arrays throughout the call: no reference counting inside
-    ctx = borrow(ctx)
-    p = borrow(p)
     if start:
         begin(ctx, p, walls)
     return advance(ctx, p, walls)

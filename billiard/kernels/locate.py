@@ -80,7 +80,7 @@ def provably_clear(ga, dga, gb, dgb, h, m):
 
 @inline
 def ulp(x):
-    """math.ulp(x) for a finite x (numba has no math.ulp: compiled, from the bits)."""
+    """math.ulp(x) for a finite x (numba has no math.ulp: compiled, exact arithmetic)."""
     return _ulp(x)
 
 

@@ -22,11 +22,11 @@ arrays into the compiled code as constants.
 
 from __future__ import annotations
 
-import struct
+import math
 
 import numpy as np
 
-from .borrow import COMPILED, inline
+from .borrow import inline
 
 __all__ = ["shortest"]
 
@@ -52,6 +52,10 @@ _LOW32 = np.uint64(0xFFFFFFFF)
 _FRACTION = np.uint64((1 << _MANTISSA_BITS) - 1)
 _HIDDEN = np.uint64(1 << _MANTISSA_BITS)
 _EXPONENT_MASK = np.uint64(0x7FF)
+_SIGN = np.uint64(1 << 63)
+_EXPONENT_ALL = np.uint64(0x7FF << 52)
+_QUIET = np.uint64(1 << 51)
+_SMALLEST_NORMAL = 2.0**-1022
 _ZERO_CHAR = np.uint64(ord("0"))
 
 
@@ -135,27 +139,26 @@ _POW10 = _T["pow10"]
 del _T
 
 
-if COMPILED:
-    from llvmlite import ir
-    from numba.core import types
-    from numba.extending import intrinsic
-
-    @intrinsic
-    def _float_bits(typingctx, x):
-        """The 64 bits of a float64 as a uint64 (one bitcast)."""
-        if not isinstance(x, types.Float) or x.bitwidth != 64:
-            return None
-
-        def codegen(context, builder, signature, args):
-            return builder.bitcast(args[0], ir.IntType(64))
-
-        return types.uint64(types.float64), codegen
-
-else:
-
-    def _float_bits(x):
-        """The 64 bits of a float as a uint64 (interpreted)."""
-        return np.uint64(struct.unpack("<Q", struct.pack("<d", x))[0])
+@inline
+def _float_bits(x):
+    """The 64 bits of a float64 as a uint64, from its value: the sign from
+    ``copysign``, the exponent and the fraction from ``frexp`` (exact: a power of two
+    and a significand of 53 bits scale without rounding). Every float gives its own
+    bits except a nan, which gives the quiet nan of its sign (its payload is not a
+    value; :func:`~billiard.kernels.float_text.write_float` reads only that the
+    fraction is not zero)."""
+    sign = _U0 if math.copysign(1.0, x) > 0.0 else _SIGN
+    y = abs(x)
+    if y != y:
+        return sign | _EXPONENT_ALL | _QUIET
+    if y == math.inf:
+        return sign | _EXPONENT_ALL
+    if y < _SMALLEST_NORMAL:
+        # zero and the subnormals: the fraction is the value in units of 2**-1074
+        # (scaled in two exact steps: 2.0**1074 is not a float)
+        return sign | np.uint64((y * 2.0**1022) * 2.0**52)
+    m, e = math.frexp(y)  # y = m * 2**e, 0.5 <= m < 1
+    return sign | (np.uint64(e + 1022) << _U52) | np.uint64((m + m - 1.0) * 2.0**52)
 
 
 @inline

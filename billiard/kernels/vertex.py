@@ -27,7 +27,7 @@ from __future__ import annotations
 
 import math
 
-from .borrow import borrow, inline, jit
+from .borrow import inline, jit
 from .contact import EVENT_TOL, pmin
 from .contact_forces import boundary
 from .illinois import narrow, secant_point
@@ -315,8 +315,6 @@ def run_hold(ctx, start):
     """:func:`begin` (when ``start``) and :func:`advance` as one compiled function: the
     entry :class:`billiard.models.hold.VertexHold` calls, once per hold and once per sample,
     when the kernels are compiled."""
-    # the caller owns the array throughout the call: no reference counting inside
-    ctx = borrow(ctx)
     if start:
         begin(ctx)
     return advance(ctx)

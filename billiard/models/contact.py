@@ -66,8 +66,8 @@ Watched = tuple[Any, list]
 _KERNEL_ERRORS = kernel_errors()
 #: phases run by the compiled kernels (else by the twin, interpreted: the same bits)
 COMPILED = _jit.ENABLED
-#: the compiled phase's entry point, by the number of walls it is given
-_ENTRIES: dict[int, Any] = {}
+#: the numbers of walls the compiled phase was called with in this process
+_CALLED: set[int] = set()
 
 #: accepted steps between two pauses of a phase (a stop request is looked at, progress
 #: reported): some milliseconds compiled, a tenth of a second interpreted
@@ -354,38 +354,38 @@ class ContactModel:
         call on it (:func:`billiard.kernels.contact.run_phase`; ``call(start)``): the
         caller copies the array back into ``self.ctx`` (also after a stop), so that the
         rest reads Python floats as before."""
-        walls, entry = self._compiled_walls(wall, others)
+        from billiard.kernels.contact import run_phase
+
+        walls, first = self._compiled_walls(wall, others)
         state = np.array(self.ctx, dtype=np.float64)
         p = np.array(wall.p, dtype=np.float64)
 
         def call(start: bool) -> int:
-            return entry(state, p, walls, start)
+            nonlocal first
+            if first:
+                first = False
+                with _jit.compiling(run_phase):
+                    return run_phase(state, p, walls, start)
+            return run_phase(state, p, walls, start)
 
         return state, call
 
-    def _compiled_walls(self, wall: Any, others: Sequence[Watched]) -> tuple[tuple, Any]:
-        """The phase's wall functions as compiled function values, and the compiled
-        overload's entry point for them (the dispatcher would type the tuple of wall
-        functions anew on every call, tens of microseconds)."""
-        from numba import typeof
-
-        from billiard.geometry.wall_functions import WallFunction
-        from billiard.kernels.contact import run_phase
+    def _compiled_walls(self, wall: Any, others: Sequence[Watched]) -> tuple[tuple, bool]:
+        """The phase's wall functions as compiled function values, and whether this is
+        the process's first phase with their number of walls (whose first call of the
+        compiled kernel may compile it: with the compile notices)."""
+        from billiard.geometry.wall_functions import WallFunction, WallTable
 
         functions = self.wall_functions(wall, others)
         key = tuple(id(f) for f in functions[0])
         walls = self._compiled.get(key)
         if walls is None:
-            walls = tuple(tuple(WallFunction(f) for f in row) for row in functions)
+            walls = WallTable(tuple(WallFunction(f) for f in row) for row in functions)
             self._compiled[key] = walls
-        # the wall functions are typed by their signature alone: one overload per count
-        entry = _ENTRIES.get(len(walls[0]))
-        if entry is None:
-            args = (np.zeros(_L.SIZE), np.array(wall.p, dtype=np.float64), walls, True)
-            signature = tuple(typeof(a) for a in args)
-            run_phase.compile(signature)
-            entry = _ENTRIES[len(walls[0])] = run_phase.overloads[signature].entry_point
-        return walls, entry
+        # the wall functions are typed by their signature alone: one compile per count
+        first = len(walls[0]) not in _CALLED
+        _CALLED.add(len(walls[0]))
+        return walls, first
 
     def _stop(self, exc: Exception) -> SimulationError:
         """The error a kernel's stop stands for, worded as before."""

@@ -36,10 +36,10 @@ from __future__ import annotations
 import math
 from collections.abc import Callable, Iterable, Iterator
 from dataclasses import dataclass
-from typing import Any
 
 import numpy as np
 
+from billiard import jit as _jit
 from billiard.errors import BallAtRest
 from billiard.kernels.interpreted import layout as _L
 from billiard.kernels.interpreted import vertex as _k
@@ -52,8 +52,8 @@ __all__ = ["EVENT_TOL", "HELD", "HoldEnd", "VertexHold"]
 HELD = "held"
 #: time resolution (s) of a release
 EVENT_TOL = _k.EVENT_TOL
-#: the compiled hold's entry point (when the kernels are compiled)
-_ENTRY: Any = None
+#: the compiled hold was called in this process (its first call may compile it)
+_CALLED = False
 
 
 @dataclass(slots=True)
@@ -149,23 +149,22 @@ class VertexHold:
         """The hold set up in ``self.ctx``, run by the compiled kernels
         (:func:`billiard.kernels.vertex.run_hold`) on a float64 copy of it, copied back
         (also after a stop) so that the rest reads Python floats as before."""
-        global _ENTRY
-        if _ENTRY is None:
-            from numba import typeof
+        global _CALLED
+        from billiard.kernels.vertex import run_hold
 
-            from billiard.kernels.vertex import run_hold
-
-            signature = (typeof(np.zeros(_L.SIZE)), typeof(True))
-            run_hold.compile(signature)
-            _ENTRY = run_hold.overloads[signature].entry_point
         ctx = self.ctx
         state = np.array(ctx, dtype=np.float64)
         try:
-            status = _ENTRY(state, True)
+            if _CALLED:
+                status = run_hold(state, True)
+            else:
+                _CALLED = True
+                with _jit.compiling(run_hold):
+                    status = run_hold(state, True)
             while status == _L.PHASE_SAMPLE:
                 on_sample(float(state[_L.VX_SAMPLE_T]), float(state[_L.VX_SAMPLE_W]))  # type: ignore[misc]
                 state[_L.VX_NEXT] = next(samples, math.inf)
-                status = _ENTRY(state, False)
+                status = run_hold(state, False)
         finally:
             ctx[:] = state.tolist()
         return status

@@ -78,6 +78,8 @@ def format_rows_bytes(block: np.ndarray, line_end: str) -> bytes:
     return _format_rows_repr(block, line_end).encode("ascii")
 
 
+#: the compiled formatter was called in this process
+_formatted = False
 #: what the compiled formatter is given besides the rows, built on its first call
 _compiled_constants: tuple[np.ndarray, np.ndarray, np.ndarray, int] | None = None
 
@@ -117,7 +119,13 @@ def _format_rows_compiled(block: np.ndarray, line_end: str) -> memoryview | None
     end = np.frombuffer(line_end.encode("ascii"), dtype=np.uint8)
     rows = block.shape[0]
     out = np.empty(rows * (row_bytes + end.size), dtype=np.uint8)
-    size = float_text.format_rows(block, rows, out, labels, starts, lid, end)
+    global _formatted
+    if _formatted:
+        size = float_text.format_rows(block, rows, out, labels, starts, lid, end)
+    else:
+        with _jit.compiling(float_text.format_rows):  # the first call may compile
+            size = float_text.format_rows(block, rows, out, labels, starts, lid, end)
+        _formatted = True
     if size < 0:
         return None
     return out[:size].data

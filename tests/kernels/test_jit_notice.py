@@ -1,12 +1,15 @@
-"""The notices of billiard.jit: a compile of billiard's functions names what it
-compiles (a kernel family, a curve's wall functions) and, when long, how long it took; a
-start from numba's cache says nothing."""
+"""The notices of billiard.jit: a block that compiles billiard's functions (still
+running after COMPILE_NOTICE_AFTER seconds) names what it compiles (a kernel family, a
+curve's wall functions) and, when long, how long it took; a start from numba's cache
+says nothing."""
 
 from __future__ import annotations
 
 import os
 import subprocess
 import sys
+import threading
+import time
 
 import pytest
 
@@ -17,28 +20,27 @@ compiled = pytest.mark.skipif(not jit.ENABLED, reason=f"numba unavailable: {jit.
 
 @pytest.fixture
 def fresh_notices(monkeypatch):
-    """No family announced yet in this process, no compile in progress."""
+    """No family announced yet in this process, short delays."""
     monkeypatch.setattr(jit, "_announced", set())
-    monkeypatch.setattr(jit, "_compiling", [])
+    monkeypatch.setattr(jit, "COMPILE_NOTICE_AFTER", 0.05)
 
 
-def compile_signal(function, inner=()):
-    """numba's "numba:compile" signals of a compile of ``function`` that compiles the
-    functions ``inner`` within it (as a kernel compiles the kernels it calls)."""
-    from numba.core import event
-
-    with event.trigger_event("numba:compile", data={"dispatcher": function}):
-        for other in inner:
-            compile_signal(other)
+def busy(function, seconds, inner=()):
+    """A block of ``seconds`` announced for ``function`` (as a first call that
+    compiles), with the blocks ``inner`` (function, seconds) within it."""
+    with jit.compiling(function):
+        for other, length in inner:
+            busy(other, length)
+        time.sleep(seconds)
 
 
 @compiled
-def test_a_compile_names_its_family_and_function_once(capsys, fresh_notices, monkeypatch):
+def test_a_long_block_names_its_family_and_function_once(capsys, fresh_notices, monkeypatch):
     from billiard.kernels import locate, loop
 
     monkeypatch.setattr(jit, "COMPILED_NOTICE_AFTER", float("inf"))  # no end lines
-    compile_signal(loop.run_chunk, inner=[locate.locate, loop.step])
-    compile_signal(loop.run_chunk)  # again (other argument types): named once
+    busy(loop.run_chunk, 0.3, inner=[(locate.locate, 0.1)])
+    busy(loop.run_chunk, 0.3)  # again (other argument types): named once
     assert capsys.readouterr().err.splitlines() == [
         "billiard: compiling the impact loop with numba (billiard.kernels.loop.run_chunk); "
         "cached for later runs"
@@ -46,12 +48,22 @@ def test_a_compile_names_its_family_and_function_once(capsys, fresh_notices, mon
 
 
 @compiled
+def test_a_short_block_says_nothing(capsys, fresh_notices):
+    from billiard.kernels import loop
+
+    busy(loop.run_chunk, 0.0)  # a load from the cache
+    assert capsys.readouterr().err == ""
+    assert "the impact loop" not in jit._announced
+
+
+@compiled
 def test_a_long_compile_says_how_long_it_took(capsys, fresh_notices, monkeypatch):
     from billiard.kernels import contact, rest
 
-    monkeypatch.setattr(jit, "COMPILED_NOTICE_AFTER", 0.0)  # every compile is "long"
-    compile_signal(rest.offset_heights)
-    compile_signal(contact.run_phase, inner=[rest.offset_heights])
+    monkeypatch.setattr(jit, "COMPILED_NOTICE_AFTER", 0.2)
+    busy(rest.offset_heights, 0.3)
+    busy(contact.run_phase, 0.3, inner=[(rest.offset_heights, 0.1)])
+    busy(contact.run_phase, 0.1)  # announced, and shorter than COMPILED_NOTICE_AFTER
     lines = capsys.readouterr().err.splitlines()
     assert [line.split(" with numba")[0] for line in lines[::2]] == [
         "billiard: compiling the resting-position scan",
@@ -63,7 +75,24 @@ def test_a_long_compile_says_how_long_it_took(capsys, fresh_notices, monkeypatch
     ]
     for line in lines[1::2]:
         seconds = line.rsplit(" in ", 1)[1]
-        assert seconds.endswith(" s") and float(seconds[:-2]) >= 0.0
+        assert seconds.endswith(" s") and float(seconds[:-2]) >= 0.2
+
+
+@compiled
+def test_blocks_in_other_threads_at_the_same_time_say_nothing(capsys, fresh_notices, monkeypatch):
+    from billiard.kernels import float_text
+
+    monkeypatch.setattr(jit, "COMPILED_NOTICE_AFTER", 0.0)
+    threads = [threading.Thread(target=busy, args=(float_text.format_rows, 0.3)) for _ in range(3)]
+    for thread in threads:
+        thread.start()
+    for thread in threads:
+        thread.join()
+    lines = capsys.readouterr().err.splitlines()
+    assert [line.split(" with numba")[0].split(" in ")[0] for line in lines] == [
+        "billiard: compiling the CSV number formatting",
+        "billiard: compiled the CSV number formatting",
+    ]
 
 
 def test_the_families_name_the_kernels_and_a_curves_wall_functions():
@@ -83,7 +112,7 @@ def test_the_families_name_the_kernels_and_a_curves_wall_functions():
         (vertex.begin, "the hold in a vertex"),
     ):
         assert jit.compile_family(getattr(function, "py_func", function)) == family
-    assert jit.compile_family(compile_signal) is None  # not billiard's
+    assert jit.compile_family(busy) is None  # not billiard's
 
 
 @compiled
@@ -94,7 +123,9 @@ def test_other_compiles_are_not_announced(capsys, fresh_notices):
     def twice(x):
         return 2 * x
 
-    compile_signal(twice)
+    with jit.compiling(twice):
+        assert twice(3) == 6
+        time.sleep(0.2)
     assert capsys.readouterr().err == ""
 
 
@@ -121,24 +152,6 @@ def test_a_warm_start_prints_nothing(tmp_path):
     )
     runs = two_compiled_runs(script, tmp_path)
     assert runs[1].stderr == ""  # the first run filled the cache if it was empty
-
-
-@compiled
-def test_a_warm_start_loads_no_registries_and_can_still_compile(tmp_path):
-    """Loading the kernels from the cache skips numba's registries (its linear algebra
-    among them); a function compiled afterwards in the same process still compiles and
-    runs (the compiler loads them itself)."""
-    script = (
-        "import sys; from billiard.engine.simulation import Simulation; "
-        "from billiard.runfile.record import MemoryRecorder; "
-        "from billiard.scene.scene import load_scene; "
-        "Simulation(load_scene('wedge-6.6hz')).run(5, MemoryRecorder()); "
-        "print('linalg' if 'numba.np.linalg' in sys.modules else 'light'); "
-        "import numba, numpy; "
-        "print(numba.njit(lambda a: numpy.sum(a))(numpy.full(3, 3.0)))"
-    )
-    runs = two_compiled_runs(script, tmp_path)
-    assert runs[1].stdout.split() == ["light", "9.0"]
 
 
 def test_missing_numba_is_announced_in_one_line():
