@@ -6,7 +6,7 @@ from __future__ import annotations
 
 from billiard.generated import ball as _ball
 
-from .borrow import jit
+from .decorators import jit
 
 flight_exact = jit(_ball.flight_exact)
 flight_rhs_drag = jit(_ball.flight_rhs_drag)

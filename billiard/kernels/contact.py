@@ -23,8 +23,8 @@ from __future__ import annotations
 
 import math
 
-from .borrow import inline, jit
 from .contact_forces import at_rest, conditions, n_conditions, n_y, rhs
+from .decorators import inline, jit
 from .illinois import narrow, secant_point
 from .layout import (
     AMP,

@@ -6,7 +6,7 @@ from __future__ import annotations
 
 from billiard.generated import contact as _contact
 
-from .borrow import jit
+from .decorators import jit
 
 roll_rhs = jit(_contact.roll_rhs)
 roll_spin = jit(_contact.roll_spin)

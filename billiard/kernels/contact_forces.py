@@ -7,8 +7,8 @@ from __future__ import annotations
 
 import math
 
-from .borrow import inline
 from .contact_equations import centre_state, roll_rhs, slide_rhs, slip_velocity
+from .decorators import inline
 from .layout import (
     AMP,
     CURVED,

@@ -17,7 +17,7 @@ from __future__ import annotations
 import math
 
 from . import flight
-from .borrow import inline
+from .decorators import inline
 from .layout import (
     E_DEPARTURES,
     E_FOOT,

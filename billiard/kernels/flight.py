@@ -7,7 +7,7 @@ from __future__ import annotations
 import math
 
 from .ball import flight_exact, flight_rhs_drag, flight_rhs_magnus
-from .borrow import inline
+from .decorators import inline
 from .layout import (
     E_STEP_CONTROL,
     EN_ERR_VALUE,

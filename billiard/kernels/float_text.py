@@ -15,7 +15,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .borrow import inline, jit
+from .decorators import inline, jit
 from .layout import LID_LABEL
 from .ryu import (
     _EXPONENT_MASK,

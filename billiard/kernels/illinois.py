@@ -7,7 +7,7 @@ kernel of the caller's state, not a value."""
 
 from __future__ import annotations
 
-from .borrow import inline
+from .decorators import inline
 
 
 @inline

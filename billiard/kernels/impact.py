@@ -7,7 +7,7 @@ from __future__ import annotations
 import math
 
 from .ball import contact_velocity, impact_slip, impact_stick
-from .borrow import inline
+from .decorators import inline
 from .layout import (
     ELASTIC,
     IM_E,

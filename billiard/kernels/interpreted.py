@@ -1,6 +1,6 @@
 """The kernels of :mod:`billiard.kernels`, interpreted: the same source files loaded a
 second time as the package ``billiard.kernels_py``, in which every decorator of
-``kernels/borrow.py`` is the identity, so each kernel is the plain Python function
+``kernels/decorators.py`` is the identity, so each kernel is the plain Python function
 (whether numba is there or not) and the generated equations are the generated functions.
 
 The runtime's classes (:mod:`billiard.models.flight`, :mod:`billiard.geometry.surfaces`,

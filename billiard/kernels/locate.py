@@ -10,8 +10,8 @@ from __future__ import annotations
 import math
 
 from . import flight
-from .borrow import inline
-from .borrow import ulp as _ulp
+from .decorators import inline
+from .decorators import ulp as _ulp
 from .layout import (
     AMP,
     DRIVE_ACCEL,

@@ -10,7 +10,7 @@ import math
 
 from . import fixed_step, flight
 from .ball import contact_velocity, energy, frame_velocity
-from .borrow import inline, jit
+from .decorators import inline, jit
 from .impact import kane_levinson, rebound_settles
 from .layout import (
     AMP,

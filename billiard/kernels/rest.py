@@ -10,7 +10,7 @@ of 5-25 ms of interpreted Newton steps, once per simulation built.
 
 from __future__ import annotations
 
-from .borrow import jit
+from .decorators import jit
 from .surfaces import offset_height
 
 

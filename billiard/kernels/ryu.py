@@ -26,7 +26,7 @@ import math
 
 import numpy as np
 
-from .borrow import inline
+from .decorators import inline
 
 __all__ = ["shortest"]
 

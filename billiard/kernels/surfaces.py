@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import math
 
-from .borrow import inline
+from .decorators import inline
 from .layout import (
     CURVED,
     E_INVERSION,

@@ -27,9 +27,9 @@ from __future__ import annotations
 
 import math
 
-from .borrow import inline, jit
 from .contact import EVENT_TOL, pmin
 from .contact_forces import boundary
+from .decorators import inline, jit
 from .illinois import narrow, secant_point
 from .layout import (
     AMP,

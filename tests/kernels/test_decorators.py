@@ -1,5 +1,5 @@
 """The two kernels that read a float's binary format, computed from its value alone:
-``ulp`` (``billiard/kernels/borrow.py``, for the event locator's tolerances) and the
+``ulp`` (``billiard/kernels/decorators.py``, for the event locator's tolerances) and the
 bits that the CSV formatter reads (``_float_bits``, ``billiard/kernels/ryu.py``). The
 references are ``math.ulp`` and the float's own bits (a numpy view), on every binade's
 edges, the subnormals and a million random bit patterns."""
@@ -12,7 +12,8 @@ import math
 import numpy as np
 import pytest
 
-from billiard import jit, kernels_python
+from billiard import jit
+from billiard.kernels import interpreted as kernels_python
 
 compiled = pytest.mark.skipif(not jit.ENABLED, reason=f"numba unavailable: {jit.numba_problem()}")
 
@@ -60,20 +61,20 @@ def _loop(kernel, dtype):
 
 @compiled
 def test_compiled_ulp_is_math_ulp():
-    from billiard.kernels import borrow
+    from billiard.kernels import decorators
 
     values = _values()
-    got = _loop(borrow.ulp, np.float64)(values)
+    got = _loop(decorators.ulp, np.float64)(values)
     expected = np.array([math.ulp(x) for x in values])
     assert np.array_equal(got.view(np.uint64), expected.view(np.uint64))
     special = np.array([math.inf, -math.inf, math.nan, -math.nan])
-    assert (_loop(borrow.ulp, np.float64)(special) == NOT_FINITE_ULP).all()
+    assert (_loop(decorators.ulp, np.float64)(special) == NOT_FINITE_ULP).all()
 
 
 def test_the_ulp_arithmetic_is_exact_in_python_too():
     """The compiled ulp's source, run by CPython (the same IEEE operations), on the
     binades' edges: the algorithm, not numba, gives the exact result."""
-    twin = importlib.import_module(f"{kernels_python.PACKAGE}.borrow")
+    twin = importlib.import_module(f"{kernels_python.PACKAGE}.decorators")
     ulp = getattr(twin._ulp_compiled, "py_func", twin._ulp_compiled)
     values = _values()[:20_000]
     assert all(ulp(x) == math.ulp(x) for x in values.tolist())
