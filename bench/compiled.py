@@ -153,5 +153,12 @@ def main(argv: list[str] | None = None) -> None:
     )
 
 
+def refcount(repeats: int) -> dict:
+    """What numba's reference counting of an array argument costs a call that is not
+    inlined (:func:`refcount_cost`)."""
+    array_ns, scalar_ns, share = refcount_cost(repeats=repeats)
+    return {"array_ns": array_ns, "scalar_ns": scalar_ns, "share": share}
+
+
 if __name__ == "__main__":
     main()

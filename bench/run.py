@@ -14,7 +14,17 @@ import time
 from pathlib import Path
 
 from bench import baseline as baseline_bench
-from bench import charts, contact, failures, ladder, page, report, throughput, workprecision
+from bench import (
+    charts,
+    compiled,
+    contact,
+    failures,
+    ladder,
+    page,
+    report,
+    throughput,
+    workprecision,
+)
 from bench import sweep as sweep_bench
 from bench.common import Config, start_scene
 from bench.version import code_version
@@ -78,7 +88,7 @@ def measure(section: str, cfg: Config, starts: Starts, baseline: dict | None = N
             "runs": throughput.whole_runs(cfg.scenes, 25000, cfg.startup_repeats),
             "million": throughput.million("wedge-6.6hz", cfg.million_impacts),
             "compiled_startup": throughput.compiled_startup("wedge-6.6hz", cfg.startup_repeats),
-            "refcount": throughput.refcount(cfg.throughput_repeats),
+            "refcount": compiled.refcount(cfg.throughput_repeats),
             "startup": throughput.startup(cfg.startup_repeats),
             "memory": throughput.memory("wedge-6.6hz", cfg.memory_sizes),
         }

@@ -281,15 +281,6 @@ def million(name: str, impacts: int) -> list[dict]:
     return rows
 
 
-def refcount(repeats: int) -> dict:
-    """What numba's reference counting of an array argument costs a call that is not
-    inlined (``bench.compiled.refcount_cost``)."""
-    from bench.compiled import refcount_cost
-
-    array_ns, scalar_ns, share = refcount_cost(repeats=repeats)
-    return {"array_ns": array_ns, "scalar_ns": scalar_ns, "share": share}
-
-
 def compiled_startup(name: str, repeats: int) -> dict:
     """Warm start-up to the first impact (median of ``repeats``) and one cold compile."""
     warm = first_impact(name, repeats)
