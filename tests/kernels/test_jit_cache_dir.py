@@ -74,7 +74,11 @@ def _kernel_folder(tmp_path: Path) -> Path:
 
 
 @compiled
-@pytest.mark.parametrize("cache_dir", [False, True], ids=["beside-sources", "NUMBA_CACHE_DIR"])
+@pytest.mark.parametrize(
+    "cache_dir",
+    [False, pytest.param(True, marks=pytest.mark.slow)],  # the same stamp, another folder
+    ids=["beside-sources", "NUMBA_CACHE_DIR"],
+)
 def test_an_edit_of_a_dependency_recompiles_the_kernels(tmp_path, cache_dir):
     root = _kernel_folder(tmp_path / "src")
     env = {"NUMBA_CACHE_DIR": str(tmp_path / "cache")} if cache_dir else {}

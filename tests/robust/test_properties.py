@@ -214,6 +214,7 @@ def test_impacts_never_create_energy_with_the_drive_off(draw):
     check_energy(draw, "event", 300)
 
 
+@pytest.mark.slow  # 5 s; the drive-off property above runs by default
 @settings(
     max_examples=200, deadline=None, derandomize=True, suppress_health_check=[HealthCheck.too_slow]
 )

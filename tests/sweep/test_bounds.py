@@ -400,6 +400,7 @@ def _growth(tmp_path: Path, name: str, points: int) -> int:
     return seen[-1] - seen[1]
 
 
+@pytest.mark.slow  # 8 s: 200 finished points
 def test_sweep_memory_does_not_grow_with_finished_points(tmp_path):
     tracemalloc.start()
     try:
