@@ -516,7 +516,11 @@ def section_baseline(b: dict) -> str:
         f"This code ({b['new']}) against commit {b['short']} ({b['subject']}; "
         f"`--baseline {b['ref']}`), both measured alternately in the same bench run, "
         "through the public API and the command line, medians "
-        f"({_tables('baseline')}):\n\n" + table(["what", "new", "old", "new / old"], rows) + "\n"
+        f"({_tables('baseline')}):\n\n"
+        + table(["what", "new", "old", "new / old"], rows)
+        + "\nA ratio above 1 means this code takes longer. What the kernels' start-up and "
+        "time per impact owe to how numba is called is in "
+        "[design.md](design.md#numba).\n"
     )
 
 
