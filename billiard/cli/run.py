@@ -301,7 +301,7 @@ def cmd_run(args: argparse.Namespace) -> int:
         where = f": {exc.filename}" if exc.filename else ""
         raise UserError(f"cannot write the run: {exc.strerror or exc}{where}") from None
     _report(result.summary(), out)
-    extra = [p for p in (result._contacts, result._trajectory) if isinstance(p, Path)]
+    extra = result.side_files
     names = ", ".join(str(p) for p in (out / CSV_NAME, *extra))
     _report(f"wrote {names} and {out / SCENE_NAME}", out)
     if not args.no_plot and len(result) > 1:

@@ -171,7 +171,7 @@ class KernelEngine:
             ctx[base + L.S_WS] = warm[0]
             ctx[base + L.S_WSLOPE] = warm[1]
         if self.adaptive:
-            ctx[L.FL_H] = self.sim.flight._h
+            ctx[L.FL_H] = self.sim.flight.step_proposal
         if self.fixed:
             for slots in _FIXED_MEMORY:
                 ctx[slots] = self.sim.locator.ctx[slots]
@@ -183,7 +183,7 @@ class KernelEngine:
             warm[0] = float(ctx[base + L.S_WS])
             warm[1] = float(ctx[base + L.S_WSLOPE])
         if self.adaptive:
-            self.sim.flight._h = float(ctx[L.FL_H])
+            self.sim.flight.step_proposal = float(ctx[L.FL_H])
         if self.fixed:
             for slots in _FIXED_MEMORY:
                 self.sim.locator.ctx[slots] = [float(x) for x in ctx[slots]]

@@ -138,7 +138,7 @@ class AdaptiveFlight(_KernelFlight):
     velocities. Error control on (q1, q2, u1, u2) with ``atol = rtol * (1 m, 1 m/s)``.
     The last stage of an accepted step is the first of the next (FSAL), and the first
     stage of the current step is kept for re-integrations inside it. The step proposal
-    (``_h``) carries over from step to step and from flight to flight.
+    (``step_proposal``) carries over from step to step and from flight to flight.
     """
 
     def __init__(
@@ -158,23 +158,23 @@ class AdaptiveFlight(_KernelFlight):
         ctx[_L.FL_H] = 1e-3
 
     @property
-    def _h(self) -> float:
-        """The step proposal (s)."""
+    def step_proposal(self) -> float:
+        """The step the next Dormand-Prince step tries (s)."""
         return self.ctx[_L.FL_H]
 
-    @_h.setter
-    def _h(self, value: float) -> None:
+    @step_proposal.setter
+    def step_proposal(self, value: float) -> None:
         self.ctx[_L.FL_H] = value
 
     def memory(self) -> dict[str, float]:
         # the step proposal outlives a flight: the next flight starts with it
-        return {"step": self._h}
+        return {"step": self.step_proposal}
 
     def restore_memory(self, memory: Mapping[str, float]) -> None:
         step = memory.get("step") if set(memory) == {"step"} else None
         if not (isinstance(step, float) and math.isfinite(step) and step > 0.0):
             raise ValueError(f"AdaptiveFlight memory must be {{'step': h > 0}}, got {memory!r}")
-        self._h = step
+        self.step_proposal = step
 
     def advance(self, tau_a: float, tau_target: float) -> float:
         ctx = self.ctx

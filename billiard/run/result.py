@@ -113,6 +113,12 @@ class Result:
         return _side_columns(self._trajectory)
 
     @property
+    def side_files(self) -> tuple[Path, ...]:
+        """The files a streamed run wrote beside its CSV file: contacts.csv under
+        ``contact.model = "phases"``, trajectory.csv with a sampling interval."""
+        return tuple(p for p in (self._contacts, self._trajectory) if isinstance(p, Path))
+
+    @property
     def message(self) -> str:
         if self.stop_reason:
             return self.stop_reason
