@@ -299,6 +299,7 @@ def test_sigint_mid_run_keeps_rows_and_says_how_to_resume(tmp_path, long_referen
     assert same_run(ref, out)
 
 
+@pytest.mark.slow  # 8 s; SIGINT and SIGTERM mid-run stay in the default suite
 def test_sigkill_mid_run_then_resume(tmp_path, long_reference):
     """A kill leaves the last checkpoint and whatever rows reached the disk; a half
     written last line is dropped on resume; the result equals an uninterrupted run."""

@@ -291,7 +291,9 @@ def _sweep_process(address: str, out: Path, timeout: float = 90.0):
     return done, time.monotonic() - started
 
 
-@pytest.mark.parametrize("server", ["http_server", "garbage_server"])
+@pytest.mark.parametrize(
+    "server", [pytest.param("http_server", marks=pytest.mark.slow), "garbage_server"]
+)  # the HTTP server takes 4 s to refuse; the garbage server is the same check
 def test_dask_address_that_is_not_a_scheduler_fails_in_one_line(server, request, tmp_path):
     address = request.getfixturevalue(server)
     out = tmp_path / "out"
