@@ -357,6 +357,12 @@ class Simulation(ContactPhases, EventStep):
                 Status.NUMERICAL_FAULT,
             ) from None
 
+    @property
+    def kernel_engine(self) -> KernelEngine | None:
+        """The compiled kernels' engine this simulation runs on (its state vector
+        ``ctx``), or None while it runs on the models' classes."""
+        return self._kernel
+
     def _engine(self) -> KernelEngine | None:
         """The kernels, while they can run this simulation: an impact law replaced after
         construction (an audit wrapping it) or trajectory sampling, which the kernels do

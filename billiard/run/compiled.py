@@ -88,7 +88,7 @@ def prepare(scene: Any, collisions: int | None = None, chunk: int = CHUNK) -> Pr
         ValueError: a scene the kernels do not cover (:func:`supports`).
     """
     sim, total = _simulation(scene, collisions)
-    kernel = sim._kernel
+    kernel = sim.kernel_engine
     assert kernel is not None
     ctx, params = kernel.ctx, kernel.params
     ctx[L.EN_TARGET] = float(total)

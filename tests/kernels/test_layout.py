@@ -105,7 +105,7 @@ def _scene(model: str):
 def test_quantities_are_read_by_name_from_a_run():
     sim = Simulation(_scene("impacts"))
     sim.run(300, MemoryRecorder())
-    ctx = sim._kernel.ctx
+    ctx = sim.kernel_engine.ctx
     state = sim.state
     assert L.CTX.read(ctx, "impact.restitution") == 0.8125
     assert L.CTX.read(ctx, "impact.elastic_below") == 0.0375
