@@ -266,7 +266,7 @@ class ContactPhases:
             # request): the phase so far is reported as cut, the state stays at its start
             t_cut = t0 + end.tau
             theta = (theta0 + omega * end.tau) % (2.0 * math.pi)
-            self._report_cut(
+            self._cut(
                 ContactRecord(
                     t_start,
                     t_cut,
@@ -276,9 +276,9 @@ class ContactPhases:
                     settle,
                     *model.lab_state(wall, theta0, (s, sd, ball.u3), mode),
                     *model.lab_state(wall, theta, end.y, mode)[:5],
-                )  # fmt: skip
+                ),  # fmt: skip
+                deadline,
             )
-            self._after_cut(t_cut, deadline)
             return None
         tau = end.tau
         total, error, t, theta = self._clock_after(theta0, tau)
@@ -440,15 +440,14 @@ class ContactPhases:
             Status.IN_CONTACT,
         )
 
-    def _report_cut(self, record: ContactRecord) -> None:
-        """Report a phase cut by the run's end (``end`` = ``cut``): it is no event of the
-        engine, whose state stays at the phase's start (a resumed run redoes the phase)."""
+    def _cut(self, record: ContactRecord, deadline: float) -> None:
+        """A phase cut by the run's end (``end`` = ``cut``) at ``record.t_end``: reported
+        (it is no event of the engine, whose state stays at the phase's start: a resumed
+        run redoes the phase), then the contact span's end, a stop request
+        (RunInterrupted), or the time limit (the caller returns None)."""
         if self.on_contact_cut is not None:
             self.on_contact_cut(record)
-
-    def _after_cut(self, t_cut: float, deadline: float) -> None:
-        """After a phase was cut at t_cut: the contact span's end, a stop request
-        (RunInterrupted), or the time limit (the caller returns None)."""
+        t_cut = record.t_end
         request = self._request
         if request is not None and request.signum:
             self.final_time = t_cut
@@ -505,7 +504,7 @@ class ContactPhases:
         )  # fmt: skip
         if end.reason is None:
             t_cut = t0 + end.tau
-            self._report_cut(
+            self._cut(
                 ContactRecord(
                     t_start,
                     t_cut,
@@ -515,9 +514,9 @@ class ContactPhases:
                     settle,
                     *lab(theta0, ball.u3),
                     *lab(theta0 + drive.omega * end.tau, end.u3),
-                )  # fmt: skip
+                ),  # fmt: skip
+                deadline,
             )
-            self._after_cut(t_cut, deadline)
             return None
         tau = end.tau
         total, error, t, theta = self._clock_after(theta0, tau)

@@ -72,39 +72,23 @@ def WallFunction(fn: Any, args: int = 1) -> Any:  # noqa: N802  (a factory stand
 
 def wall_functions(sim: Any) -> tuple[tuple[Any, ...], ...]:
     """(f, df, d2f): one tuple per function, one entry per wall of the curve."""
-    walls = sim.boundary.walls
-    return _table(
-        (
-            tuple(WallFunction(w.f) for w in walls),
-            tuple(WallFunction(w.df) for w in walls),
-            tuple(WallFunction(w.d2f) for w in walls),
-        )
-    )
+    return _table(sim.boundary.walls, ("f", "df", "d2f"), 1)
 
 
 def near_functions(sim: Any) -> tuple[tuple[Any, ...], ...]:
     """(near, dnear): the walls' nearest-point conditions g(s, px, py, p) and dg/ds, for
     the fixed-step detection (method ``rk4``)."""
-    walls = sim.boundary.walls
-    return _table(
-        (
-            tuple(WallFunction(w.near, 3) for w in walls),
-            tuple(WallFunction(w.dnear, 3) for w in walls),
-        )
-    )
+    return _table(sim.boundary.walls, ("near", "dnear"), 3)
 
 
-def _table(rows: tuple[tuple[Any, ...], ...]) -> tuple[tuple[Any, ...], ...]:
-    """``rows`` as a :class:`WallTable` when compiled (the interpreted functions as they
-    are)."""
+def _table(walls: Any, names: tuple[str, ...], args: int) -> tuple[tuple[Any, ...], ...]:
+    """One row per function name, one :func:`WallFunction` of ``args`` floats per wall:
+    a :class:`WallTable` when compiled, the interpreted functions as they are."""
+    rows = tuple(tuple(WallFunction(getattr(w, name), args) for w in walls) for name in names)
     return WallTable(rows) if _jit.ENABLED else rows
 
 
 def plain_wall_functions(walls: Any) -> tuple[tuple[Any, ...], ...]:
     """(f, df, d2f) of ``walls`` as the interpreted kernels take them: the generated
     functions themselves."""
-    return (
-        tuple(w.f for w in walls),
-        tuple(w.df for w in walls),
-        tuple(w.d2f for w in walls),
-    )
+    return tuple(tuple(getattr(w, name) for w in walls) for name in ("f", "df", "d2f"))

@@ -18,7 +18,7 @@ read; :data:`CTX` is the declaration, by which a reader finds a quantity by name
 
 Each model (flight, impact law, locator, contact phase, hold) keeps its coefficients in
 its own block, and the interpreted models keep their own ``ctx`` in this layout; the
-engine's is assembled from theirs (``kernels/state.py``). ``contact.restitution`` and
+engine's is assembled from theirs (:mod:`billiard.engine.ctx`). ``contact.restitution`` and
 ``contact.elastic_below`` have one slot each, the impact law's (``IM_E``, ``IM_EB``),
 which the landing test of ``contact.model = "phases"`` reads too. No file stores a slot
 number.
