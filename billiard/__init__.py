@@ -3,11 +3,13 @@
 Equations come from a Kane's-method derivation (``billiard.derivation``) and run as
 generated code (``billiard.generated``). The Python API::
 
-    from billiard import load_scene, simulate, with_values
+    from billiard import load_scene, open_run, simulate, with_values
 
     scene = with_values(load_scene("parabola-5.4hz"), {"contact.restitution": 0.5})
-    result = simulate(scene, collisions=2000)
+    result = simulate(scene, collisions=2000)   # or simulate("parabola-5.4hz", ...)
     heights = result.columns["q2"]   # numpy array, m
+    df = result.to_pandas()          # DataFrame, units in df.attrs["units"] ([data] extra)
+    again = open_run("runs/parabola-5.4hz")   # a run folder as the same Result
 
 This module is the public API only: it binds the names above from the wings that define
 them (docs/design.md, "Layout"). The scene, simulation and calibration API is imported
@@ -126,6 +128,7 @@ __version__ = "0.1.0"
 _EXPORTS = {
     "load_curve": "billiard.geometry.curves",
     "read_collisions": "billiard.runfile.record",
+    "open_run": "billiard.run.load",
     "camera_filter": "billiard.analysis.camera",
     "plot_run": "billiard.plot",
 }
@@ -141,6 +144,7 @@ __all__ = [
     "camera_filter",
     "load_curve",
     "load_scene",
+    "open_run",
     "plot_run",
     "read_collisions",
     "scene_from_dict",

@@ -13,7 +13,9 @@ A streamed run (``simulate(..., out_dir=DIR)``) keeps three files in DIR:
     byte, because the engine state holds everything the engine carries from one impact
     to the next (the compensated clock, the collapse detector's window, the surfaces'
     Newton warm starts, the flight integrator's step proposal), written with
-    :func:`repr` so that every float reads back exactly.
+    :func:`repr` so that every float reads back exactly. The last checkpoint of a run
+    that ended also holds its outcome (the simulated time reached, the ball's motion
+    state, the time per motion state), which :func:`~billiard.run.load.open_run` reads.
 
 SIGINT (Ctrl-C) and SIGTERM during a streamed run stop it at the next impact boundary:
 the rows so far are flushed, a final checkpoint is written and
@@ -488,7 +490,9 @@ def _run_streamed(
         stream.close()
         raise
 
-    def save(state: EngineState, status: str, reason: str | None = None) -> None:
+    def save(
+        state: EngineState, status: str, reason: str | None = None, *, end: bool = False
+    ) -> None:
         if stream.checking:
             # rows already on disk are still being compared with the recomputed ones:
             # the existing checkpoint stays until they all match
@@ -516,6 +520,7 @@ def _run_streamed(
                 "side": {name: side.flush() for name, side in sides.items()},
                 "side_crc32": {name: side.crc32 for name, side in sides.items()},
                 "scene_toml_sha256": scene_file_sha256,
+                **({"outcome": _outcome(sim)} if end else {}),
             },
         )
         saved[0] = mark.rows
@@ -557,7 +562,7 @@ def _run_streamed(
             # the run is over: rows on disk it did not reach (none, unless the file
             # held more than the run makes) are not part of it
             stream.end_check()
-            save(sim.state, "complete" if reason is None else "stopped", reason)
+            save(sim.state, "complete" if reason is None else "stopped", reason, end=True)
             write_cut()
     except OSError as exc:
         stream.close()
@@ -589,6 +594,18 @@ def _run_streamed(
         trajectory=out / TRAJECTORY_NAME if "trajectory" in sides else None,
         final_mode=sim.mode,
     )
+
+
+def _outcome(sim: Simulation) -> dict[str, Any]:
+    """What a run that ended leaves for :func:`~billiard.run.load.open_run` beyond its
+    engine state: the simulated time it reached (s; the last impact, ``run.duration`` or
+    the end of a rest or contact), the ball's motion state then and the time per motion
+    state (s). A non-finite time, which JSON cannot hold, is left out (None)."""
+    final_time = sim.final_time if math.isfinite(sim.final_time) else None
+    mode_times = sim.mode_times() if sim.phases or sim.sample_dt else None
+    if mode_times is not None and not _all_finite(mode_times):
+        mode_times = None
+    return {"final_time": final_time, "final_mode": sim.mode, "mode_times": mode_times}
 
 
 def _all_finite(data: Any) -> bool:

@@ -39,7 +39,7 @@ from billiard.run.persist import (
 )
 from billiard.run.result import Result
 from billiard.runfile.record import CONTACT_COLUMNS, TRAJECTORY_COLUMNS, MemoryRecorder
-from billiard.scene.scene import SceneError, with_values
+from billiard.scene.scene import Scene, SceneError, load_scene, with_values
 from billiard.status import Status
 
 __all__ = [
@@ -63,7 +63,7 @@ __all__ = [
 
 
 def simulate(
-    scene: Any,
+    scene: Scene | str | os.PathLike[str],
     *,
     collisions: int | None = None,
     method: str | None = None,
@@ -77,7 +77,9 @@ def simulate(
     """Run a scene.
 
     Args:
-        scene: a :class:`billiard.scene.scene.Scene`.
+        scene: a :class:`billiard.scene.scene.Scene`, the name of a built-in scene
+            (``"parabola-5.4hz"``) or the path of a scene file (``.toml``), loaded with
+            :func:`~billiard.scene.scene.load_scene`.
         collisions: number of impacts; default ``scene.run.collisions``.
         method: ``"event"`` (default from the scene) or ``"rk4"`` (the paper's scheme).
         out_dir: stream the run to ``out_dir`` (``collisions.csv``, ``scene.toml`` and
@@ -100,7 +102,8 @@ def simulate(
 
     Raises:
         GeometryError: the scene's geometry cannot be simulated.
-        SceneError: the scene (or the impact count) is invalid.
+        SceneError: the scene (or the impact count) is invalid, or ``scene`` names
+            neither a built-in scene nor a scene file.
         OutputSizeError: (a ``SceneError``) the samples may take more than 1 GB and
             ``allow_large`` is False, checked before the run starts; or the run made more
             samples than estimated (the time in contact phases is not in the estimate
@@ -111,6 +114,7 @@ def simulate(
         RunWriteError: a streamed run could not write its files (a full disk; an
             ``OSError``): its message says how many impacts are kept and how to continue.
     """
+    scene = _scene_of(scene)
     if duration is not None:
         scene = with_values(scene, {"run.duration": duration})  # validates it
     sim = Simulation(scene, method)
@@ -155,4 +159,16 @@ def simulate(
         contacts=contacts,
         trajectory=trajectory,
         final_mode=sim.mode,
+    )
+
+
+def _scene_of(scene: Any) -> Scene:
+    """The scene ``simulate`` was given: a Scene, or one loaded by name or path."""
+    if isinstance(scene, Scene):
+        return scene
+    if isinstance(scene, (str, os.PathLike)):
+        return load_scene(scene)
+    raise SceneError(
+        f"simulate() takes a Scene, a built-in scene name or a scene file's path, "
+        f"got {type(scene).__name__}"
     )

@@ -33,6 +33,7 @@ from pathlib import Path
 from typing import Any
 
 from billiard.scene.checks import SceneError, check_name, error, shown
+from billiard.scene.display import html_table, scene_line, scene_rows
 from billiard.scene.keys import check_keys, sets_keys
 from billiard.scene.spec import (
     BUILTIN_CURVES,
@@ -107,6 +108,15 @@ class Scene:
             value = getattr(self, key)
             if not isinstance(value, cls):
                 raise error(f"scene section '{key}' must be a {cls.__name__}, got {shown(value)}")
+
+    def __repr__(self) -> str:
+        """One line: name, curve, drive, restitution, contact model, impacts (SI units);
+        ``scene_to_toml(scene)`` gives every value exactly."""
+        return scene_line(self)
+
+    def _repr_html_(self) -> str:
+        """The scene's main settings as a small HTML table (shown by notebooks)."""
+        return html_table(scene_rows(self), f"Scene {self.name!r}")
 
 
 def scene_from_dict(data: Mapping[str, Any], name: str = "scene") -> Scene:

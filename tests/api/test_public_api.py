@@ -9,7 +9,15 @@ import subprocess
 import sys
 import textwrap
 
-EXPORTS = ("calibrate", "plot_run", "read_collisions", "load_curve", "camera_filter", "simulate")
+EXPORTS = (
+    "calibrate",
+    "plot_run",
+    "read_collisions",
+    "load_curve",
+    "camera_filter",
+    "simulate",
+    "open_run",
+)
 
 
 def test_exports_are_the_functions_every_time():
@@ -27,13 +35,13 @@ def test_exports_are_the_functions_every_time():
         for module in ("billiard.analysis.calibrate", "billiard.plot",
                        "billiard.runfile.record", "billiard.geometry.curves",
                        "billiard.analysis.camera", "billiard.run.simulate",
-                       "billiard.reproduce.paper", "billiard.cli"):
+                       "billiard.reproduce.paper", "billiard.cli", "billiard.run.load"):
             importlib.import_module(module)
         import billiard.analysis.calibrate
         from billiard import plot_run, read_collisions, load_curve, camera_filter
-        from billiard import calibrate
+        from billiard import calibrate, open_run
         again = dict(calibrate=calibrate, plot_run=plot_run, read_collisions=read_collisions,
-                     load_curve=load_curve, camera_filter=camera_filter)
+                     load_curve=load_curve, camera_filter=camera_filter, open_run=open_run)
         for n, f in again.items():
             assert f is first[n], (n, f)
             assert getattr(billiard, n) is first[n], n
