@@ -3,11 +3,12 @@
 Equations come from a Kane's-method derivation (``billiard.derivation``) and run as
 generated code (``billiard.generated``). The Python API::
 
-    from billiard import load_scene, simulate, with_values
+    from billiard import load_scene, simulate, view, with_values
 
     scene = with_values(load_scene("parabola-5.4hz"), {"contact.restitution": 0.5})
     result = simulate(scene, collisions=2000)
     heights = result.columns["q2"]   # numpy array, m
+    view(result)                     # in a notebook: the run's interactive view, inline
 
 This module is the public API only: it binds the names above from the wings that define
 them (docs/design.md, "Layout"). The scene, simulation and calibration API is imported
@@ -128,6 +129,7 @@ _EXPORTS = {
     "read_collisions": "billiard.runfile.record",
     "camera_filter": "billiard.analysis.camera",
     "plot_run": "billiard.plot",
+    "view": "billiard.plot.interactive",
 }
 
 __all__ = [
@@ -146,6 +148,7 @@ __all__ = [
     "scene_from_dict",
     "scene_to_toml",
     "simulate",
+    "view",
     "with_values",
 ]
 

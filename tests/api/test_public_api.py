@@ -9,7 +9,15 @@ import subprocess
 import sys
 import textwrap
 
-EXPORTS = ("calibrate", "plot_run", "read_collisions", "load_curve", "camera_filter", "simulate")
+EXPORTS = (
+    "calibrate",
+    "plot_run",
+    "read_collisions",
+    "load_curve",
+    "camera_filter",
+    "simulate",
+    "view",
+)
 
 
 def test_exports_are_the_functions_every_time():
@@ -24,7 +32,7 @@ def test_exports_are_the_functions_every_time():
         for n in names:
             assert getattr(billiard, n) is first[n], n
             assert callable(first[n]) and not isinstance(first[n], types.ModuleType), n
-        for module in ("billiard.analysis.calibrate", "billiard.plot",
+        for module in ("billiard.analysis.calibrate", "billiard.plot", "billiard.plot.interactive",
                        "billiard.runfile.record", "billiard.geometry.curves",
                        "billiard.analysis.camera", "billiard.run.simulate",
                        "billiard.reproduce.paper", "billiard.cli"):
