@@ -33,6 +33,7 @@ CHROMIUM_SWITCHES = (
     "--disable-component-update",
     "--disable-sync",
     "--disable-dev-shm-usage",
+    "--hide-scrollbars",
 )
 #: How to install the browser (README.md, "Interactive view"; .ci/run).
 INSTALL = "apt-get install -y chromium chromium-driver"
