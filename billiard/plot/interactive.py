@@ -282,7 +282,7 @@ class View:
     """
 
     #: height (px) of the frame a notebook shows the page in
-    height = 900
+    height = 1000
 
     def __init__(self, data: Mapping[str, Any]):
         self.data = dict(data)
@@ -319,10 +319,6 @@ class View:
         return path
 
 
-def _result_parts(result: Any) -> tuple[Columns, Scene, Side | None, Side | None]:
-    return result.columns, result.scene, result.contacts, result.trajectory
-
-
 def view(source: Any, *, window: Window | None = None) -> View:
     """The interactive view of a run, for a notebook (it displays inline) or to save.
 
@@ -342,7 +338,8 @@ def view(source: Any, *, window: Window | None = None) -> View:
         columns, scene = load_run(source)
         contacts, samples = load_sides(source)
     elif hasattr(source, "columns") and hasattr(source, "scene"):
-        columns, scene, contacts, samples = _result_parts(source)
+        columns, scene = source.columns, source.scene
+        contacts, samples = source.contacts, source.trajectory
     else:
         raise RunDataError(f"view: expected a Result or a run folder, got {type(source).__name__}")
     return View(view_data(columns, scene, contacts, samples, window=window))

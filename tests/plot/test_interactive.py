@@ -365,3 +365,19 @@ def test_drag_flights_stay_within_micrometres(driver, tmp_path):
         x, y = flight_positions(columns, i, np.array([time - t[i]]), scene)
         worst = max(worst, math.hypot(state["x"] - x[0], state["y"] - y[0]))
     assert 0 < worst < 6e-6  # not the parabola's exactness: the drag is there
+
+
+def test_the_notebook_frame_runs_the_page(driver, bounce_run, tmp_path):
+    """The page in the sandboxed frame a notebook shows runs as it does from disk."""
+    notebook = tmp_path / "notebook.html"
+    frame = billiard.view(bounce_run)._repr_html_()
+    notebook.write_text(f"<!DOCTYPE html><html><body>{frame}</body></html>", encoding="utf-8")
+    driver.get(notebook.as_uri())
+    driver.switch_to.frame(driver.find_element("tag name", "iframe"))
+    try:
+        state = call(driver, "select(25)")
+        q1, q2 = (read_collisions(bounce_run / "collisions.csv")[k][24] for k in ("q1", "q2"))
+        assert (state["n"], state["x"], state["y"]) == (25, q1, q2)
+        assert browser.console_errors(driver) == []
+    finally:
+        driver.switch_to.default_content()
