@@ -3,13 +3,14 @@
 Equations come from a Kane's-method derivation (``billiard.derivation``) and run as
 generated code (``billiard.generated``). The Python API::
 
-    from billiard import load_scene, open_run, simulate, with_values
+    from billiard import load_scene, open_run, simulate, view, with_values
 
     scene = with_values(load_scene("parabola-5.4hz"), {"contact.restitution": 0.5})
     result = simulate(scene, collisions=2000)   # or simulate("parabola-5.4hz", ...)
     heights = result.columns["q2"]   # numpy array, m
     df = result.to_pandas()          # DataFrame, units in df.attrs["units"] ([data] extra)
     again = open_run("runs/parabola-5.4hz")   # a run folder as the same Result
+    view(result)                     # in a notebook: the run's interactive view, inline
 
 This module is the public API only: it binds the names above from the wings that define
 them (docs/design.md, "Layout"). The scene, simulation and calibration API is imported
@@ -131,6 +132,7 @@ _EXPORTS = {
     "open_run": "billiard.run.load",
     "camera_filter": "billiard.analysis.camera",
     "plot_run": "billiard.plot",
+    "view": "billiard.plot.interactive",
 }
 
 __all__ = [
@@ -150,6 +152,7 @@ __all__ = [
     "scene_from_dict",
     "scene_to_toml",
     "simulate",
+    "view",
     "with_values",
 ]
 

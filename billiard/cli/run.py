@@ -127,12 +127,12 @@ def _holds_run(folder: Path) -> bool:
 
 
 def _remove_plots(folder: Path) -> list[str]:
-    """Delete the figures ``plot_run`` wrote into a run folder (they no longer match its
-    data); returns the names removed."""
-    from billiard.runfile.folder import FIGURE_NAMES
+    """Delete the figures ``plot_run`` and the view ``billiard view`` wrote into a run
+    folder (they no longer match its data); returns the names removed."""
+    from billiard.runfile.folder import FIGURE_NAMES, VIEW_NAME
 
     removed = []
-    for name in FIGURE_NAMES:
+    for name in (*FIGURE_NAMES, VIEW_NAME):
         path = folder / name
         if path.is_file():
             path.unlink()

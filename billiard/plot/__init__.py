@@ -27,6 +27,7 @@ One module per figure:
 | ``phase`` | :func:`phase_plot`, :func:`phase_coordinates` |
 | ``trajectory`` | :func:`trajectory`, :func:`default_window` |
 | ``animation`` | :func:`animate` (GIF) |
+| ``interactive`` | :func:`view`, :func:`write_view`: the interactive view, one HTML page |
 | ``run`` | :func:`plot_run` (``billiard plot DIR``), :func:`load_run`, :func:`load_sides` |
 | ``paper`` | :func:`paper_figure`, :func:`paper_phase_figure`, :func:`paper_models_figure` |
 """
@@ -37,6 +38,7 @@ from billiard.plot.animation import animate
 from billiard.plot.common import RunDataError
 from billiard.plot.flights import flight_positions
 from billiard.plot.inputs import parse_frame_interval, parse_window
+from billiard.plot.interactive import View, view, write_view
 from billiard.plot.maps import return_map, time_map
 from billiard.plot.outline import drive_offset
 from billiard.plot.paper import paper_figure, paper_models_figure, paper_phase_figure
@@ -48,6 +50,7 @@ from billiard.plot.trajectory import default_window, trajectory
 __all__ = [
     "FIGURE_NAMES",
     "RunDataError",
+    "View",
     "animate",
     "default_window",
     "drive_offset",
@@ -67,4 +70,6 @@ __all__ = [
     "scene_title",
     "time_map",
     "trajectory",
+    "view",
+    "write_view",
 ]

@@ -3,7 +3,7 @@ consults them before and after a run without loading the plotting stack)."""
 
 from __future__ import annotations
 
-__all__ = ["FIGURE_NAMES"]
+__all__ = ["FIGURE_NAMES", "VIEW_NAME"]
 
 #: Figures written by :func:`billiard.plot.plot_run`, in order.
 FIGURE_NAMES: tuple[str, ...] = (
@@ -13,3 +13,7 @@ FIGURE_NAMES: tuple[str, ...] = (
     "trajectory.png",
     "animation.gif",
 )
+
+#: The interactive view written by ``billiard view DIR`` (:mod:`billiard.plot.interactive`);
+#: like the figures, it is removed when the run's data change without it being written again.
+VIEW_NAME = "view.html"

@@ -17,6 +17,7 @@ EXPORTS = (
     "camera_filter",
     "simulate",
     "open_run",
+    "view",
 )
 
 
@@ -32,7 +33,7 @@ def test_exports_are_the_functions_every_time():
         for n in names:
             assert getattr(billiard, n) is first[n], n
             assert callable(first[n]) and not isinstance(first[n], types.ModuleType), n
-        for module in ("billiard.analysis.calibrate", "billiard.plot",
+        for module in ("billiard.analysis.calibrate", "billiard.plot", "billiard.plot.interactive",
                        "billiard.runfile.record", "billiard.geometry.curves",
                        "billiard.analysis.camera", "billiard.run.simulate",
                        "billiard.reproduce.paper", "billiard.cli", "billiard.run.load"):

@@ -69,6 +69,7 @@ def test_every_command_is_walked():
         "bench",
         "reproduce",
         "sweep",
+        "view",
     ]
     for _, parser in commands(build_parser()):
         assert parser.format_help()  # every help prints
