@@ -13,8 +13,9 @@ files), :mod:`~billiard.sweep.attractor` (period and class of one trajectory),
 :mod:`~billiard.sweep.measure` (one point, in a worker), :mod:`~billiard.sweep.store`
 (the folder and its durable points file), :mod:`~billiard.sweep.execute` (executors,
 resume, interruption), :mod:`~billiard.sweep.netcdf` (the result file),
-:mod:`~billiard.sweep.basins` and :mod:`~billiard.sweep.plots` (figures). See
-docs/sweeps.md.
+:mod:`~billiard.sweep.basins`, :mod:`~billiard.sweep.categories`,
+:mod:`~billiard.sweep.container` and :mod:`~billiard.sweep.plots` (figures). See
+docs/sweeps.md; ``run_sweep(...).dataset`` is the result as an ``xarray.Dataset``.
 """
 
 from billiard.sweep.definition import Axis, Sweep, SweepError, parse_vary, read_sweep_file

@@ -27,6 +27,7 @@ import math
 import tomllib
 from collections.abc import Iterator, Mapping, Sequence
 from dataclasses import dataclass, field, replace
+from fractions import Fraction
 from pathlib import Path
 from typing import Any
 
@@ -237,19 +238,31 @@ def _check_int(name: str, value: Any, low: int, high: int, unit: str) -> None:
 
 
 class LinearValues(Sequence[float]):
-    """The values of ``START:STOP:N`` computed when asked for, never all held: value i is
-    ``START + i * (STOP - START) / (N - 1)``, the last one STOP exactly (a million-point
-    axis costs nothing until its points run)."""
+    """The values of ``START:STOP:N`` computed when asked for, never all held (a
+    million-point axis costs nothing until its points run).
+
+    Value i is the float nearest to the exact decimal ``START + i (STOP - START) / (N - 1)``
+    of the decimals START and STOP stand for (their shortest ``repr``, the text typed):
+    the grid's own values, so ``0.02:0.03:11`` holds ``0.027`` (``float("0.027")``), not
+    ``0.02 + 7 * 0.001 = 0.027000000000000003``, and a result selected by the value asked
+    for finds it. The first value is START and the last STOP exactly.
+    """
 
     def __init__(self, start: float, stop: float, num: int):
         self.start, self.stop, self.num = float(start), float(stop), int(num)
-        self._step = (self.stop - self.start) / (self.num - 1) if self.num > 1 else 0.0
+        a, b = Fraction(repr(self.start)), Fraction(repr(self.stop))
+        steps = max(self.num - 1, 1)
+        # value i = (first + i * rise) / over, in integers: Python's int / int is the
+        # correctly rounded quotient, so each value is the float nearest the exact one
+        self._over = a.denominator * b.denominator * steps
+        self._first = a.numerator * b.denominator * steps
+        self._rise = b.numerator * a.denominator - a.numerator * b.denominator
 
     def __len__(self) -> int:
         return self.num
 
     def _value(self, i: int) -> float:
-        return self.stop if i == self.num - 1 else self.start + i * self._step
+        return (self._first + i * self._rise) / self._over
 
     def __getitem__(self, i: Any) -> Any:
         if isinstance(i, slice):
@@ -264,10 +277,7 @@ class LinearValues(Sequence[float]):
     def __array__(self, dtype: Any = None, copy: Any = None) -> Any:
         import numpy as np
 
-        # the same float operations as _value, element by element
-        out = self.start + np.arange(self.num, dtype=float) * self._step
-        if self.num:
-            out[-1] = self.stop
+        out = np.fromiter(map(self._value, range(self.num)), dtype=float, count=self.num)
         return out if dtype is None else out.astype(dtype)
 
     def __eq__(self, other: object) -> bool:

@@ -56,6 +56,7 @@ __all__ = [
 ]
 
 DASK_HINT = 'pip install "realworld-billiard[dask]"'
+DATA_HINT = 'pip install "realworld-billiard[data]"'
 
 #: Seconds to reach a Dask scheduler and hear it answer as one (``--dask``): a live
 #: address that is something else (an HTTP server, the dashboard's port) must not hang.
@@ -88,9 +89,12 @@ class SweepInterrupted(KeyboardInterrupt):
         self.directory, self.done, self.total = directory, done, total
 
 
-@dataclass
+@dataclass(repr=False)
 class SweepOutcome:
-    """What :func:`run_sweep` did.
+    """What :func:`run_sweep` did; :attr:`dataset` opens its result in xarray.
+
+    Printed, it is one line (the folder, points per status and per attractor class, where
+    they ran); in a notebook a small table.
 
     Attributes:
         directory: the sweep folder.
@@ -128,6 +132,63 @@ class SweepOutcome:
     def measured(self) -> int:
         """Points measured (status ``ok``)."""
         return self.statuses.get("ok", 0)
+
+    @property
+    def dataset(self) -> Any:
+        """The result file as an ``xarray.Dataset`` (opened lazily: arrays are read when
+        used), coordinates the swept keys' values, missing values masked, units in each
+        variable's ``attrs``; e.g. ``outcome.dataset.height_mean.sel(drive_amplitude=0.027)``.
+
+        Raises:
+            ModuleNotFoundError: xarray is not installed (one line naming the extra).
+        """
+        try:
+            import xarray
+        except ImportError:
+            raise ModuleNotFoundError(
+                f"SweepOutcome.dataset needs xarray: {DATA_HINT}", name="xarray"
+            ) from None
+        return xarray.open_dataset(self.result)
+
+    def _summary(self) -> dict[str, str]:
+        """The outcome in a few short lines (for its repr and its HTML table)."""
+        from billiard.sweep.attractor import CLASSES
+
+        total = sum(self.statuses.values())
+        order = ("ok", "failed", "invalid")
+        statuses = sorted(self.statuses.items(), key=lambda kv: (kv[0] not in order, kv[0]))
+        classes = sorted(
+            self.classes.items(),
+            key=lambda kv: CLASSES.index(kv[0]) if kv[0] in CLASSES else len(CLASSES),
+        )
+        return {
+            "folder": str(self.directory),
+            "points": f"{total} (" + ", ".join(f"{n} {name}" for name, n in statuses) + ")",
+            "attractors": ", ".join(f"{n} {name}" for name, n in classes) or "none",
+            "computed": f"{len(self.computed)} in this session on {self.where}",
+            "files": ", ".join(p.name for p in (self.result, *self.plots)),
+        }
+
+    def __repr__(self) -> str:
+        s = self._summary()
+        return (
+            f"<SweepOutcome {s['folder']}: points {s['points']}; attractors {s['attractors']}; "
+            f"computed {s['computed']}; files {s['files']}>"
+        )
+
+    def _repr_html_(self) -> str:
+        from html import escape
+
+        rows = "".join(
+            f"<tr><th style='text-align:left'>{escape(name)}</th><td style='text-align:left'>"
+            f"{escape(text)}</td></tr>"
+            for name, text in self._summary().items()
+        )
+        return (
+            "<table><caption style='text-align:left'><b>SweepOutcome</b> "
+            "(<code>.dataset</code>: the result as an xarray.Dataset)</caption>"
+            f"{rows}</table>"
+        )
 
 
 # ----------------------------------------------------------------------------------------

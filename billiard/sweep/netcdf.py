@@ -1,22 +1,39 @@
-"""The sweep's result file, ``DIR/sweep.nc``: netCDF-3, self-describing, one line to open::
+"""The sweep's result file, ``DIR/sweep.nc``: netCDF-3 following the CF conventions
+(CF-1.8), self-describing, one line to open::
 
     import xarray as xr;  ds = xr.open_dataset("runs/sweep-parabola-5.4hz/sweep.nc")
+    ds.height_mean.sel(drive_frequency=5.4)       # the value asked for selects its point
     # or, without xarray:  scipy.io.netcdf_file(path, mmap=False).variables
 
 Every swept key is a dimension with a coordinate variable of the same name, dots made
 underscores (``drive.frequency`` -> ``drive_frequency``; the attribute ``scene_key``
-keeps the dotted key), with ``units`` and ``long_name``. Every measured quantity is a
-variable over those dimensions (plus ``impact`` for the last K impacts), with ``units``
-and ``long_name``; NaN means "not measured" (a failed point, or the exponent not
-asked for). The global attributes hold the sweep file and the base scene as text.
+keeps the dotted key), with ``units`` and ``long_name``. Its values are the values the
+points ran with, the grid's decimals (``0.02:0.03:11`` holds 0.027, the float of the
+text "0.027"), so ``sel`` with the value asked for finds the point.
 
-The file is built from the points sorted by index and holds no timings, so its bytes do
-not depend on the number of workers or the order in which they finished.
+Every measured quantity is a variable over those dimensions (plus ``impact`` for the last
+K impacts), with ``units`` and ``long_name``. What was not measured is missing, declared
+by ``_FillValue`` (readers such as xarray mask it): NaN for real numbers (a failed point,
+the exponent not asked for), :data:`INT_FILL` for ``period`` and ``drive_periods`` where
+no period was found. ``attractor`` is a coded integer, its classes named by the CF
+attributes ``flag_values`` and ``flag_meanings`` (the codes of
+:data:`billiard.sweep.attractor.CLASSES`, in that order). Text variables (``status``,
+``reason``, ``run_status``, ``final_mode``) and the class codes are not quantities and
+carry no ``units``.
+
+The global attributes: ``Conventions``, ``title``, ``source`` (the package and its
+version), ``history`` (the command that makes the file again), ``comment``, and the sweep
+file and the base scene as text (``sweep_definition``, ``base_scene``). The file is built
+from the points sorted by index and holds no wall-clock time (the start and end times are
+in ``sweep.log`` beside it), so its bytes depend only on the sweep and the package
+version: not on the number of workers, the order in which they finished, interruptions
+or the folder.
 """
 
 from __future__ import annotations
 
 import os
+import sys
 from collections.abc import Iterable, Sequence
 from pathlib import Path
 from typing import Any
@@ -28,9 +45,26 @@ from billiard.sweep.attractor import CLASSES
 from billiard.sweep.definition import Sweep, sweep_to_toml
 from billiard.sweep.units import key_unit, variable_name
 
-__all__ = ["RESULT_NAME", "write_result"]
+__all__ = ["CONVENTIONS", "INT_FILL", "RESULT_NAME", "read_result", "write_result"]
 
 RESULT_NAME = "sweep.nc"
+DISTRIBUTION = "realworld-billiard"
+CONVENTIONS = "CF-1.8"
+#: ``_FillValue`` of the integer variables (netCDF's own default fill for a 32-bit int).
+INT_FILL = -2147483647
+#: Integer variables whose 0 in a point's record means "none": stored as INT_FILL.
+_NONE_IS_ZERO = ("period", "drive_periods")
+#: The global attributes, in the order written (read back by name: public API only).
+GLOBAL_ATTRIBUTES = (
+    "Conventions",
+    "title",
+    "source",
+    "history",
+    "comment",
+    "sweep_definition",
+    "base_scene",
+    "points",
+)
 
 # name -> (record field, dtype, units, long_name)
 _SCALARS: tuple[tuple[str, str, str, str], ...] = (
@@ -39,9 +73,14 @@ _SCALARS: tuple[tuple[str, str, str, str], ...] = (
         "i4",
         "1",
         "impacts per repetition of the post-impact state and drive phase "
-        "(0: no period up to max_period)",
+        "(missing: no period up to max_period)",
     ),
-    ("drive_periods", "i4", "1", "drive periods per repetition of the state (0: no period)"),
+    (
+        "drive_periods",
+        "i4",
+        "1",
+        "drive periods per repetition of the state (missing: no period)",
+    ),
     ("impacts", "i4", "1", "impacts measured (after the transient)"),
     ("total_impacts", "i4", "1", "impacts simulated, transient included"),
     ("rest_height", "f8", "m", "centre height of the ball at rest at the bottom"),
@@ -83,11 +122,10 @@ def _chars(strings: Sequence[str], shape: tuple[int, ...]) -> tuple[np.ndarray, 
     return column.chars(shape)
 
 
-#: Text variables: name -> long_name (the attractor's lists the classes).
+#: Text variables: name -> long_name.
 _TEXT = (
     ("status", "ok, failed (the run stopped early: see reason) or invalid (skipped)"),
     ("reason", "why a point failed or was skipped (empty when ok)"),
-    ("attractor", "attractor class: " + ", ".join(CLASSES)),
     (
         "run_status",
         "how the point's run ended (billiard.Status, lower case: complete, time_limit, "
@@ -95,6 +133,32 @@ _TEXT = (
     ),
     ("final_mode", "the ball's motion when the run ended: flight, roll, slide or held"),
 )
+
+
+def history_line() -> str:
+    """The ``history`` attribute: the command that makes the file again from its folder,
+    and the package that made it (no time: the file's bytes depend only on the sweep)."""
+    return (
+        f"billiard sweep sweep.toml (the sweep folder's definition; {_source()}); "
+        "wall-clock times are in sweep.log"
+    )
+
+
+def _source() -> str:
+    """The distribution and its version (that of the package imported, in a checkout run
+    without installing: its parent package is loaded before this module)."""
+    import importlib.metadata
+
+    try:
+        version = importlib.metadata.version(DISTRIBUTION)
+    except importlib.metadata.PackageNotFoundError:
+        version = getattr(sys.modules.get("billiard"), "__version__", "unknown")
+    return f"{DISTRIBUTION} {version}"
+
+
+def _title(sweep: Sweep) -> str:
+    keys = ", ".join(axis.key for axis in sweep.axes)
+    return f"billiard sweep of {sweep.scene.name} over {keys}"
 
 
 def write_result(
@@ -105,6 +169,7 @@ def write_result(
     size, keep = sweep.size, sweep.keep
     seen = np.zeros(size, dtype=bool)
     text = {name: _Strings(size) for name, _ in _TEXT}
+    codes = np.zeros(size, dtype=np.int8)
     scalars = {
         name: np.zeros(size, dtype=np.int32) if dtype == "i4" else np.full(size, np.nan)
         for name, dtype, _, _ in _SCALARS
@@ -115,9 +180,11 @@ def write_result(
         seen[i] = True
         for name, _ in _TEXT:
             text[name][i] = str(r.get(name, ""))
+        codes[i] = CLASSES.index(r["attractor"])
         for name, dtype, _, _ in _SCALARS:
             if dtype == "i4":
-                scalars[name][i] = int(r[name] or 0)
+                value = int(r[name] or 0)
+                scalars[name][i] = INT_FILL if value == 0 and name in _NONE_IS_ZERO else value
             else:
                 scalars[name][i] = np.nan if r[name] is None else float(r[name])
         for name, data in tails.items():
@@ -132,18 +199,23 @@ def write_result(
     tmp = path.with_name(path.name + ".tmp")
     f = netcdf_file(tmp, "w", version=2)
     try:
-        f.title = "billiard sweep"
-        f.source = "realworld-billiard, billiard sweep"
-        f.conventions = "netCDF-3 (64-bit offset); SI units; NaN = not measured"
-        f.attractor_classes = " ".join(CLASSES)
+        # numbers as numpy scalars: scipy writes a Python float as a 32-bit float
+        f.Conventions = CONVENTIONS
+        f.title = _title(sweep)
+        f.source = f"{_source()}, billiard sweep"
+        f.history = history_line()
+        f.comment = (
+            "SI units; NaN or _FillValue: not measured; netCDF-3 (64-bit offset); "
+            "sweep_definition and base_scene hold the sweep file and its base scene"
+        )
         f.sweep_definition = sweep_to_toml(sweep)
         f.base_scene = scene_toml
-        f.points = size
+        f.points = np.int32(size)
         for axis, dim in zip(sweep.axes, dims, strict=True):
             f.createDimension(dim, len(axis.values))
             if axis.numeric:
                 var = f.createVariable(dim, "f8", (dim,))
-                var[:] = np.asarray(axis.values, dtype=float)
+                var[:] = np.asarray(axis.values, dtype=float)  # the values the points ran
             else:
                 chars, width = _chars([str(v) for v in axis.values], (len(axis.values),))
                 f.createDimension(f"{dim}_strlen", width)
@@ -163,6 +235,11 @@ def write_result(
         var[:] = np.arange(size, dtype=np.int32).reshape(shape)
         var.units = "1"
         var.long_name = "point index (C order of the swept keys; as in points.jsonl)"
+        var = f.createVariable("attractor", "b", dims)
+        var[:] = codes.reshape(shape)
+        var.long_name = "attractor class (code; flag_meanings names each flag_values)"
+        var.flag_values = np.arange(len(CLASSES), dtype=np.int8)
+        var.flag_meanings = " ".join(CLASSES)
         for name, long_name in _TEXT:
             chars, width = text.pop(name).chars(shape)
             f.createDimension(f"{name}_strlen", width)
@@ -175,6 +252,10 @@ def write_result(
             var[:] = scalars.pop(name).reshape(shape)
             var.units = units
             var.long_name = long_name
+            if name in _NONE_IS_ZERO:
+                var._FillValue = np.int32(INT_FILL)
+            elif dtype == "f8":
+                var._FillValue = np.float64(np.nan)
         for name, units, long_name in (
             ("last_height", "m", "last impact heights q2 (NaN-padded at the front)"),
             ("last_tof", "s", "last times of flight (NaN-padded at the front)"),
@@ -183,14 +264,26 @@ def write_result(
             var[:] = tails.pop(name).reshape(*shape, keep)
             var.units = units
             var.long_name = long_name
+            var._FillValue = np.float64(np.nan)
     finally:
         f.close()
     os.replace(tmp, path)
     return path
 
 
+def _text(value: Any) -> Any:
+    return value.decode("utf-8") if isinstance(value, bytes) else value
+
+
 def read_result(path: Path) -> dict[str, Any]:
-    """The result file as a dict of numpy arrays (strings decoded) and its attributes."""
+    """The result file as a dict of numpy arrays, decoded as xarray decodes them, and its
+    global attributes (under ``"_attributes"``).
+
+    Text variables become arrays of ``str``; ``attractor`` its class names (through
+    ``flag_meanings``); an integer variable with a ``_FillValue`` becomes float, NaN where
+    filled (``period`` where no period was found). Files written before the attractor
+    was coded (text) read the same.
+    """
     with netcdf_file(path, "r", mmap=False) as f:
         out: dict[str, Any] = {}
         for name, var in f.variables.items():
@@ -199,8 +292,17 @@ def read_result(path: Path) -> dict[str, Any]:
                 rows = data.reshape(-1, data.shape[-1])
                 text = [b"".join(row).rstrip(b"\0").decode() for row in rows]
                 data = np.array(text, dtype=object).reshape(data.shape[:-1])
+            meanings = getattr(var, "flag_meanings", None)
+            fill = getattr(var, "_FillValue", None)
+            if meanings is not None:
+                codes = np.ravel(var.flag_values).tolist()
+                names = dict(zip(codes, _text(meanings).split(), strict=True))
+                flat = [names[int(code)] for code in data.ravel()]
+                data = np.array(flat, dtype=object).reshape(data.shape)
+            elif fill is not None and data.dtype.kind in "iu":
+                data = np.where(data == fill, np.nan, data.astype(float))
             out[name] = data
         out["_attributes"] = {
-            k: (v.decode() if isinstance(v, bytes) else v) for k, v in f._attributes.items()
+            name: _text(getattr(f, name)) for name in GLOBAL_ATTRIBUTES if hasattr(f, name)
         }
     return out

@@ -2,10 +2,12 @@
 
 * one numeric axis: ``bifurcation.png``, the last K impact heights and times of flight
   against the swept key (and the Lyapunov exponent when computed);
-* two numeric axes (the first one horizontal): ``heatmaps.png``, period (discrete
-  colours, one per whole number), mean impact height and (when computed) the Lyapunov
-  exponent; and when a swept key is a starting state (``initial.*``), ``basins.png``,
-  each start coloured by the attractor it reaches.
+* two numeric axes (the first one horizontal): ``heatmaps.png``, period (a category:
+  one colour per period found, named in a legend), mean impact height and (when
+  computed) the Lyapunov exponent; and when a swept key is a starting state
+  (``initial.*``), ``basins.png``, each start coloured by the attractor it reaches (one
+  colour per attractor, named in a legend), with the container's wall at the start time
+  when the keys are the starting position (``initial.q1`` and ``initial.q2``).
 
 A map whose values agree to rounding (relative spread at most 1e-9), or for heights
 within the sweep's ``tolerance`` (10 µm by default: states closer than that are the same
@@ -29,6 +31,13 @@ import numpy as np
 
 from billiard.sweep.attractor import CONTACT_CLASSES
 from billiard.sweep.basins import attractor_labels
+from billiard.sweep.categories import (
+    CLASS_COLOURS,
+    category_legend,
+    category_map,
+    distinct_colours,
+)
+from billiard.sweep.container import POSITION_KEYS, lid_height, wall_outline
 from billiard.sweep.definition import Sweep
 from billiard.sweep.units import axis_label, variable_name
 
@@ -228,27 +237,20 @@ def _panel(
     return bar
 
 
-def _period_panel(fig: Any, ax: Any, xe: Any, ye: Any, period: np.ndarray) -> Any:
-    """Periods are whole numbers: one discrete colour per period, ticks on whole numbers."""
-    import matplotlib.pyplot as plt
-    from matplotlib.colors import BoundaryNorm
-    from matplotlib.ticker import MaxNLocator
-
-    found = np.unique(period[np.isfinite(period)]).astype(int)
-    low, high = (int(found.min()), int(found.max())) if found.size else (1, 1)
-    levels = high - low + 1
-    cmap = plt.get_cmap("viridis", levels)
-    norm = BoundaryNorm(np.arange(low - 0.5, high + 1.0, 1.0), levels)
-    mesh = ax.pcolormesh(xe, ye, np.ma.masked_invalid(period).T, cmap=cmap, norm=norm)
-    ticks = found if found.size <= 12 else None  # no period at all: no ticks
-    bar = fig.colorbar(mesh, ax=ax, ticks=ticks)
-    if ticks is None:
-        bar.locator = MaxNLocator(integer=True)
-        bar.update_ticks()
-    bar.set_label("period (impacts per repetition of the state)", fontsize=8)
-    if not found.size:
+def _period_panel(ax: Any, xe: Any, ye: Any, period: np.ndarray) -> Any:
+    """Periods are categories: one distinct colour per period found, named in a legend
+    (a colour scale would suggest that period 3 lies between 2 and 4 as a height does)."""
+    # NaN: none (the file's _FillValue); 0 too, the "none" of files written before it
+    found = np.unique(period[np.isfinite(period) & (period > 0)]).astype(int)
+    ids = np.full(period.shape, -1)
+    for k, value in enumerate(found):
+        ids[period == value] = k
+    labels = [f"period {value}" for value in found]
+    handles = category_map(ax, xe, ye, ids, labels, distinct_colours(len(found)))
+    legend = category_legend(ax, handles, "impacts per repetition\nof the state")
+    if legend is None:
         ax.text(0.5, 0.5, "no period found", transform=ax.transAxes, ha="center", fontsize=8)
-    return bar
+    return legend
 
 
 def heatmaps(sweep: Sweep, data: Mapping[str, Any], path: Path) -> Path:
@@ -262,13 +264,12 @@ def heatmaps_figure(sweep: Sweep, data: Mapping[str, Any]) -> Any:
 
     xa, ya = sweep.axes  # first key horizontal, second vertical
     xe, ye = _edges(data[variable_name(xa.key)]), _edges(data[variable_name(ya.key)])
-    period = _grid(data, "period")
-    period[period == 0] = np.nan
+    period = _grid(data, "period")  # NaN: no period (the file's _FillValue)
     lyap = _grid(data, "lyapunov")
     panels = 3 if np.isfinite(lyap).any() else 2
     fig, axes = plt.subplots(1, panels, figsize=(4.8 * panels, 4.3), dpi=100)
     axes = np.atleast_1d(axes)
-    _period_panel(fig, axes[0], xe, ye, period)
+    _period_panel(axes[0], xe, ye, period)
     axes[0].set_title("period (blank: none, failed or invalid)", fontsize=9)
     # heights closer than the sweep's state tolerance are one orbit's to the sweep
     resolution = (sweep.tolerance, f"{sweep.tolerance:g} m, the sweep's tolerance")
@@ -303,53 +304,57 @@ def heatmaps_figure(sweep: Sweep, data: Mapping[str, Any]) -> Any:
 
 def basins(sweep: Sweep, data: Mapping[str, Any], path: Path) -> Path:
     """Each start coloured by the attractor it reaches."""
+    return _save(basins_figure(sweep, data), path)
+
+
+def basins_figure(sweep: Sweep, data: Mapping[str, Any]) -> Any:
+    """Each start coloured by the attractor it reaches, one distinct colour per attractor
+    (periodic orbits told apart by period and mean height) named in a legend; over
+    starting positions (initial.q1 and initial.q2) with the container's wall and lid at
+    the start time, at equal scales."""
     import matplotlib.pyplot as plt
-    from matplotlib.colors import BoundaryNorm, ListedColormap
-    from matplotlib.patches import Patch
 
     flat = {name: np.asarray(data[name]).ravel() for name in ("attractor", "period", "height_mean")}
     records = [
-        {"attractor": str(a), "period": int(p), "height_mean": h}
+        {"attractor": str(a), "period": p, "height_mean": h}
         for a, p, h in zip(flat["attractor"], flat["period"], flat["height_mean"], strict=True)
     ]
     ids, labels = attractor_labels(records)
-    palette = plt.get_cmap("tab10").colors
-    special = {
-        "failed": "black",
-        "invalid": "white",
-        "resting": "0.6",
-        "chaotic": "tab:red",
-        "rolling": "tab:green",
-        "sliding": "tab:olive",
-        "held": "tab:brown",
-    }
-    colours = []
-    k = 0
-    for label in labels:
-        if label in special:
-            colours.append(special[label])
-        else:
-            colours.append(palette[k % len(palette)])
-            k += 1
-    cmap = ListedColormap(colours)
-    norm = BoundaryNorm(np.arange(len(labels) + 1) - 0.5, len(labels))
+    special = [CLASS_COLOURS[label] for label in labels if label in CLASS_COLOURS]
+    others = iter(distinct_colours(len(labels) - len(special), taken=special))
+    colours = [CLASS_COLOURS[label] if label in CLASS_COLOURS else next(others) for label in labels]
     xa, ya = sweep.axes  # first key horizontal, second vertical
+    xe, ye = _edges(data[variable_name(xa.key)]), _edges(data[variable_name(ya.key)])
     grid = np.array(ids).reshape(sweep.shape)
     fig, ax = plt.subplots(figsize=(7.5, 5.0), dpi=100)
-    ax.pcolormesh(
-        _edges(data[variable_name(xa.key)]),
-        _edges(data[variable_name(ya.key)]),
-        grid.T,
-        cmap=cmap,
-        norm=norm,
-    )
-    counts = np.bincount(grid.ravel(), minlength=len(labels))
-    handles = [
-        Patch(facecolor=c, edgecolor="black", label=f"{lab} ({n} starts)")
-        for c, lab, n in zip(colours, labels, counts, strict=True)
-    ]
-    ax.legend(handles=handles, fontsize=7, loc="upper left", bbox_to_anchor=(1.01, 1.0))
+    handles = category_map(ax, xe, ye, grid, labels, colours, unit="start")
+    if {xa.key, ya.key} == set(POSITION_KEYS):
+        handles += _container(ax, sweep, xe, ye, transposed=xa.key == "initial.q2")
+    category_legend(ax, handles)
     ax.set_xlabel(axis_label(xa.key))
     ax.set_ylabel(axis_label(ya.key))
     ax.set_title(f"attractor reached from each start\n{_title(sweep, 70)}", fontsize=9)
-    return _save(fig, path)
+    return fig
+
+
+def _container(ax: Any, sweep: Sweep, xe: np.ndarray, ye: np.ndarray, transposed: bool) -> list:
+    """Draw the wall (and the lid, if in view) over a map of starting positions, at equal
+    scales, the view kept to the map's cells; ``transposed``: q2 is horizontal. Returns
+    the lines, for the legend."""
+    q1_edges, q2_edges = (ye, xe) if transposed else (xe, ye)
+    lo, hi = float(np.min(q1_edges)), float(np.max(q1_edges))
+    try:
+        x, y = wall_outline(sweep.scene, lo, hi)
+    except ValueError:  # a curve that cannot be loaded here: the map without it
+        return []
+    line = (y, x) if transposed else (x, y)
+    (wall,) = ax.plot(*line, color="black", lw=1.2, label="container wall at the start")
+    lines = [wall]
+    lid = lid_height(sweep.scene)
+    if lid is not None and np.min(q2_edges) <= lid <= np.max(q2_edges):
+        draw = ax.axvline if transposed else ax.axhline
+        lines.append(draw(lid, color="black", lw=1.2, ls="--", label="lid"))
+    ax.set_xlim(float(np.min(xe)), float(np.max(xe)))
+    ax.set_ylim(float(np.min(ye)), float(np.max(ye)))
+    ax.set_aspect("equal", adjustable="box")
+    return lines

@@ -19,6 +19,7 @@ import sys
 import threading
 import time
 import tracemalloc
+from fractions import Fraction
 from http.server import SimpleHTTPRequestHandler, ThreadingHTTPServer
 from pathlib import Path
 
@@ -368,15 +369,26 @@ def test_size_estimate_is_close_to_the_files_written(tmp_path, keep):
         assert 0.8 * written < size < 1.25 * written, (name, size, written)
 
 
-def test_range_values_equal_the_materialised_ones():
-    axis = parse_vary("drive.frequency=4:7:31")
-    start, stop, n = 4.0, 7.0, 31
-    step = (stop - start) / (n - 1)
-    expected = [start + i * step for i in range(n - 1)] + [stop]
-    assert list(axis.values) == expected
-    assert np.asarray(axis.values).tolist() == expected
-    assert axis.values == tuple(expected)
+def test_range_values_are_the_grids_decimals():
+    # value i is the float nearest START + i (STOP - START) / (N - 1) in decimals: what
+    # the user asked for, so a result is selected by the value as typed
+    for spec, texts in {
+        "4:7:31": [f"{4 + i / 10:.1f}" for i in range(31)],
+        "0.02:0.03:11": [f"0.0{20 + i}" for i in range(11)],
+        "0.012:0.03:7": ["0.012", "0.015", "0.018", "0.021", "0.024", "0.027", "0.03"],
+        "-0.003:0.03:12": [f"{-0.003 + 0.003 * i:.3f}" for i in range(12)],
+        "0:1:4": ["0", "1/3", "2/3", "1"],
+    }.items():
+        axis = parse_vary(f"drive.frequency={spec}")
+        expected = [float(Fraction(text)) for text in texts]
+        assert list(axis.values) == expected, spec
+        assert np.asarray(axis.values).tolist() == expected
+        assert axis.values == tuple(expected)
+    # 0.012 + 5 * 0.003 in floats is 0.026999999999999996: not the value asked for
+    assert parse_vary("drive.amplitude=0.012:0.03:7").values[5] == 0.027
     assert parse_vary("drive.frequency=7:4:4").values == (7.0, 6.0, 5.0, 4.0)
+    huge = parse_vary("drive.frequency=0:1:999999999").values  # never materialised
+    assert huge[-1] == 1.0 and huge[333333333] == float(Fraction(333333333, 999999998))
 
 
 def _growth(tmp_path: Path, name: str, points: int) -> int:

@@ -95,6 +95,41 @@ def test_result_file_is_self_describing(reference):
     assert "impacts/s" in log
 
 
+def test_outcome_prints_in_one_short_line(reference):
+    _, outcome = reference
+    text = repr(outcome)
+    assert text == (
+        f"<SweepOutcome {outcome.directory}: points 4 (4 ok); attractors 2 resting, "
+        "1 periodic, 1 aperiodic; computed 4 in this session on 1 local worker process; "
+        "files sweep.nc, heatmaps.png>"
+    )
+    assert "last_height" not in text  # no record is dumped
+    html = outcome._repr_html_()
+    assert html.startswith("<table>") and html.endswith("</table>")
+    assert "<th style='text-align:left'>attractors</th>" in html
+    assert "<td style='text-align:left'>2 resting, 1 periodic, 1 aperiodic</td>" in html
+
+
+def test_outcome_dataset_is_the_result_in_xarray(reference):
+    _, outcome = reference
+    data = read_result(outcome.result)
+    with outcome.dataset as ds:
+        orbit = ds.sel(drive_amplitude=0.02543, drive_frequency=5.4)
+        assert float(orbit.height_mean) == data["height_mean"][1, 1]
+        assert ds.height_mean.attrs["units"] == "m"
+        np.testing.assert_array_equal(ds.period.values, data["period"])
+
+
+def test_outcome_dataset_without_xarray_names_the_extra(reference, monkeypatch):
+    _, outcome = reference
+    monkeypatch.setitem(sys.modules, "xarray", None)  # not installed
+    with pytest.raises(ModuleNotFoundError) as caught:
+        outcome.dataset  # noqa: B018
+    assert str(caught.value) == (
+        'SweepOutcome.dataset needs xarray: pip install "realworld-billiard[data]"'
+    )
+
+
 def test_two_workers_give_the_same_bytes(reference, tmp_path):
     sweep, outcome = reference
     other = run_sweep(_sweep(), tmp_path / "two", workers=2, progress=_quiet(sweep))

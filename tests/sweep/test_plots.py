@@ -1,5 +1,7 @@
-"""Sweep plots: labelled colour bars, a constant map drawn as one value, whole-number
-periods in discrete colours, and titles that name the base scene's --set changes."""
+"""Sweep plots: labelled colour bars, a constant map drawn as one value, periods and
+attractors in one distinct colour per category with a legend, basin maps over starting
+positions with the container's wall, and titles that name the base scene's --set
+changes."""
 
 from __future__ import annotations
 
@@ -8,8 +10,10 @@ import numpy as np
 import pytest
 
 from billiard import load_scene
+from billiard.geometry.curves import load_curve
 from billiard.sweep import Sweep, parse_vary
 from billiard.sweep.plots import (
+    basins_figure,
     bifurcation_figure,
     constant_value,
     heatmaps_figure,
@@ -32,7 +36,7 @@ def _data(sweep: Sweep, **fields) -> dict:
     data = {variable_name(a.key): np.asarray(a.values, dtype=float) for a in sweep.axes} | {
         "status": np.full(shape, "ok", dtype=object),
         "attractor": np.full(shape, "periodic", dtype=object),
-        "period": np.full(shape, 2, dtype=np.int32),
+        "period": np.full(shape, 2.0),  # as read_result gives it: NaN where none
         "height_mean": np.full(shape, 0.075),
         "lyapunov": np.full(shape, np.nan),
         "rest_height": np.full(shape, 0.00785),
@@ -73,8 +77,9 @@ def test_constant_height_map_is_one_colour_with_its_value_and_unit():
     heights = 0.0753465998259358 + np.array([[0.0, 4.6e-12], [1e-13, 0.0], [2e-12, 3e-12]])
     fig = heatmaps_figure(sweep, _data(sweep, height_mean=heights))
     bars = _colour_bars(fig)
-    assert len(bars) == 2  # period and height: every map has its colour bar
-    height_bar = bars[1]._colorbar
+    assert len(bars) == 1  # the height's; the period map has a legend of categories
+    assert fig.axes[0].get_legend() is not None
+    height_bar = bars[0]._colorbar
     assert height_bar.ax.get_ylabel() == "mean impact height q2 (m)"
     ticks = [t.get_text() for t in height_bar.ax.get_yticklabels()]
     assert ticks == ["0.0753466"]
@@ -87,27 +92,38 @@ def test_varying_height_map_keeps_a_continuous_labelled_bar():
     sweep = _sweep()
     heights = np.array([[0.03, 0.05], [0.06, 0.075], [0.08, 0.11]])
     fig = heatmaps_figure(sweep, _data(sweep, height_mean=heights))
-    bar = _colour_bars(fig)[1]._colorbar
+    bar = _colour_bars(fig)[0]._colorbar
     assert bar.ax.get_ylabel() == "mean impact height q2 (m)"
     assert len(_cell_colours(fig, 1)) == 6
 
 
-def test_period_map_has_discrete_colours_and_whole_number_ticks():
+def _legend_texts(ax) -> list[str]:
+    legend = ax.get_legend()
+    return [] if legend is None else [t.get_text() for t in legend.get_texts()]
+
+
+def test_period_map_is_categorical_one_colour_per_period_with_a_legend():
     sweep = _sweep()
-    period = np.array([[2, 2], [3, 8], [0, 2]], dtype=np.int32)  # 0: no period, blank
+    period = np.array([[2, 2], [3, 8], [np.nan, 2]])  # NaN: no period, blank
     fig = heatmaps_figure(sweep, _data(sweep, period=period))
-    bar = _colour_bars(fig)[0]._colorbar
-    assert bar.ax.get_ylabel() == "period (impacts per repetition of the state)"
-    assert list(bar.get_ticks()) == [2.0, 3.0, 8.0]
-    assert bar.cmap.N == 7  # one colour per whole number from 2 to 8
+    assert _legend_texts(fig.axes[0]) == [
+        "period 2 (3 points)",
+        "period 3 (1 point)",
+        "period 8 (1 point)",
+    ]
+    assert fig.axes[0].get_legend().get_title().get_text().startswith("impacts per repetition")
+    mesh = fig.axes[0].collections[0]
+    assert mesh.cmap.N == 3  # one colour per period present, none for 4 to 7
     assert len(_cell_colours(fig, 0)) == 3  # 2, 3 and 8 (the blank cell is masked)
+    # the legend's patches are the colours of the cells
+    patches = {tuple(p.get_facecolor()) for p in fig.axes[0].get_legend().get_patches()}
+    assert patches == _cell_colours(fig, 0)
 
 
 def test_period_map_without_any_period_says_so():
     sweep = _sweep()
-    fig = heatmaps_figure(sweep, _data(sweep, period=np.zeros(sweep.shape, dtype=np.int32)))
-    bar = _colour_bars(fig)[0]._colorbar
-    assert list(bar.get_ticks()) == []
+    fig = heatmaps_figure(sweep, _data(sweep, period=np.full(sweep.shape, np.nan)))
+    assert fig.axes[0].get_legend() is None
     assert [t.get_text() for t in fig.axes[0].texts] == ["no period found"]
 
 
@@ -116,7 +132,7 @@ def test_lyapunov_bar_is_labelled():
     lyap = np.array([[0.1, -0.2], [0.05, 0.0], [0.3, -0.01]])
     fig = heatmaps_figure(sweep, _data(sweep, lyapunov=lyap))
     labels = [ax._colorbar.ax.get_ylabel() for ax in _colour_bars(fig)]
-    assert labels[2] == "Lyapunov exponent (1/impact)"
+    assert labels[1] == "Lyapunov exponent (1/impact)"
     assert all(labels)
 
 
@@ -150,3 +166,95 @@ def test_bifurcation_draws_a_ball_without_impacts_at_its_resting_height(tmp_path
     assert "periodic (1)" in labels
     paths = plot_sweep(one, data, tmp_path)
     assert [p.name for p in paths] == ["bifurcation.png"] and paths[0].stat().st_size > 0
+
+
+# --- basin maps ------------------------------------------------------------------------
+
+
+def _basin_sweep(first="initial.q1=-0.04:0.04:5", second="initial.q2=0.01:0.09:5") -> Sweep:
+    scene = load_scene("parabola-5.4hz")
+    return Sweep(scene, (parse_vary(first), parse_vary(second)), impacts=300, transient=100)
+
+
+def _basin_data(sweep: Sweep) -> dict:
+    """Starts inside the wall invalid; the others two orbits (period 2 at two heights),
+    a chaotic start and a resting one."""
+    shape = sweep.shape
+    attractor = np.full(shape, "periodic", dtype=object)
+    period = np.full(shape, 2.0)
+    height = np.full(shape, 0.075)
+    height[:, 3:] = 0.11
+    attractor[0, 0] = attractor[-1, 0] = "invalid"
+    attractor[2, 1] = "chaotic"
+    attractor[2, 0] = "resting"
+    period[attractor != "periodic"] = np.nan
+    status = np.where(attractor == "invalid", "invalid", "ok").astype(object)
+    return _data(sweep, attractor=attractor, period=period, height_mean=height, status=status)
+
+
+def _wall_line(ax):
+    (line,) = [ln for ln in ax.get_lines() if ln.get_label() == "container wall at the start"]
+    return np.asarray(line.get_xdata()), np.asarray(line.get_ydata())
+
+
+def test_basin_map_over_positions_draws_the_container_wall():
+    sweep = _basin_sweep()
+    fig = basins_figure(sweep, _basin_data(sweep))
+    ax = fig.axes[0]
+    x, y = _wall_line(ax)
+    curve = load_curve("parabola", dict(sweep.scene.boundary.parameters))
+    # drive phase 0 at t = 0: the wall is f itself, over the map's whole width
+    assert x.min() == pytest.approx(-0.05) and x.max() == pytest.approx(0.05)
+    assert np.array_equal(y, [curve.f(float(v)) for v in x])
+    # the view is the map's cells, at equal scales (positions in the same unit)
+    assert ax.get_xlim() == pytest.approx((-0.05, 0.05))
+    assert ax.get_ylim() == pytest.approx((0.0, 0.1))
+    assert ax.get_aspect() == 1.0
+    assert _legend_texts(ax)[-1] == "container wall at the start"
+
+
+def test_basin_map_with_q2_horizontal_draws_the_wall_transposed():
+    sweep = _basin_sweep("initial.q2=0.01:0.09:5", "initial.q1=-0.04:0.04:5")
+    fig = basins_figure(sweep, _basin_data(sweep))
+    q2, q1 = _wall_line(fig.axes[0])
+    curve = load_curve("parabola", dict(sweep.scene.boundary.parameters))
+    assert np.array_equal(q2, [curve.f(float(v)) for v in q1])
+
+
+def test_basin_map_over_other_keys_has_no_wall():
+    sweep = _basin_sweep("initial.v1=-0.1:0.1:5", "initial.q2=0.01:0.09:5")
+    fig = basins_figure(sweep, _basin_data(sweep))
+    assert fig.axes[0].get_lines() == []
+
+
+def test_basin_map_colours_are_one_per_attractor_present():
+    sweep = _basin_sweep()
+    fig = basins_figure(sweep, _basin_data(sweep))
+    texts = _legend_texts(fig.axes[0])
+    classes = texts[:-1]
+    assert classes == [
+        "resting (1 start)",
+        "period 2, mean q2 0.0750 m (11 starts)",
+        "period 2, mean q2 0.1100 m (10 starts)",
+        "chaotic (1 start)",
+        "invalid (2 starts)",
+    ]
+    assert texts[-1] == "container wall at the start"
+    fig.canvas.draw()
+    mesh = fig.axes[0].collections[0]
+    drawn = {tuple(c) for c in mesh.to_rgba(mesh.get_array().ravel())}
+    assert len(drawn) == len(classes)  # discrete: one colour per class, none shared
+
+
+def test_many_orbits_still_get_colours_of_their_own():
+    sweep = _basin_sweep("initial.q1=-0.04:0.04:5", "initial.q2=0.01:0.2:20")
+    data = _basin_data(sweep)
+    data["height_mean"] = np.linspace(0.02, 0.4, sweep.size).reshape(sweep.shape)  # 5 mm apart
+    data["attractor"][:] = "periodic"
+    data["status"][:] = "ok"
+    data["period"] = np.full(sweep.shape, 2.0)
+    fig = basins_figure(sweep, data)
+    fig.canvas.draw()
+    mesh = fig.axes[0].collections[0]
+    drawn = {tuple(c) for c in mesh.to_rgba(mesh.get_array().ravel())}
+    assert len(drawn) == sweep.size == 100  # more orbits than any one palette has colours
