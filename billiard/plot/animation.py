@@ -13,28 +13,12 @@ from PIL import Image
 
 from billiard.plot.common import MM, Columns, Window, cannot_write, column, new_figure
 from billiard.plot.contacts import MODE_LABELS, MODE_STYLES, PhasePath, Side, joined, phase_path
-from billiard.plot.flights import arcs, flight_positions
+from billiard.plot.flights import arcs, positions_at
 from billiard.plot.outline import drive_offset
 from billiard.plot.trajectory import boundary_positions, view, window_rows
 from billiard.scene.scene import Scene
 
 __all__ = ["animate"]
-
-
-def _ball_centres(
-    columns: Columns, rows: np.ndarray, frame_times: np.ndarray, scene: Scene
-) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """The centre (m) at each frame time (s), on the flight from the last impact before
-    it, and that impact's row."""
-    t = column(columns, "t")
-    index = np.searchsorted(t[rows], frame_times, side="right") - 1
-    starts = rows[np.maximum(index, 0)]
-    x = np.empty(frame_times.shape)
-    y = np.empty(frame_times.shape)
-    for row in np.unique(starts):
-        mask = starts == row
-        x[mask], y[mask] = flight_positions(columns, int(row), frame_times[mask] - t[row], scene)
-    return x, y, starts
 
 
 def _phase_centres(
@@ -137,7 +121,7 @@ def animate(
     q2 = column(columns, "q2")[rows]
     if phases is None:
         arc_x, arc_y = arcs(columns, rows, scene)
-        ball_x, ball_y, starts = _ball_centres(columns, rows, frame_times, scene)
+        ball_x, ball_y, starts = positions_at(columns, rows, frame_times, scene)
         texts = [f"impact {int(columns['n'][row])}" for row in starts]
         colors = ["tab:blue"] * count
         all_x, all_y = np.concatenate([q1, arc_x]), np.concatenate([q2, arc_y])
