@@ -147,11 +147,13 @@ def single_axes() -> tuple[Figure, object]:
     return fig, fig.add_subplot()
 
 
-def check_png(path: Path, min_width: int = 500) -> None:
+def check_png(path: Path, min_width: int = 500, dpi: int = 100) -> None:
+    """A non-blank PNG at least ``min_width`` px wide at 100 dpi and 2.5 to 10 inches
+    high, at ``dpi`` pixels per inch."""
     image = mpimg.imread(path)
     assert image.ndim == 3 and image.shape[2] in (3, 4)
     height, width = image.shape[:2]
-    assert width >= min_width and 250 <= height <= 1000
+    assert width >= min_width * dpi / 100 and 2.5 * dpi <= height <= 10 * dpi
     assert image[..., :3].std() > 0.02  # not blank
 
 

@@ -11,6 +11,7 @@ import time
 from pathlib import Path
 
 from billiard.cli.common import UserError, _note, add_set_argument
+from billiard.cli.figure_options import add_figure_arguments, figure_options
 
 
 class ProgressBar:
@@ -129,10 +130,11 @@ def _holds_run(folder: Path) -> bool:
 def _remove_plots(folder: Path) -> list[str]:
     """Delete the figures ``plot_run`` and the view ``billiard view`` wrote into a run
     folder (they no longer match its data); returns the names removed."""
-    from billiard.runfile.folder import FIGURE_NAMES, VIEW_NAME
+    from billiard.runfile.figure_files import all_figure_names
+    from billiard.runfile.folder import VIEW_NAME
 
     removed = []
-    for name in (*FIGURE_NAMES, VIEW_NAME):
+    for name in (*all_figure_names(), VIEW_NAME):  # figures in whichever format were drawn
         path = folder / name
         if path.is_file():
             path.unlink()
@@ -195,6 +197,7 @@ def cmd_run(args: argparse.Namespace) -> int:
 
     # every argument is checked before any work
     frame_interval = _frame_interval(args.frame_interval)
+    figures = figure_options(args, "run")
     if args.sample is not None and not (math.isfinite(args.sample) and args.sample > 0):
         raise UserError(f"run: --sample must be a number > 0 (s), got {args.sample!r}")
     bar = ProgressBar()
@@ -308,7 +311,7 @@ def cmd_run(args: argparse.Namespace) -> int:
         from billiard.plot import plot_run
 
         try:
-            paths = plot_run(out, frame_interval=frame_interval)
+            paths = plot_run(out, frame_interval=frame_interval, **figures)
         except KeyboardInterrupt:
             print(
                 f"billiard: interrupted while drawing the plots; the run is complete in "
@@ -398,4 +401,5 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
         help="also plot what a camera with this frame interval (s, e.g. 0.0333 or 1/30) "
         "would record (default: no camera view)",
     )
+    add_figure_arguments(p)
     p.set_defaults(func=cmd_run)

@@ -8,6 +8,7 @@ from pathlib import Path
 
 from billiard.analysis.phase import DEFAULT_PHASE_REFERENCE
 from billiard.cli.common import UserError, _note, add_set_argument, check_output_folder
+from billiard.cli.figure_options import add_figure_arguments
 
 
 def cmd_scenes(args: argparse.Namespace) -> int:
@@ -68,6 +69,9 @@ def cmd_calibrate(args: argparse.Namespace) -> int:
 
 
 def cmd_plot(args: argparse.Namespace) -> int:
+    from billiard.cli.figure_options import figure_options
+
+    options = figure_options(args, "plot")  # checked before the plotting stack loads
     from billiard.plot import parse_frame_interval, parse_window, plot_run
 
     interval = None if args.frame_interval is None else parse_frame_interval(args.frame_interval)
@@ -78,6 +82,7 @@ def cmd_plot(args: argparse.Namespace) -> int:
         frame_interval=interval,
         window=window,
         gif=not args.no_gif,
+        **options,
     )
     for path in paths:
         print(f"wrote {path}")
@@ -160,7 +165,9 @@ def add_parsers(sub: argparse._SubParsersAction) -> None:
         "plot",
         help="draw the paper's plots of a run",
         description="Return map, time-of-flight map, phase plot, trajectory "
-        "and animation from DIR/collisions.csv and DIR/scene.toml.",
+        "and animation from DIR/collisions.csv and DIR/scene.toml. The maps and the "
+        "phase plot draw each impact as a dot, and above 50,000 impacts a density image "
+        "of the impacts per bin with a colour bar.",
     )
     p.add_argument("dir", help="run directory")
     p.add_argument("--out", metavar="DIR", help="where to write the figures (default: DIR)")
@@ -177,6 +184,7 @@ def add_parsers(sub: argparse._SubParsersAction) -> None:
         "left out; default: the last four drive periods)",
     )
     p.add_argument("--no-gif", action="store_true", help="skip the animated GIF")
+    add_figure_arguments(p)
     p.set_defaults(func=cmd_plot)
 
     p = sub.add_parser(

@@ -7,34 +7,28 @@ from collections.abc import Sequence
 from pathlib import Path
 
 import numpy as np
+from matplotlib import rc_context
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.patches import Circle
 from PIL import Image
 
-from billiard.plot.common import MM, Columns, Window, cannot_write, column, new_figure
+from billiard.plot.common import (
+    DRAW_RC,
+    MM,
+    Columns,
+    Window,
+    cannot_write,
+    column,
+    new_figure,
+)
 from billiard.plot.contacts import MODE_LABELS, MODE_STYLES, PhasePath, Side, joined, phase_path
-from billiard.plot.flights import arcs, flight_positions
+from billiard.plot.density import density_image, use_density
+from billiard.plot.flights import arcs, positions_at
 from billiard.plot.outline import drive_offset
-from billiard.plot.trajectory import boundary_positions, view, window_rows
+from billiard.plot.trajectory import boundary_positions, path_samples, view, window_rows
 from billiard.scene.scene import Scene
 
 __all__ = ["animate"]
-
-
-def _ball_centres(
-    columns: Columns, rows: np.ndarray, frame_times: np.ndarray, scene: Scene
-) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """The centre (m) at each frame time (s), on the flight from the last impact before
-    it, and that impact's row."""
-    t = column(columns, "t")
-    index = np.searchsorted(t[rows], frame_times, side="right") - 1
-    starts = rows[np.maximum(index, 0)]
-    x = np.empty(frame_times.shape)
-    y = np.empty(frame_times.shape)
-    for row in np.unique(starts):
-        mask = starts == row
-        x[mask], y[mask] = flight_positions(columns, int(row), frame_times[mask] - t[row], scene)
-    return x, y, starts
 
 
 def _phase_centres(
@@ -135,9 +129,16 @@ def animate(
     frame_times = np.linspace(t0, t1, count)
     q1 = column(columns, "q1")[rows]
     q2 = column(columns, "q2")[rows]
-    if phases is None:
+    dense = phases is None and use_density(rows.size)
+    if dense:  # thousands of arcs: the path's density, drawn as an image
+        arc_x, arc_y, _ = path_samples(columns, rows, scene)
+        ball_x, ball_y, starts = positions_at(columns, rows, frame_times, scene)
+        texts = [f"impact {int(columns['n'][row])}" for row in starts]
+        colors = ["tab:blue"] * count
+        all_x, all_y = np.concatenate([q1, arc_x]), np.concatenate([q2, arc_y])
+    elif phases is None:
         arc_x, arc_y = arcs(columns, rows, scene)
-        ball_x, ball_y, starts = _ball_centres(columns, rows, frame_times, scene)
+        ball_x, ball_y, starts = positions_at(columns, rows, frame_times, scene)
         texts = [f"impact {int(columns['n'][row])}" for row in starts]
         colors = ["tab:blue"] * count
         all_x, all_y = np.concatenate([q1, arc_x]), np.concatenate([q2, arc_y])
@@ -157,7 +158,18 @@ def animate(
     aspect = (y_lim[1] - y_lim[0]) / (x_lim[1] - x_lim[0])
     fig = new_figure((5.0, float(np.clip(4.2 * aspect + 0.9, 2.5, 6.5))), dpi=dpi)
     ax = fig.add_subplot()
-    ax.plot(arc_x * MM, arc_y * MM, color="0.8", linewidth=0.7, zorder=0)
+    if dense:
+        density_image(
+            ax,
+            arc_x * MM,
+            arc_y * MM,
+            (x_lim[0] * MM, x_lim[1] * MM),
+            (y_lim[0] * MM, y_lim[1] * MM),
+            cmap="Greys",
+            colorbar=False,
+        ).set_zorder(0)
+    else:
+        ax.plot(arc_x * MM, arc_y * MM, color="0.8", linewidth=0.7, zorder=0)
     if phases is not None:
         for piece in phases.stretches:
             ax.plot(
@@ -201,7 +213,8 @@ def animate(
         artist.set_animated(True)
     canvas = fig.canvas
     assert isinstance(canvas, FigureCanvasAgg)
-    canvas.draw()
+    with rc_context(DRAW_RC):
+        canvas.draw()
     fig.set_layout_engine("none")  # freeze the layout: the frames only move artists
     background = canvas.copy_from_bbox(fig.bbox)
     frames: list[Image.Image] = []

@@ -14,6 +14,7 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+from matplotlib import rc_context
 from matplotlib.axes import Axes
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
@@ -27,6 +28,12 @@ __all__ = ["RunDataError", "camera_filter", "read_collisions"]
 MM = 1e3  # mm per m
 
 DPI = 100
+#: Matplotlib settings while a figure is drawn: Agg draws a line of more than this many
+#: vertices in pieces (a trajectory over a long window has millions; in one piece Agg
+#: refuses it), and a shorter line, as every figure of a usual run, in one.
+DRAW_RC = {"agg.path.chunksize": 20_000}
+#: Pixels per inch of the parts of an SVG or PDF figure embedded as images (print quality).
+VECTOR_IMAGE_DPI = 300
 SINGLE_SIZE = (6.0, 5.6)  # inches: 600 x 560 px at DPI
 MODEL_COLOR = "tab:blue"
 CAMERA_COLOR = "tab:orange"
@@ -155,7 +162,8 @@ def camera_handle(frame_interval: float, label: str | None = None) -> Line2D:
     )
 
 
-def square_limits(ax: Axes, values: Sequence[np.ndarray]) -> tuple[float, float]:
+def square_range(values: Sequence[np.ndarray]) -> tuple[float, float]:
+    """The range of a square view over ``values`` (the finite ones, padded by 4 %)."""
     finite = np.concatenate([v[np.isfinite(v)] for v in values]) if values else np.array([])
     if finite.size == 0:
         lo, hi = 0.0, 1.0
@@ -166,6 +174,12 @@ def square_limits(ax: Axes, values: Sequence[np.ndarray]) -> tuple[float, float]
         else:
             pad = 0.04 * (hi - lo)
         lo, hi = lo - pad, hi + pad
+    return lo, hi
+
+
+def square_limits(ax: Axes, values: Sequence[np.ndarray]) -> tuple[float, float]:
+    """Set the same range (:func:`square_range`) on both axes, with equal aspect."""
+    lo, hi = square_range(values)
     ax.set_xlim(lo, hi)
     ax.set_ylim(lo, hi)
     ax.set_aspect("equal", adjustable="box")
@@ -210,15 +224,29 @@ def output_directory(out: str | os.PathLike[str]) -> Path:
     return out
 
 
-def save(fig: Figure, path: str | os.PathLike[str]) -> Path:
+def save(fig: Figure, path: str | os.PathLike[str], dpi: int = DPI) -> Path:
     """Save ``fig`` to ``path`` and clear it.
+
+    The format follows the file's extension (``.png``, ``.svg``, ``.pdf``...); ``dpi`` is
+    the pixels per inch of a raster file. A vector file (SVG, PDF) ignores it: what it
+    holds as an image (a layer of many markers, see
+    :func:`billiard.plot.density.rasterize_if_large`) is embedded at
+    :data:`VECTOR_IMAGE_DPI`. SVG and PDF files are written without a creation date and
+    with fixed element ids, so that the same figure gives the same bytes.
 
     Raises:
         RunDataError: the file cannot be written (one line naming it).
     """
     path = Path(path)
+    suffix = path.suffix.lower()
+    metadata: dict[str, Any] | None = None
+    if suffix == ".svg":
+        metadata, dpi = {"Date": None}, VECTOR_IMAGE_DPI
+    elif suffix == ".pdf":
+        metadata, dpi = {"CreationDate": None}, VECTOR_IMAGE_DPI
     try:
-        fig.savefig(path, dpi=DPI)
+        with rc_context({**DRAW_RC, "svg.hashsalt": "billiard"}):
+            fig.savefig(path, dpi=dpi, metadata=metadata)
     except OSError as exc:
         raise cannot_write(path, exc) from None
     finally:

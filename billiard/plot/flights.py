@@ -18,7 +18,16 @@ from billiard.generated import ball as _ball
 from billiard.plot.common import Columns, RunDataError, column
 from billiard.scene.scene import Scene
 
-__all__ = ["arc_count", "arcs", "flight_from_state", "flight_label", "flight_positions"]
+__all__ = [
+    "ARC_POINT_BUDGET",
+    "arc_count",
+    "arc_counts",
+    "arcs",
+    "flight_from_state",
+    "flight_label",
+    "flight_positions",
+    "positions_at",
+]
 
 RTOL = 1e-9
 ATOL = 1e-12  # m and m/s
@@ -122,22 +131,107 @@ def arc_count(duration: float) -> int:
     return int(min(200, max(8, duration * 2000)))
 
 
-def arcs(columns: Columns, rows: np.ndarray, scene: Scene) -> tuple[np.ndarray, np.ndarray]:
+def positions_at(
+    columns: Columns, rows: np.ndarray, times: np.ndarray, scene: Scene
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The centre (m) at each of ``times`` (s, within the impacts ``rows``' span), on the
+    flight from the last impact of ``rows`` at or before it, and that impact's row.
+
+    Exact parabolas are computed for all times at once; a flight with drag is integrated
+    once per impact that starts one of the times' flights.
+
+    Returns:
+        ``(x, y, starts)``, each shaped like ``times``.
+    """
+    rows = np.asarray(rows, dtype=np.intp)
+    times = np.asarray(times, dtype=float)
+    t = column(columns, "t")
+    index = np.searchsorted(t[rows], times, side="right") - 1
+    starts = rows[np.maximum(index, 0)]
+    if _rhs(scene, 0.0) is None:  # the exact parabola, as flight_from_state draws it
+        tau = times - t[starts]
+        q1, q2, v1, v2 = (column(columns, k)[starts] for k in ("q1", "q2", "v1", "v2"))
+        g = scene.run.gravity
+        return q1 + v1 * tau, q2 + v2 * tau - 0.5 * g * tau**2, starts
+    x = np.empty(times.shape)
+    y = np.empty(times.shape)
+    for row in np.unique(starts):
+        mask = starts == row
+        x[mask], y[mask] = flight_positions(columns, int(row), times[mask] - t[row], scene)
+    return x, y, starts
+
+
+#: Points drawn along all the arcs of a trajectory, at most (about the pixels of the
+#: figure). A longer window (thousands of impacts) covers the view with overlapping
+#: arcs; its arcs get proportionally fewer points each (at least :data:`MIN_ARC_POINTS`),
+#: so that drawing it takes seconds, not minutes, and shows the same picture.
+ARC_POINT_BUDGET = 1_000_000
+MIN_ARC_POINTS = 3
+
+
+def arc_counts(durations: np.ndarray, budget: int | None = ARC_POINT_BUDGET) -> np.ndarray:
+    """Points along flights of the given durations (s): :func:`arc_count` each, scaled
+    down together where their sum exceeds ``budget`` (None: no limit)."""
+    counts = np.clip(np.asarray(durations, dtype=float) * 2000, 8, 200).astype(np.intp)
+    total = int(counts.sum())
+    if budget is not None and total > budget:
+        counts = np.maximum(MIN_ARC_POINTS, (counts * (budget / total)).astype(np.intp))
+    return counts
+
+
+def arcs(
+    columns: Columns, rows: np.ndarray, scene: Scene, *, budget: int | None = ARC_POINT_BUDGET
+) -> tuple[np.ndarray, np.ndarray]:
     """Flight arcs (m) between consecutive impacts of ``rows``, separated by NaN.
 
-    The arc after impact ``row`` lasts the next row's time of flight (``tof``).
+    The arc after impact ``row`` lasts the next row's time of flight (``tof``), drawn on
+    :func:`arc_count` points, fewer where all the arcs' points would exceed ``budget``
+    (see :func:`arc_counts`). Exact parabolas (no air drag, no Magnus force) are computed
+    for all arcs at once, as whole arrays; a flight with drag is integrated arc by arc.
     """
+    rows = np.asarray(rows, dtype=np.intp)
     tof = column(columns, "tof")
+    starts = rows[:-1][np.diff(rows) == 1]  # an arc needs the next impact's time of flight
+    if starts.size == 0:
+        return np.array([]), np.array([])
+    durations = np.maximum(tof[starts + 1], 0.0)
+    counts = arc_counts(durations, budget)
+    if _rhs(scene, 0.0) is None:  # no drag, no Magnus force: the exact parabola
+        return _parabolas(columns, starts, durations, counts, scene)
     xs: list[np.ndarray] = []
     ys: list[np.ndarray] = []
-    for row, nxt in zip(rows[:-1], rows[1:], strict=True):
-        if nxt != row + 1:
-            continue
-        duration = max(float(tof[nxt]), 0.0)
-        count = arc_count(duration)
-        x, y = flight_positions(columns, int(row), np.linspace(0.0, duration, count), scene)
+    for row, duration, count in zip(starts, durations, counts, strict=True):
+        tau = np.linspace(0.0, float(duration), int(count))
+        x, y = flight_positions(columns, int(row), tau, scene)
         xs += [x, np.array([np.nan])]
         ys += [y, np.array([np.nan])]
-    if not xs:
-        return np.array([]), np.array([])
     return np.concatenate(xs), np.concatenate(ys)
+
+
+def _parabolas(
+    columns: Columns,
+    starts: np.ndarray,
+    durations: np.ndarray,
+    counts: np.ndarray,
+    scene: Scene,
+) -> tuple[np.ndarray, np.ndarray]:
+    """The exact parabolas after the impacts ``starts`` (row indices), of the given
+    durations (s) and numbers of points, each followed by NaN: the points
+    :func:`flight_positions` gives one arc at a time, to the last bit (times spaced as
+    :func:`numpy.linspace` spaces them)."""
+    steps = durations / np.maximum(counts - 1, 1)
+    lengths = counts + 1  # each arc's points and the NaN after it
+    arc = np.repeat(np.arange(starts.size), lengths)
+    first = np.cumsum(lengths) - lengths
+    j = np.arange(arc.size) - first[arc]  # the point's index along its arc
+    tau = j * steps[arc]
+    tau[first + counts - 1] = durations  # linspace ends exactly at its stop
+    rows = starts[arc]
+    q1, q2, v1, v2 = (column(columns, k)[rows] for k in ("q1", "q2", "v1", "v2"))
+    g = scene.run.gravity
+    x = q1 + v1 * tau
+    y = q2 + v2 * tau - 0.5 * g * tau**2
+    gap = first + counts
+    x[gap] = np.nan
+    y[gap] = np.nan
+    return x, y

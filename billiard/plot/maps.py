@@ -4,8 +4,8 @@ heights (q2,n vs q2,n+1, mm) and the map of times of flight (t_n vs t_n+1, s).""
 from __future__ import annotations
 
 import numpy as np
+from matplotlib.artist import Artist
 from matplotlib.axes import Axes
-from matplotlib.lines import Line2D
 
 from billiard.plot.common import (
     LID_COLOR,
@@ -20,15 +20,26 @@ from billiard.plot.common import (
     marker_size,
     rings,
     square_limits,
+    square_range,
     uniform_legend_markers,
 )
+from billiard.plot.density import density_handle, density_image, rasterize_if_large, use_density
 from billiard.plot.inputs import checked_interval
 from billiard.plot.titles import camera_label
 
 __all__ = ["return_map", "time_map"]
 
+#: Marker size (points) of the camera's rings and the lid's crosses over a density image.
+_OVER_DENSITY = 1.5
 
-def return_map(columns: Columns, ax: Axes, *, frame_interval: float | None = None) -> list[Line2D]:
+
+def return_map(
+    columns: Columns,
+    ax: Axes,
+    *,
+    frame_interval: float | None = None,
+    density: bool | None = None,
+) -> list[Artist]:
     """Return map of impact heights: q2,n (x) against q2,n+1 (y), both in mm.
 
     Each point is a pair of consecutive impacts (the centre's height q2 at impact n and at
@@ -37,6 +48,10 @@ def return_map(columns: Columns, ax: Axes, *, frame_interval: float | None = Non
     impact on the lid (its height is fixed, so they would line up at the lid's height
     without explanation) get their own marker and legend entry, "lid impacts".
 
+    The model's pairs are dots, or, above :data:`billiard.plot.density.DENSITY_THRESHOLD`
+    pairs, a density image of the pairs per bin with a colour bar (see
+    :mod:`billiard.plot.density`); the lid's pairs and the camera's stay markers.
+
     Args:
         columns: a run's columns (``q2`` in m and ``z`` in rad; ``wall`` if present; ``t``
             in s with ``frame_interval``).
@@ -44,26 +59,39 @@ def return_map(columns: Columns, ax: Axes, *, frame_interval: float | None = Non
         frame_interval: if given (s), also draw, as hollow rings beneath the model's dots,
             the return map of the impacts a camera with this frame interval would have
             recorded (see :func:`billiard.analysis.camera.camera_filter`).
+        density: True for a density image, False for dots, None (default) to choose by
+            the number of pairs.
 
     Returns:
-        The data lines: the model's pairs without a lid impact (x data ``q2,n`` and y data
-        ``q2,n+1`` in mm), then the camera's if ``frame_interval`` is given, then the pairs
-        with a lid impact if there are any.
+        The data artists: the model's pairs without a lid impact (a line of dots with x
+        data ``q2,n`` and y data ``q2,n+1`` in mm, or the density image whose
+        ``get_array()`` holds the pairs per bin), then the camera's if ``frame_interval``
+        is given, then the pairs with a lid impact if there are any.
     """
     interval = checked_interval(frame_interval)
     q2 = column(columns, "q2") * MM
     lid = lid_mask(columns)
     with_lid = lid[:-1] | lid[1:]
     x, y = q2[:-1], q2[1:]
-    size = marker_size(x, y)
-    lines = [
-        dots(ax, x[~with_lid], y[~with_lid], f"model: all {q2.size} impacts", MODEL_COLOR, size)
-    ]
     shown = [q2]
+    seen = None
     if interval is not None:
         seen = column(camera_filter(columns, interval), "q2") * MM
-        lines.append(rings(ax, seen[:-1], seen[1:], camera_label(interval, seen.size), size))
         shown.append(seen)
+    label = f"model: all {q2.size} impacts"
+    mx, my = x[~with_lid], y[~with_lid]
+    lines: list[Artist]
+    if use_density(mx.size, density):
+        lo, hi = square_range(shown)
+        lines = [density_image(ax, mx, my, (lo, hi), (lo, hi), unit="mm")]
+        density_handle(ax, f"{label} (density)")
+        size = _OVER_DENSITY
+    else:
+        size = marker_size(x, y)
+        lines = [dots(ax, mx, my, label, MODEL_COLOR, size)]
+    if seen is not None:
+        lines.append(rings(ax, seen[:-1], seen[1:], camera_label(interval, seen.size), size))
+        rasterize_if_large(lines[-1], seen.size)
     if with_lid.any():
         height = float(np.median(q2[lid]))
         (lid_line,) = ax.plot(
@@ -77,6 +105,7 @@ def return_map(columns: Columns, ax: Axes, *, frame_interval: float | None = Non
             label=f"lid impacts ({int(lid.sum())}; centre at $q_2$ = {height:.4g} mm)",
             zorder=2.6,
         )
+        rasterize_if_large(lid_line, int(with_lid.sum()))
         lines.append(lid_line)
     lo, hi = square_limits(ax, shown)
     diagonal(ax, lo, hi, "$q_{2,n} = q_{2,n+1}$")
@@ -88,12 +117,19 @@ def return_map(columns: Columns, ax: Axes, *, frame_interval: float | None = Non
 
 
 def time_map(
-    columns: Columns, ax: Axes, *, frame_interval: float | None = None, log: bool = False
-) -> list[Line2D]:
+    columns: Columns,
+    ax: Axes,
+    *,
+    frame_interval: float | None = None,
+    log: bool = False,
+    density: bool | None = None,
+) -> list[Artist]:
     """Map of times of flight: t_n (x) against t_n+1 (y), in s.
 
     t_n is the time of flight before impact n (the ``tof`` column: time since the
-    previous impact). The dashed line is the diagonal t_n = t_n+1.
+    previous impact). The dashed line is the diagonal t_n = t_n+1. The model's pairs are
+    dots, or a density image above :data:`billiard.plot.density.DENSITY_THRESHOLD` pairs
+    (see :func:`return_map`).
 
     Args:
         columns: a run's columns (``tof`` in s, and ``t`` in s with ``frame_interval``).
@@ -102,35 +138,48 @@ def time_map(
             the map of the camera-filtered impacts, whose times of flight are the times
             between recorded impacts.
         log: logarithmic axes (rapid-succession impacts have times of flight down to
-            microseconds).
+            microseconds); a density image then has bins equally wide in log t.
+        density: True for a density image, False for dots, None (default) to choose by
+            the number of pairs.
 
     Returns:
-        The data lines (``tof[:-1]``, ``tof[1:]``): the model's, then the camera's.
+        The data artists (``tof[:-1]``, ``tof[1:]``): the model's (dots, or the density
+        image whose ``get_array()`` holds the pairs per bin), then the camera's.
     """
     interval = checked_interval(frame_interval)
     tof = column(columns, "tof")
-    size = marker_size(tof[:-1], tof[1:])
-    lines = [dots(ax, tof[:-1], tof[1:], f"model: all {tof.size} impacts", MODEL_COLOR, size)]
+    x, y = tof[:-1], tof[1:]
     shown = [tof]
+    seen = None
     if interval is not None:
         seen = column(camera_filter(columns, interval), "tof")
-        lines.append(rings(ax, seen[:-1], seen[1:], camera_label(interval, seen.size), size))
         shown.append(seen)
     if log:
         positive = [s[s > 0] for s in shown]
         finite = np.concatenate(positive)
         lo = float(finite.min()) / 1.5 if finite.size else 1e-4
         hi = float(finite.max()) * 1.5 if finite.size else 1.0
+    else:
+        lo, hi = square_range(shown)
+        lo = max(lo, -0.02 * hi)
+    label = f"model: all {tof.size} impacts"
+    lines: list[Artist]
+    if use_density(x.size, density):
+        lines = [density_image(ax, x, y, (lo, hi), (lo, hi), unit="s", log=log)]
+        density_handle(ax, f"{label} (density)")
+        size = _OVER_DENSITY
+    else:
+        size = marker_size(x, y)
+        lines = [dots(ax, x, y, label, MODEL_COLOR, size)]
+    if seen is not None:
+        lines.append(rings(ax, seen[:-1], seen[1:], camera_label(interval, seen.size), size))
+        rasterize_if_large(lines[-1], seen.size)
+    if log:
         ax.set_xscale("log")
         ax.set_yscale("log")
-        ax.set_xlim(lo, hi)
-        ax.set_ylim(lo, hi)
-        ax.set_aspect("equal", adjustable="box")
-    else:
-        lo, hi = square_limits(ax, shown)
-        lo = max(lo, -0.02 * hi)
-        ax.set_xlim(lo, hi)
-        ax.set_ylim(lo, hi)
+    ax.set_xlim(lo, hi)
+    ax.set_ylim(lo, hi)
+    ax.set_aspect("equal", adjustable="box")
     diagonal(ax, lo, hi, "$t_n = t_{n+1}$")
     ax.set_xlabel("time of flight $t_n$ (s)")
     ax.set_ylabel("next time of flight $t_{n+1}$ (s)")

@@ -4,8 +4,8 @@ height q2/q2max against the normalized tangential velocity u4/u4max after each i
 from __future__ import annotations
 
 import numpy as np
+from matplotlib.artist import Artist
 from matplotlib.axes import Axes
-from matplotlib.lines import Line2D
 from matplotlib.ticker import MultipleLocator
 
 from billiard.analysis.phase import (
@@ -26,6 +26,7 @@ from billiard.plot.common import (
     rings,
     uniform_legend_markers,
 )
+from billiard.plot.density import density_handle, density_image, rasterize_if_large, use_density
 from billiard.plot.inputs import checked_interval
 from billiard.plot.titles import camera_label
 from billiard.scene.scene import Scene
@@ -121,7 +122,8 @@ def phase_plot(
     *,
     frame_interval: float | None = None,
     reference: str = DEFAULT_PHASE_REFERENCE,
-) -> list[Line2D]:
+    density: bool | None = None,
+) -> list[Artist]:
     """Phase plot: normalized impact height q2/q2max (y) against normalized tangential
     velocity u4/u4max (x) after each impact (both dimensionless).
 
@@ -134,6 +136,9 @@ def phase_plot(
     (+-0.0372, 0.376)). The dashed curve is the energy bound
     (u4/u4max)^2 + (q2 - h0)/q2max = 1.
     The axes span x in [-1, 1] and y in [0, 1], widened if some points lie outside.
+    The model's impacts are dots, or a density image when more than
+    :data:`billiard.plot.density.DENSITY_THRESHOLD` of them can be normalized (see
+    :mod:`billiard.plot.density`).
 
     Args:
         columns: a run's columns (``q2`` m, ``u4`` m/s, ``energy`` J).
@@ -141,20 +146,42 @@ def phase_plot(
         ax: the axes to draw in.
         frame_interval: if given (s), ring the impacts a camera with this frame interval
             would have recorded (hollow rings in a second colour beneath the model's dots).
+        density: True for a density image, False for dots, None (default) to choose by
+            the number of points drawn (impacts with E0 > 0).
 
     Returns:
-        The data lines (x = u4/u4max, y = q2/q2max): the model's, then the camera's.
+        The data artists (x = u4/u4max, y = q2/q2max): the model's (dots, or the density
+        image whose ``get_array()`` holds the impacts per bin), then the camera's.
     """
     interval = checked_interval(frame_interval)
     x, y = phase_coordinates(columns, scene, reference)
-    size = marker_size(x, y, (2.0, 1.0))
-    lines = [dots(ax, x, y, f"model: all {x.size} impacts", MODEL_COLOR, size)]
     xs, ys = [x], [y]
     if interval is not None:
         sx, sy = phase_coordinates(camera_filter(columns, interval), scene, reference)
-        lines.append(rings(ax, sx, sy, camera_label(interval, sx.size), size))
         xs.append(sx)
         ys.append(sy)
+    all_x = np.concatenate([a[np.isfinite(a)] for a in xs])
+    all_y = np.concatenate([b[np.isfinite(b)] for b in ys])
+    xlo, xhi = -1.0, 1.0
+    ylo, yhi = 0.0, 1.0
+    if all_x.size:  # widen only for points outside the usual ranges
+        if all_x.min() < xlo or all_x.max() > xhi:
+            xlo, xhi = min(xlo, float(all_x.min()) - 0.02), max(xhi, float(all_x.max()) + 0.02)
+        if all_y.min() < ylo or all_y.max() > yhi:
+            ylo, yhi = min(ylo, float(all_y.min()) - 0.02), max(yhi, float(all_y.max()) + 0.02)
+    label = f"model: all {x.size} impacts"
+    lines: list[Artist]
+    drawn = int(np.count_nonzero(np.isfinite(x) & np.isfinite(y)))  # E0 > 0 only
+    if use_density(drawn, density):
+        lines = [density_image(ax, x, y, (xlo, xhi), (ylo, yhi))]
+        density_handle(ax, f"{label} (density)")
+        size = 1.5
+    else:
+        size = marker_size(x, y, (2.0, 1.0))
+        lines = [dots(ax, x, y, label, MODEL_COLOR, size)]
+    if interval is not None:
+        lines.append(rings(ax, xs[1], ys[1], camera_label(interval, xs[1].size), size))
+        rasterize_if_large(lines[-1], xs[1].size)
     s = np.linspace(-1, 1, 201)
     ax.plot(
         s,
@@ -166,15 +193,6 @@ def phase_plot(
         zorder=0,
     )
     ax.axvline(0.0, color="0.6", linewidth=0.5, zorder=0)
-    all_x = np.concatenate([a[np.isfinite(a)] for a in xs])
-    all_y = np.concatenate([b[np.isfinite(b)] for b in ys])
-    xlo, xhi = -1.0, 1.0
-    ylo, yhi = 0.0, 1.0
-    if all_x.size:  # widen only for points outside the usual ranges
-        if all_x.min() < xlo or all_x.max() > xhi:
-            xlo, xhi = min(xlo, float(all_x.min()) - 0.02), max(xhi, float(all_x.max()) + 0.02)
-        if all_y.min() < ylo or all_y.max() > yhi:
-            ylo, yhi = min(ylo, float(all_y.min()) - 0.02), max(yhi, float(all_y.max()) + 0.02)
     ax.set_xlim(xlo, xhi)
     ax.set_ylim(ylo, yhi)
     ax.xaxis.set_major_locator(MultipleLocator(0.5))

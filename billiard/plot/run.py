@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import os
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from pathlib import Path
 
 import numpy as np
@@ -27,6 +27,12 @@ from billiard.plot.maps import return_map, time_map
 from billiard.plot.phase import PHASE_CAPTION, phase_plot
 from billiard.plot.titles import scene_title
 from billiard.plot.trajectory import trajectory, window_rows
+from billiard.runfile.figure_files import (
+    DEFAULT_DPI,
+    DEFAULT_FORMAT,
+    check_dpi,
+    figure_names,
+)
 from billiard.runfile.folder import FIGURE_NAMES
 from billiard.scene.scene import Scene, SceneError, scene_from_toml
 from billiard.scene.userfile import MAX_SCENE_BYTES, FileRefused, read_limited
@@ -125,13 +131,15 @@ def _legend_outside(fig: Figure, ax: Axes, caption: str | None = None) -> None:
 
 def _single(
     draw: Callable[[Axes], object],
-    title: str,
+    title: str | None,
     path: Path,
     *,
+    dpi: int,
     fit_height: bool = False,
     caption: str | None = None,
 ) -> Path:
-    """One-panel figure, 600 px wide, with the title on top and the legend below.
+    """One-panel figure, 6 inches wide, with the title on top (none when ``title`` is
+    None) and the legend below; saved at ``dpi`` pixels per inch (PNG).
 
     With ``fit_height``, the height follows the shape of the (equal-aspect) view;
     ``caption`` is small text under the axes, above the legend. A trajectory's contact
@@ -148,9 +156,10 @@ def _single(
         if isinstance(drawn, dict) and "stretches" in drawn:
             height += 0.2 * (len(drawn["stretches"]) + 1)
         fig.set_size_inches(SINGLE_SIZE[0], float(np.clip(height, 3.6, 8.0)))
-    fig.suptitle(title, fontsize=9)
+    if title is not None:
+        fig.suptitle(title, fontsize=9)
     _legend_outside(fig, ax, caption)
-    return save(fig, path)
+    return save(fig, path, dpi=dpi)
 
 
 def _figures(
@@ -160,21 +169,31 @@ def _figures(
     interval: float | None,
     window: tuple[int, int],
     sides: tuple[Columns | None, Columns | None] = (None, None),
+    *,
+    names: Sequence[str],
+    dpi: int,
+    title: bool,
+    density: bool | None,
 ) -> list[Path]:
-    title = scene_title(scene, int(columns["t"].size))
+    heading = scene_title(scene, int(columns["t"].size)) if title else None
     return [
         _single(
-            lambda ax: return_map(columns, ax, frame_interval=interval),
-            title,
-            out / "return_map.png",
+            lambda ax: return_map(columns, ax, frame_interval=interval, density=density),
+            heading,
+            out / names[0],
+            dpi=dpi,
         ),
         _single(
-            lambda ax: time_map(columns, ax, frame_interval=interval), title, out / "time_map.png"
+            lambda ax: time_map(columns, ax, frame_interval=interval, density=density),
+            heading,
+            out / names[1],
+            dpi=dpi,
         ),
         _single(
-            lambda ax: phase_plot(columns, scene, ax, frame_interval=interval),
-            title,
-            out / "phase.png",
+            lambda ax: phase_plot(columns, scene, ax, frame_interval=interval, density=density),
+            heading,
+            out / names[2],
+            dpi=dpi,
             caption=PHASE_CAPTION,
         ),
         _single(
@@ -186,9 +205,11 @@ def _figures(
                 frame_interval=interval,
                 contacts=sides[0],
                 samples=sides[1],
+                title=title,
             ),
-            title,
-            out / "trajectory.png",
+            heading,
+            out / names[3],
+            dpi=dpi,
             fit_height=True,
         ),
     ]
@@ -201,16 +222,26 @@ def plot_run(
     frame_interval: float | None = None,
     window: Window | None = None,
     gif: bool = True,
+    format: str = DEFAULT_FORMAT,
+    dpi: int = DEFAULT_DPI,
+    title: bool = True,
+    density: bool | None = None,
 ) -> list[Path]:
     """Draw every figure of a run.
 
     Reads ``run_dir/collisions.csv`` and ``run_dir/scene.toml`` and writes into
-    ``out_dir`` (default ``run_dir``, created if missing): ``return_map.png``,
-    ``time_map.png``, ``phase.png``, ``trajectory.png`` and, unless ``gif`` is False,
-    ``animation.gif``. Each PNG is 600 px wide, titled with the scene's name and key
-    parameters. A run of ``contact.model = "phases"`` (``contacts.csv`` present) gets its
+    ``out_dir`` (default ``run_dir``, created if missing): ``return_map``, ``time_map``,
+    ``phase`` and ``trajectory`` in ``format`` (``.png``, ``.svg`` or ``.pdf``) and, unless
+    ``gif`` is False, ``animation.gif``. Each figure is 6 inches wide (a PNG 1200 px at the
+    default 200 dpi), titled with the scene's name and key parameters unless ``title`` is
+    False. A run of ``contact.model = "phases"`` (``contacts.csv`` present) gets its
     contact phases drawn in the trajectory and the animation as stretches along the wall,
     from ``trajectory.csv``'s samples when present (see :mod:`billiard.plot.contacts`).
+
+    The maps and the phase plot draw each impact as a dot up to
+    :data:`billiard.plot.density.DENSITY_THRESHOLD` impacts, and above it a density image
+    of the impacts per bin with a colour bar (``density`` True or False forces one or the
+    other).
 
     With ``frame_interval`` (s), the maps also show, as hollow rings in a second colour,
     the data a camera with that frame interval would have recorded (the experiment missed
@@ -225,30 +256,53 @@ def plot_run(
         window: impact numbers ``(n0, n1)``, n0 <= n < n1, for the trajectory and the
             animation (default: :func:`billiard.plot.default_window`, the last few drive
             periods); either may be None for an open end.
-        gif: write the animation (the slowest figure, a few seconds).
+        gif: write the animation (the slowest figure, about a second; at most 150 frames
+            whatever the window).
+        format: the still figures' file format: ``"png"``, ``"svg"`` or ``"pdf"`` (see
+            :data:`billiard.runfile.figure_files.FIGURE_FORMATS`).
+        dpi: pixels per inch of a PNG, a whole number from 20 to 1200; SVG and PDF are
+            vector files and ignore it. The animation keeps its own size (400 px wide).
+        title: write the title above each still figure (and the window's impacts and
+            times above the trajectory); False leaves them to a caption.
+        density: True or False to draw the maps' and phase plot's points as a density
+            image or as dots; None (default) chooses by their number.
 
     Returns:
-        The paths written, in the order of :data:`FIGURE_NAMES`.
+        The paths written, in the order of :data:`FIGURE_NAMES`
+        (:func:`billiard.runfile.figure_files.figure_names` gives them for ``format``).
 
     Raises:
         RunDataError: (a ValueError) a missing, empty or malformed file, a window with no
-            impacts, a bad frame interval, or an output directory that cannot be written;
-            the message is one line.
+            impacts, a bad frame interval, format or dpi, or an output directory that
+            cannot be written; the message is one line.
         SceneError: (a ValueError) ``scene.toml`` is not a valid scene; one line.
     """
+    names = figure_names(format)
+    dpi = check_dpi(dpi)
     interval = checked_interval(frame_interval)
     columns, scene = load_run(run_dir)
     rows = window_rows(columns, scene, window)  # check the window before drawing
     chosen = (int(columns["n"][rows[0]]), int(columns["n"][rows[-1]]) + 1)
     contacts, samples = load_sides(run_dir)
     out = output_directory(out_dir if out_dir is not None else run_dir)
-    written = _figures(columns, scene, out, interval, chosen, (contacts, samples))
+    written = _figures(
+        columns,
+        scene,
+        out,
+        interval,
+        chosen,
+        (contacts, samples),
+        names=names,
+        dpi=dpi,
+        title=title,
+        density=density,
+    )
     if gif:
         written.append(
             animate(
                 columns,
                 scene,
-                out / "animation.gif",
+                out / names[4],
                 window=chosen,
                 contacts=contacts,
                 samples=samples,

@@ -21,13 +21,27 @@ from billiard.plot.common import (
     column,
 )
 from billiard.plot.contacts import MODE_LABELS, MODE_STYLES, MODES, Side, joined, phase_path
-from billiard.plot.flights import arcs, flight_label
+from billiard.plot.density import density_handle, density_image, use_density
+from billiard.plot.flights import arcs, flight_label, positions_at
 from billiard.plot.inputs import checked_interval
 from billiard.plot.outline import boundary_function, boundary_outline
 from billiard.plot.titles import fmt
 from billiard.scene.scene import Scene
 
-__all__ = ["default_window", "trajectory", "view", "window_rows"]
+__all__ = [
+    "FLIGHT_TIME_LABEL",
+    "PATH_SAMPLES",
+    "default_window",
+    "path_samples",
+    "trajectory",
+    "view",
+    "window_rows",
+]
+
+#: Times at which a long window's path is sampled for its density image.
+PATH_SAMPLES = 1_000_000
+#: The colour bar's label of a long window's density image (the bin's size follows it).
+FLIGHT_TIME_LABEL = "flight time per bin (s)"
 
 
 def default_window(
@@ -68,6 +82,20 @@ def window_rows(columns: Columns, scene: Scene, window: Window | None) -> np.nda
             f"{int(n[0])} to {int(n[-1])}; N1 is excluded)"
         )
     return rows
+
+
+def path_samples(
+    columns: Columns, rows: np.ndarray, scene: Scene, count: int = 0
+) -> tuple[np.ndarray, np.ndarray, float]:
+    """The centre (m) at ``count`` times (default :data:`PATH_SAMPLES`) spaced evenly
+    from the first to the last impact of ``rows``, each on its flight (see
+    :func:`billiard.plot.flights.positions_at`), and the time step (s) between them:
+    binned, they give the time spent per bin."""
+    t = column(columns, "t")
+    t0, t1 = float(t[rows[0]]), float(t[rows[-1]])
+    times, step = np.linspace(t0, t1, count or PATH_SAMPLES, retstep=True)
+    x, y, _ = positions_at(columns, rows, times, scene)
+    return x, y, float(step)
 
 
 def view(
@@ -118,6 +146,8 @@ def trajectory(
     frame_interval: float | None = None,
     contacts: Side | None = None,
     samples: Side | None = None,
+    title: bool = True,
+    density: bool | None = None,
 ) -> dict[str, Any]:
     """The ball's path over a window of impacts, in the lab frame, in mm (equal aspect).
 
@@ -147,18 +177,35 @@ def trajectory(
             ``Result.contacts``), or None.
         samples: the run's samples (the columns of trajectory.csv,
             ``Result.trajectory``), used with ``contacts``; or None.
+        title: write the window's first and last impacts and times (and the number of
+            contact phases) above the axes; False leaves them to a caption.
+        density: draw the flights as a density image (see below): True, False, or None
+            (default) when the window holds more than
+            :data:`billiard.plot.density.DENSITY_THRESHOLD` impacts. Not for a run with
+            ``contacts``.
+
+    A window of more than :data:`billiard.plot.density.DENSITY_THRESHOLD` impacts would
+    be a tangle of arcs that takes minutes to draw: its flights are drawn instead as a
+    density image of the time the centre spent in each bin (s, the path sampled at
+    :data:`PATH_SAMPLES` times spaced evenly over the window), with a colour bar, and
+    neither the impacts nor the camera's rings are marked.
 
     Returns:
         A dict with the row indices drawn (``rows``) and the artists (``impacts``,
-        ``arcs``, ``boundary``, and ``camera`` with ``frame_interval``); with
-        ``contacts`` also the :class:`~billiard.plot.contacts.PhasePath` drawn (``path``) and
-        the contact stretches' lines by mode (``stretches``).
+        ``arcs``: the line, or the density image, ``boundary``, and ``camera`` with
+        ``frame_interval`` unless the flights are a density image); with ``contacts``
+        also the :class:`~billiard.plot.contacts.PhasePath` drawn (``path``) and the contact
+        stretches' lines by mode (``stretches``).
     """
     interval = checked_interval(frame_interval)
     rows = window_rows(columns, scene, window)
     path = None
     extra_x, extra_y = np.array([]), np.array([])
-    if contacts is None:
+    dense = contacts is None and use_density(rows.size, density)
+    step = 0.0
+    if dense:
+        arc_x, arc_y, step = path_samples(columns, rows, scene)
+    elif contacts is None:
         arc_x, arc_y = arcs(columns, rows, scene)
     else:
         path = phase_path(columns, rows, scene, contacts, samples)
@@ -194,13 +241,29 @@ def trajectory(
     ceiling = scene.boundary.ceiling
     if ceiling is not None and show_lid:
         ax.axhline(ceiling * MM, color="0.3", linewidth=1.2, label="lid")
-    (arc_line,) = ax.plot(
-        arc_x * MM, arc_y * MM, color=MODEL_COLOR, linewidth=0.8, label=flight_label(scene)
-    )
+    arc_line: Any
+    if dense:
+        arc_line = density_image(
+            ax,
+            arc_x * MM,
+            arc_y * MM,
+            (x_lim[0] * MM, x_lim[1] * MM),
+            (y_lim[0] * MM, y_lim[1] * MM),
+            unit="mm",
+            weight=step,
+            label=FLIGHT_TIME_LABEL,
+        )
+        density_handle(ax, f"{flight_label(scene)}, {rows.size} impacts (density)")
+    else:
+        (arc_line,) = ax.plot(
+            arc_x * MM, arc_y * MM, color=MODEL_COLOR, linewidth=0.8, label=flight_label(scene)
+        )
     stretches = {} if path is None else _draw_stretches(ax, path)
     regime = np.asarray(columns["regime"])[rows] if "regime" in columns else None
     impacts = []
-    if regime is None:
+    if dense:
+        pass  # thousands of impacts would hide the path: the density shows where they are
+    elif regime is None:
         impacts.append(
             ax.plot(
                 q1 * MM, q2 * MM, "o", markersize=3.5, color="tab:red", label="impact (ball centre)"
@@ -229,7 +292,7 @@ def trajectory(
     if path is not None:
         drawn["path"] = path
         drawn["stretches"] = stretches
-    if interval is not None:
+    if interval is not None and not dense:
         seen = camera_filter(columns, interval)
         mask = np.isin(column(columns, "n")[rows], column(seen, "n"))
         (drawn["camera"],) = ax.plot(
@@ -252,11 +315,12 @@ def trajectory(
     n_all = column(columns, "n")
     t_lo, t_hi = (t[rows[0]], t[rows[-1]]) if path is None else (path.t_lo, path.t_hi)
     phases = "" if path is None else f", {len(path.stretches)} contact phases"
-    ax.set_title(
-        f"impacts {int(n_all[rows[0]])} to {int(n_all[rows[-1]])}{phases}, "
-        f"t = {t_lo:.3f} to {t_hi:.3f} s",
-        fontsize=9,
-    )
+    if title:
+        ax.set_title(
+            f"impacts {int(n_all[rows[0]])} to {int(n_all[rows[-1]])}{phases}, "
+            f"t = {t_lo:.3f} to {t_hi:.3f} s",
+            fontsize=9,
+        )
     ax.grid(True, linewidth=0.3, alpha=0.5)
     ax.legend(loc="upper right", fontsize=7, framealpha=0.85)
     return drawn

@@ -29,6 +29,7 @@ from billiard.plot import animation as plot_animation
 from billiard.plot import run as plot_run_module
 from billiard.plot.flights import arcs
 from billiard.run.simulate import simulate
+from billiard.runfile.figure_files import DEFAULT_DPI
 from billiard.runfile.sidecsv import read_side_csv
 from billiard.scene.scene import load_scene, with_values
 from tests.plot_support import check_gif, check_png
@@ -224,17 +225,17 @@ def test_phases_run_figures_and_gif(phases_run, unsampled_run, tmp_path, monkeyp
     labels: dict[str, list[tuple[str, str]]] = {}
     save = plot_run_module.save
 
-    def capture(fig, path):
+    def capture(fig, path, **options):
         legends[Path(path).name] = [t.get_text() for lg in fig.legends for t in lg.texts]
         labels[Path(path).name] = [(ax.get_xlabel(), ax.get_ylabel()) for ax in fig.axes]
-        return save(fig, path)
+        return save(fig, path, **options)
 
     monkeypatch.setattr(plot_run_module, "save", capture)
     for name, run in (("sampled", phases_run), ("rebuilt", unsampled_run)):
         written = plot.plot_run(run, tmp_path / name, window=WINDOW)
         assert [p.name for p in written] == list(plot.FIGURE_NAMES)
         for path in written[:-1]:
-            check_png(path)
+            check_png(path, dpi=DEFAULT_DPI)
         check_gif(written[-1])
         names = " ".join(legends["trajectory.png"])
         assert "rolling (" in names and "sliding (" in names and "held by two walls (" in names

@@ -12,7 +12,7 @@ from matplotlib.colors import to_rgba
 
 from billiard import plot
 from billiard.analysis.camera import camera_filter
-from billiard.plot import animation as plot_animation
+from billiard.plot.flights import positions_at
 from tests.plot_support import (
     C_CURVE,
     MASS,
@@ -275,7 +275,7 @@ def test_animation_follows_the_drag_flight(drag_run):
     # frames at the impact times: the ball is at each impact, reached by the flight
     # from the previous one (an impact time is on the previous flight's end)
     times = columns["t"][rows[1:]] - 1e-12
-    x, y, starts = plot_animation._ball_centres(columns, rows, times, scene)
+    x, y, starts = positions_at(columns, rows, times, scene)
     np.testing.assert_array_equal(starts, rows[:-1])
     np.testing.assert_allclose(x, columns["q1"][rows[1:]], atol=1e-6)
     np.testing.assert_allclose(y, columns["q2"][rows[1:]], atol=1e-6)

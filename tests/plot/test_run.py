@@ -16,7 +16,10 @@ from PIL import Image
 
 from billiard import plot
 from billiard.cli import main
+from billiard.plot import density as density_module
 from billiard.plot import run as plot_run_module
+from billiard.plot.common import new_figure, save
+from billiard.runfile.figure_files import DEFAULT_DPI, figure_names
 from billiard.runfile.record import RunDataError, write_collisions
 from billiard.scene.scene import SceneError
 from tests.plot_support import (
@@ -67,8 +70,8 @@ def test_plot_run_writes_every_figure(bounce_run):
     assert [p.name for p in written] == list(plot.FIGURE_NAMES)
     assert all(p.parent == bounce_run for p in written)
     for path in written[:-1]:
-        check_png(path)
-        assert mpimg.imread(path).shape[1] == 600
+        check_png(path, dpi=DEFAULT_DPI)
+        assert mpimg.imread(path).shape[1] == 6 * DEFAULT_DPI  # 6 inches wide
     check_gif(written[-1])
     assert Gcf.get_num_fig_managers() == managers  # no pyplot figure left behind
 
@@ -78,12 +81,12 @@ def test_every_axis_is_labelled_with_its_unit(bounce_run, monkeypatch):
     texts: dict[str, list[str]] = {}
     save = plot_run_module.save
 
-    def capture(fig, path):
+    def capture(fig, path, **options):
         labels[Path(path).name] = [(ax.get_xlabel(), ax.get_ylabel()) for ax in fig.axes]
         texts[Path(path).name] = [
             t.get_text() for legend in fig.legends for t in [legend.get_title(), *legend.texts]
         ]
-        return save(fig, path)
+        return save(fig, path, **options)
 
     monkeypatch.setattr(plot_run_module, "save", capture)
     plot.plot_run(bounce_run, frame_interval=0.02, gif=False)
@@ -111,7 +114,7 @@ def test_plot_run_camera_window_out_dir_no_gif(static_run, tmp_path):
     assert [p.name for p in written] == list(plot.FIGURE_NAMES[:-1])
     assert all(p.parent == out for p in written)
     for path in written:
-        check_png(path)
+        check_png(path, dpi=DEFAULT_DPI)
     assert not (static_run / "return_map.png").exists()
 
 
@@ -130,6 +133,110 @@ def test_paper_figures(bounce_run, static_run, tmp_path):
     check_png(path, min_width=900)
     path = plot.paper_phase_figure([bounce_run, static_run], tmp_path / "fig3.png")
     check_png(path, min_width=600)
+
+
+# --- formats, resolution, titles ----------------------------------------------------------
+
+MAGIC = {"png": b"\x89PNG\r\n\x1a\n", "pdf": b"%PDF-"}
+
+
+def check_format_of(path: Path, fmt: str) -> None:
+    head = path.read_bytes()[:400]
+    if fmt == "svg":
+        assert head.startswith(b"<?xml") and b"<svg" in head
+    else:
+        assert head.startswith(MAGIC[fmt])
+
+
+@pytest.mark.parametrize("fmt", ["png", "svg", "pdf"])
+def test_each_format_writes_files_of_that_format(bounce_run, tmp_path, fmt):
+    written = plot.plot_run(bounce_run, tmp_path, format=fmt, dpi=30, gif=False)
+    assert [p.name for p in written] == list(figure_names(fmt)[:4])
+    assert [p.suffix for p in written] == [f".{fmt}"] * 4
+    for path in written:
+        check_format_of(path, fmt)
+
+
+def test_vector_figures_are_reproducible(tmp_path):
+    for suffix in ("svg", "pdf"):
+        files = []
+        for name in ("a", "b"):
+            fig = new_figure()
+            ax = fig.add_subplot()
+            ax.plot([0, 1], [1, 0], label="line")
+            ax.legend()
+            files.append(save(fig, tmp_path / f"{name}.{suffix}", dpi=123).read_bytes())
+        assert files[0] == files[1], suffix
+
+
+def capture_figures(monkeypatch) -> dict[str, dict]:
+    """What plot_run's figures hold when saved: size, titles and images, by file name."""
+    seen: dict[str, dict] = {}
+    save_figure = plot_run_module.save
+
+    def capture(fig, path, **options):
+        seen[Path(path).name] = {
+            "inches": tuple(fig.get_size_inches()),
+            "suptitle": fig.get_suptitle(),
+            "axes titles": [t for ax in fig.axes for t in (ax.get_title(), ax.get_title("left"))],
+            "images": [im for ax in fig.axes for im in ax.get_images()],
+            "lines": [line for ax in fig.axes for line in ax.get_lines()],
+        }
+        return save_figure(fig, path, **options)
+
+    monkeypatch.setattr(plot_run_module, "save", capture)
+    return seen
+
+
+def test_dpi_sets_the_png_size_and_titles_are_drawn(bounce_run, tmp_path, monkeypatch):
+    seen = capture_figures(monkeypatch)
+    written = plot.plot_run(bounce_run, tmp_path, dpi=40, gif=False)
+    for path in written:
+        width, height = seen[path.name]["inches"]
+        with Image.open(path) as image:
+            assert image.size[0] == 6 * 40 == round(width * 40)  # 6 inches wide
+            assert abs(image.size[1] - height * 40) <= 1
+            assert image.info["dpi"] == pytest.approx((40, 40), abs=0.05)
+        assert seen[path.name]["suptitle"].startswith("bounce, 160 impacts")
+    assert any("impacts" in t for t in seen["trajectory.png"]["axes titles"])
+
+
+def test_no_title_removes_the_titles(bounce_run, tmp_path, monkeypatch):
+    seen = capture_figures(monkeypatch)
+    written = plot.plot_run(bounce_run, tmp_path, title=False, dpi=20, gif=False)
+    assert [p.name for p in written] == list(figure_names()[:4])
+    for path in written:
+        assert seen[path.name]["suptitle"] == "", path.name
+        assert not any(seen[path.name]["axes titles"]), path.name
+
+
+@pytest.mark.parametrize(("options", "problem"), [
+    ({"format": "gif"}, "figure format must be one of png, svg, pdf, got 'gif'"),
+    ({"dpi": 0}, "figure dpi must be between 20 and 1200 pixels per inch, got 0"),
+    ({"dpi": "high"}, "figure dpi must be a whole number of pixels per inch, got 'high'"),
+])  # fmt: skip
+def test_bad_format_or_dpi_is_refused_before_drawing(bounce_run, tmp_path, options, problem):
+    with pytest.raises(RunDataError) as info:
+        plot.plot_run(bounce_run, tmp_path / "out", **options)
+    assert str(info.value) == problem
+    assert not (tmp_path / "out").exists()
+
+
+def test_large_clouds_are_density_images_small_ones_points(bounce_run, tmp_path, monkeypatch):
+    # 159 pairs in the maps are above a threshold of 158; 113 normalized phase points
+    # (those with E0 > 0) are below it
+    monkeypatch.setattr(density_module, "DENSITY_THRESHOLD", 158)
+    seen = capture_figures(monkeypatch)
+    plot.plot_run(bounce_run, tmp_path, dpi=20, gif=False, window=(None, None))
+    for name in ("return_map.png", "time_map.png"):
+        (image,) = seen[name]["images"]
+        assert np.asarray(image.get_array()).sum() == 159, name
+    x, y = plot.phase_coordinates(*plot.load_run(bounce_run))
+    assert seen["phase.png"]["images"] == []
+    dots = [line for line in seen["phase.png"]["lines"] if line.get_marker() == "o"]
+    np.testing.assert_array_equal(dots[0].get_xdata(), x)
+    np.testing.assert_array_equal(dots[0].get_ydata(), y)
+    assert len(seen["trajectory.png"]["images"]) == 1  # 160 impacts: the path's density
 
 
 # --- billiard plot -------------------------------------------------------------------------
@@ -297,7 +404,7 @@ def test_engine_run_plots(real_run, tmp_path):
     written = plot.plot_run(real_run, tmp_path, frame_interval=1 / 30, window=(250, 300))
     assert [p.name for p in written] == list(plot.FIGURE_NAMES)
     for path in written[:-1]:
-        check_png(path)
+        check_png(path, dpi=DEFAULT_DPI)
     check_gif(written[-1])
     x, y = plot.phase_coordinates(columns, scene)
     # The run starts at rest at the bottom, the default reference's zero: heights from 0.
