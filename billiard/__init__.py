@@ -126,6 +126,8 @@ __version__ = "0.1.0"
 _EXPORTS = {
     "load_curve": "billiard.geometry.curves",
     "read_collisions": "billiard.runfile.record",
+    "read_contacts": "billiard.runfile.tables",
+    "read_trajectory": "billiard.runfile.tables",
     "camera_filter": "billiard.analysis.camera",
     "plot_run": "billiard.plot",
 }
@@ -143,6 +145,8 @@ __all__ = [
     "load_scene",
     "plot_run",
     "read_collisions",
+    "read_contacts",
+    "read_trajectory",
     "scene_from_dict",
     "scene_to_toml",
     "simulate",

@@ -1,5 +1,5 @@
-"""The outcome of a run: its records (in memory or in the run's CSV file), how it ended,
-and a one-line summary."""
+"""The outcome of a run: its records (in memory or in the run's file, CSV or binary),
+how it ended, and a one-line summary."""
 
 from __future__ import annotations
 
@@ -10,6 +10,7 @@ from typing import Any
 
 import numpy as np
 
+from billiard.runfile.npystream import NpyRecorder
 from billiard.runfile.record import MemoryRecorder, read_collisions
 from billiard.runfile.stream import CsvRecorder, Truncation
 from billiard.status import Status
@@ -18,7 +19,8 @@ __all__ = ["Result", "RunFile"]
 
 
 class RunFile:
-    """A finished run's CSV file, read-only, with the recorder interface of a Result."""
+    """A finished run's file of impacts (``collisions.csv`` or ``collisions.npy``),
+    read-only, with the recorder interface of a Result."""
 
     def __init__(self, path: Path, rows: int):
         self.path = path
@@ -34,7 +36,11 @@ class RunFile:
         return read_collisions(self.path)
 
     def write_csv(self, path: str | os.PathLike[str]) -> None:
-        if Path(path).resolve() != self.path.resolve():
+        if self.path.suffix == ".npy":
+            from billiard.runfile.npyfile import COLLISIONS, export_csv
+
+            export_csv(self.path, path, COLLISIONS)
+        elif Path(path).resolve() != self.path.resolve():
             Path(path).write_bytes(self.path.read_bytes())
 
 
@@ -52,7 +58,8 @@ class Result:
         counts: impacts per regime of the impact law, and how many of them relaunched
             a ball lying on the surface (``resting``).
         regimes: the impact law's regimes, in the order the summary lists them.
-        path: the streamed CSV file, or None for an in-memory run.
+        path: the streamed file of impacts (collisions.csv or collisions.npy), or None
+            for an in-memory run.
         final_time: simulated time the run reached (s): the last impact, or
             ``run.duration`` when that ended it.
         resumed_from: for a resumed run, the impacts already on disk when it started
@@ -66,7 +73,7 @@ class Result:
     def __init__(
         self,
         scene: Any,
-        recorder: MemoryRecorder | CsvRecorder | RunFile,
+        recorder: MemoryRecorder | CsvRecorder | NpyRecorder | RunFile,
         status: Status,
         stop_reason: str | None,
         wall_time: float,
@@ -104,18 +111,19 @@ class Result:
     def contacts(self) -> dict[str, np.ndarray] | None:
         """The contact phases (``contact.model = "phases"``): column name -> array, the
         columns of contacts.csv; None for the impacts model."""
-        return _side_columns(self._contacts)
+        return _side_columns(self._contacts, "contacts")
 
     @property
     def trajectory(self) -> dict[str, np.ndarray] | None:
         """The samples of a run with a sampling interval: column name -> array, the
         columns of trajectory.csv (t, q1, q2, v1, v2, omega, energy, mode); else None."""
-        return _side_columns(self._trajectory)
+        return _side_columns(self._trajectory, "trajectory")
 
     @property
     def side_files(self) -> tuple[Path, ...]:
-        """The files a streamed run wrote beside its CSV file: contacts.csv under
-        ``contact.model = "phases"``, trajectory.csv with a sampling interval."""
+        """The files a streamed run wrote beside its impacts' file: contacts.csv (or
+        .npy) under ``contact.model = "phases"``, trajectory.csv (or .npy) with a
+        sampling interval."""
         return tuple(p for p in (self._contacts, self._trajectory) if isinstance(p, Path))
 
     @property
@@ -208,11 +216,11 @@ def _in_contact_message(scene: Any, mode: str | None) -> str:
     )
 
 
-def _side_columns(source: Any) -> dict[str, np.ndarray] | None:
+def _side_columns(source: Any, name: str) -> dict[str, np.ndarray] | None:
     if source is None:
         return None
     if isinstance(source, (str, os.PathLike)):
-        from billiard.runfile.sidecsv import read_side_csv
+        from billiard.runfile.tables import read_contacts, read_trajectory
 
-        return read_side_csv(source)
+        return (read_contacts if name == "contacts" else read_trajectory)(source)
     return source.columns()
