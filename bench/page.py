@@ -8,7 +8,7 @@ import math
 
 from bench import baseline as baseline_mod
 from bench import contact as contact_mod
-from bench import report
+from bench import report, runio
 from bench.report import figure, num, table
 
 #: The appendix with the full tables, beside performance.md.
@@ -23,6 +23,7 @@ ANCHORS = {
     "baseline": "#before-and-after",
     "profile": "#5-where-the-default-method-spends-its-time",
     "contact": "#6-contact-phases-against-the-hops-they-replace",
+    "io": "#7-run-files-writing-reading-plotting",
 }
 DRAG = {"fowles": "on", "none": "off"}
 
@@ -118,6 +119,8 @@ def key_figures(results: dict) -> str:
                     f">= {c['target']:g}x: met in {len(ratios) - len(v['short'])} of {len(ratios)}",
                 ]
             )
+    if "io" in s:
+        rows += runio.target_rows(s["io"])
     verdicts = [row[2] for row in report.target_rows(results)]
     met = sum(v == "met" for v in verdicts)
     judged = sum(v != "-" for v in verdicts)
@@ -622,4 +625,6 @@ def render(results: dict, command: str) -> str:
         out.append(section_profile(s["profile"]))
     if "contact" in s:
         out.append(section_contact(s["contact"], command))
+    if "io" in s:
+        out.append(runio.page_section(s["io"], _tables("io")))
     return "\n".join(out).rstrip() + "\n"

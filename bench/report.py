@@ -82,6 +82,10 @@ def target_rows(results: dict) -> list[list[str]]:
         rows += report_throughput.target_rows(t) or old_throughput_targets(t)
     if "contact" in s:
         rows.append(contact_target(s["contact"]))
+    if "io" in s:
+        from bench import runio
+
+        rows += runio.target_rows(s["io"])
     if "workprecision" in s:
         ratios = speed_ratios(s["workprecision"])
         for method in dict.fromkeys(r["method"] for r in ratios):
@@ -594,6 +598,10 @@ def render_tables(results: dict, command: str) -> str:
         out.append(text.PROFILE + "\n" + section_profile(s["profile"]))
     if "contact" in s:
         out.append(text.CONTACT + "\n" + section_contact(s["contact"], command))
+    if "io" in s:
+        from bench import runio
+
+        out.append(runio.tables_section(s["io"], command))
     return "\n".join(out).rstrip() + "\n"
 
 

@@ -22,6 +22,7 @@ from bench import (
     ladder,
     page,
     report,
+    runio,
     throughput,
     workprecision,
 )
@@ -99,6 +100,8 @@ def measure(section: str, cfg: Config, starts: Starts, baseline: dict | None = N
         return {"profiles": [throughput.profile(n, cfg.profile_impacts) for n in cfg.scenes]}
     if section == "contact":
         return {**contact.measure(cfg), "code": code_version()}
+    if section == "io":
+        return {**runio.measure(cfg.quick), "code": code_version()}
     raise ValueError(f"unknown section {section!r}")
 
 

@@ -1,5 +1,5 @@
-"""Command line: ``billiard derive | scenes | run | calibrate | plot | lyapunov | bench |
-reproduce | sweep | view``, one module per command or group (this package).
+"""Command line: ``billiard derive | scenes | run | export | calibrate | plot | lyapunov |
+bench | reproduce | sweep | view``, one module per command or group (this package).
 
 Errors a user can cause (a bad scene, a bad curve expression, a stop condition) print one
 line and exit with status 2; no traceback.
@@ -13,7 +13,7 @@ import gc
 import sys
 from collections.abc import Sequence
 
-from billiard.cli import derive, run, study, sweep, view
+from billiard.cli import derive, export, run, study, sweep, view
 from billiard.cli.common import UserError
 
 __all__ = ["UserError", "build_parser", "main", "shows_default", "version_text"]
@@ -117,6 +117,7 @@ def build_parser() -> argparse.ArgumentParser:
     derive.add_parser(sub)
     study.add_scenes_parser(sub)
     run.add_parser(sub)
+    export.add_parser(sub)
     study.add_parsers(sub)  # calibrate, plot, lyapunov, bench, reproduce
     sweep._add_sweep_parser(sub)
     view.add_parser(sub)

@@ -34,6 +34,7 @@ SECTIONS = (
     "throughput",
     "profile",
     "contact",
+    "io",
     "sweep",
 )
 _PROJECT = "realworld-billiard"

@@ -119,11 +119,11 @@ def _frame_interval(text: str | None) -> float | None:
 
 
 def _holds_run(folder: Path) -> bool:
-    """Whether a folder holds a run's files (CSV, scene or checkpoint)."""
-    from billiard.run.persist import CHECKPOINT_NAME, CSV_NAME, SCENE_NAME
+    """Whether a folder holds a run's files (impacts, CSV or binary; scene; checkpoint)."""
+    from billiard.run.persist import CHECKPOINT_NAME, CSV_NAME, NPY_NAME, SCENE_NAME
 
     return folder.is_dir() and any(
-        (folder / name).exists() for name in (CSV_NAME, SCENE_NAME, CHECKPOINT_NAME)
+        (folder / name).exists() for name in (CSV_NAME, NPY_NAME, SCENE_NAME, CHECKPOINT_NAME)
     )
 
 
@@ -140,6 +140,14 @@ def _remove_plots(folder: Path) -> list[str]:
             path.unlink()
             removed.append(name)
     return removed
+
+
+def _data_file(folder: Path) -> Path:
+    """The file of a run's impacts in ``folder``: collisions.npy where the run stores
+    binary rows, else collisions.csv."""
+    from billiard.runfile.folder import data_file
+
+    return data_file(folder)
 
 
 def _checkpoint_clock(folder: Path):
@@ -191,7 +199,7 @@ def cmd_run(args: argparse.Namespace) -> int:
     import signal
 
     from billiard.run.output_size import OutputSizeError
-    from billiard.run.persist import CSV_NAME, SCENE_NAME, resume
+    from billiard.run.persist import SCENE_NAME, resume
     from billiard.run.simulate import RunInterrupted, simulate
     from billiard.runfile.checkpoint import CheckpointError
 
@@ -206,11 +214,11 @@ def cmd_run(args: argparse.Namespace) -> int:
     if args.resume is not None:
         if (
             args.scene or args.set or args.method or args.out or args.duration
-            or args.overwrite or args.sample is not None
+            or args.overwrite or args.sample is not None or args.store is not None
         ):  # fmt: skip
             raise UserError(
-                "run --resume DIR continues a run as it was set up: give no "
-                "SCENE, --out, --set, --method, --duration, --sample or --overwrite with it"
+                "run --resume DIR continues a run as it was set up: give no SCENE, --out, "
+                "--set, --method, --duration, --sample, --store or --overwrite with it"
             )
         out = Path(args.resume)
         if args.collisions is not None and args.collisions < 1:
@@ -273,6 +281,8 @@ def cmd_run(args: argparse.Namespace) -> int:
                         duration=args.duration,
                         sample=args.sample,
                         allow_large=args.yes,
+                        store=args.store or "auto",
+                        notify=lambda line: print(f"billiard: {line}", file=sys.stderr),
                     )
                 except CheckpointError as exc:  # another process is writing a run in DIR
                     changed = False
@@ -296,7 +306,7 @@ def cmd_run(args: argparse.Namespace) -> int:
         removed = f"; removed its outdated plots ({', '.join(stale)})" if stale else ""
         print(
             f"billiard: interrupted ({name}): {exc.rows} impacts kept in "
-            f"{where / CSV_NAME}; continue with `{again}`{after}{removed}",
+            f"{_data_file(where)}; continue with `{again}`{after}{removed}",
             file=sys.stderr,
         )
         return 128 + exc.signum
@@ -305,7 +315,7 @@ def cmd_run(args: argparse.Namespace) -> int:
         raise UserError(f"cannot write the run: {exc.strerror or exc}{where}") from None
     _report(result.summary(), out)
     extra = result.side_files
-    names = ", ".join(str(p) for p in (out / CSV_NAME, *extra))
+    names = ", ".join(str(p) for p in (result.path or _data_file(out), *extra))
     _report(f"wrote {names} and {out / SCENE_NAME}", out)
     if not args.no_plot and len(result) > 1:
         from billiard.plot import plot_run
@@ -382,6 +392,14 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
         action="store_true",
         help="go ahead when the estimate of trajectory.csv exceeds 1 GB (with --sample; "
         "also with --resume)",
+    )
+    p.add_argument(
+        "--store",
+        choices=["auto", "csv", "npy"],
+        help="how the rows are stored: csv (DIR/collisions.csv), npy (DIR/collisions.npy, "
+        "typed binary rows, 137 bytes per impact; `billiard export DIR --csv` writes the "
+        "CSV files from them), or auto: csv unless the run's CSV files are estimated "
+        "over 100 MB (about 310,000 impacts), then npy, said on stderr (default: auto)",
     )
     p.add_argument("--out", help="output directory (default: runs/SCENE)")
     add_set_argument(p, "override a scene key, e.g. --set drive.frequency=6.0 (repeatable)")

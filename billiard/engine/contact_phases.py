@@ -358,7 +358,7 @@ class ContactPhases:
         n = self._impacts + 1
         record = ImpactRecord(
             n, t, ball.q1, ball.q2, res.u1, res.u2, res.u3, u4, un, tau, res.regime, z,
-            energy, surface.label, res.Rt, res.Rn, s_o, q3,
+            energy, surface.code, res.Rt, res.Rn, s_o, q3,
         )  # fmt: skip
         self._impacts = n
         self._last_impact = t

@@ -98,7 +98,7 @@ class EventStep:
             res.regime,
             ev.z,
             energy,
-            ev.surface.label,
+            ev.surface.code,
             res.Rt,
             res.Rn,
             ev.s,

@@ -38,6 +38,7 @@ from billiard.errors import SimulationError
 from billiard.kernels import layout as L
 from billiard.kernels.interpreted import stop_text
 from billiard.models.rk4_locator import answer_foot
+from billiard.runfile.npystream import NpyRecorder
 from billiard.runfile.record import MemoryRecorder, record_of
 from billiard.runfile.rows import as_block
 from billiard.runfile.stream import CsvRecorder
@@ -84,7 +85,7 @@ def supports(sim: Any, *, flights: bool = False) -> str | None:
 def rows_sink(recorder: Any) -> Callable[[np.ndarray], None] | None:
     """``recorder.append_rows`` when the recorder takes rows as arrays (and does not
     override ``append``, which then has to see every record), else None."""
-    for base in (MemoryRecorder, CsvRecorder):
+    for base in (MemoryRecorder, CsvRecorder, NpyRecorder):
         if isinstance(recorder, base) and type(recorder).append is base.append:
             return recorder.append_rows
     return None

@@ -156,6 +156,8 @@ class OffsetWall(Surface):
         self.r = float(radius)
         self.index = index
         self.label = str(index)
+        #: the ``wall`` column of an impact on this surface: the wall's index
+        self.code = index
         self._p = wall.p
         self._walls = ((wall.f,), (wall.df,), (wall.d2f,))
         return self._new_ctx(kind)
@@ -300,6 +302,8 @@ class FlatLid(Surface):
         self.ceiling = float(ceiling)
         self.level = float(ceiling) - float(radius)
         self.label = "lid"
+        #: the ``wall`` column of an impact on the lid (walls count from 0)
+        self.code = int(_L.LID_LABEL)
         self._new_ctx(_L.LID)[_BASE + _L.S_A] = self.level
 
     def contact(self, px: float, warm: WarmStart) -> tuple[float, float, float]:

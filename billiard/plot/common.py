@@ -21,7 +21,7 @@ from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
 
 from billiard.analysis.camera import camera_filter
-from billiard.runfile.record import RunDataError, read_collisions
+from billiard.runfile.record import LID_WALL, RunDataError, read_collisions
 
 __all__ = ["RunDataError", "camera_filter", "read_collisions"]
 
@@ -63,13 +63,16 @@ def column(columns: Columns, name: str) -> np.ndarray:
 
 
 def lid_mask(columns: Columns) -> np.ndarray:
-    """True for the impacts on the lid: column ``wall`` is ``"lid"``, or the contact
-    tangent angle ``z`` is pi (the lid's; see the CSV columns in the README)."""
+    """True for the impacts on the lid: column ``wall`` is -1 (``"lid"`` in columns
+    made before it was an integer), or the contact tangent angle ``z`` is pi (the lid's;
+    see the CSV columns in the README)."""
     lid = np.abs(column(columns, "z") - math.pi) < 1e-9
     if "wall" in columns:
         wall = np.asarray(columns["wall"])
         if wall.dtype.kind in "US":
             lid |= np.char.strip(wall.astype(str)) == "lid"
+        elif wall.dtype.kind in "iu":
+            lid |= wall == LID_WALL
     return lid
 
 

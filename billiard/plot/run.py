@@ -33,7 +33,7 @@ from billiard.runfile.figure_files import (
     check_dpi,
     figure_names,
 )
-from billiard.runfile.folder import FIGURE_NAMES
+from billiard.runfile.folder import FIGURE_NAMES, data_file, side_file
 from billiard.scene.scene import Scene, SceneError, scene_from_toml
 from billiard.scene.userfile import MAX_SCENE_BYTES, FileRefused, read_limited
 
@@ -66,7 +66,8 @@ def read_scene(path: str | os.PathLike[str]) -> Scene:
 
 
 def load_run(run_dir: str | os.PathLike[str]) -> tuple[dict[str, np.ndarray], Scene]:
-    """Columns of ``run_dir/collisions.csv`` and the scene of ``run_dir/scene.toml``.
+    """Columns of ``run_dir/collisions.csv`` (or ``collisions.npy``) and the scene of
+    ``run_dir/scene.toml``.
 
     Raises:
         RunDataError: a file is missing or malformed, or the CSV has no impacts.
@@ -75,7 +76,7 @@ def load_run(run_dir: str | os.PathLike[str]) -> tuple[dict[str, np.ndarray], Sc
     run_dir = Path(run_dir)
     if not run_dir.is_dir():
         raise RunDataError(f"{run_dir}: not a directory")
-    csv_path = run_dir / "collisions.csv"
+    csv_path = data_file(run_dir)
     columns = read_collisions(csv_path)
     if columns["t"].size == 0:
         raise RunDataError(f"{csv_path}: no impacts to plot")
@@ -86,24 +87,18 @@ def load_sides(
     run_dir: str | os.PathLike[str],
 ) -> tuple[dict[str, np.ndarray] | None, dict[str, np.ndarray] | None]:
     """The columns of ``run_dir/contacts.csv`` and ``run_dir/trajectory.csv`` (a run of
-    ``contact.model = "phases"``, and one with ``--sample``), each None when absent.
+    ``contact.model = "phases"``, and one with ``--sample``; ``.npy`` for a binary run),
+    each None when absent.
 
     Raises:
         RunDataError: a file is present but cannot be read (one line, naming it).
     """
-    from billiard.runfile.sidecsv import CONTACTS_NAME, TRAJECTORY_NAME, read_side_csv
+    from billiard.runfile.tables import read_contacts, read_trajectory
 
     out: list[dict[str, np.ndarray] | None] = []
-    for name in (CONTACTS_NAME, TRAJECTORY_NAME):
-        path = Path(run_dir) / name
-        if not path.is_file():
-            out.append(None)
-            continue
-        try:
-            out.append(read_side_csv(path))
-        except (OSError, UnicodeDecodeError, ValueError, IndexError) as exc:
-            reason = " ".join(str(exc).split()) or type(exc).__name__
-            raise RunDataError(f"{path}: cannot read: {reason}") from None
+    for name, read in (("contacts", read_contacts), ("trajectory", read_trajectory)):
+        path = side_file(run_dir, name)
+        out.append(None if path is None else read(path))
     return out[0], out[1]
 
 

@@ -17,7 +17,7 @@ from billiard.analysis.phase import (
     phase_frame,
 )
 from billiard.run.simulate import simulate
-from billiard.runfile.record import read_collisions
+from billiard.runfile.record import LID_WALL, read_collisions
 from billiard.scene.scene import load_scene, scene_to_toml, with_values
 
 FIG2_SCENES = ("wedge-6.6hz", "hyperbola-5.8hz", "hyperbola-4.5hz")
@@ -109,7 +109,7 @@ def run_scene(
     cam = camera_filter(cols, CAMERA_FRAME)
     orbit = find_period_one(cols, scene.ball.mass, scene.run.gravity, reference=phase_frame(scene))
     wall_kind = cols.get("wall")
-    lid = float(np.mean(wall_kind == "lid")) if wall_kind is not None else 0.0
+    lid = float(np.mean(wall_kind == LID_WALL)) if wall_kind is not None else 0.0
     modes = result.mode_times if model == "phases" else None
     contacts = result.contacts if model == "phases" else None
     return RunStats(

@@ -20,8 +20,8 @@ from typing import Any
 from billiard.run.persist import CHECKPOINT_NAME, CSV_NAME, SCENE_NAME
 from billiard.run.result import Result, RunFile
 from billiard.runfile.checkpoint import CheckpointError, read_checkpoint
+from billiard.runfile.folder import COLLISIONS_NPY, data_file, side_file
 from billiard.runfile.record import RunDataError
-from billiard.runfile.sidecsv import CONTACTS_NAME, TRAJECTORY_NAME
 from billiard.scene.scene import scene_from_toml
 from billiard.scene.userfile import MAX_SCENE_BYTES, FileRefused, read_limited
 from billiard.status import Status
@@ -29,7 +29,7 @@ from billiard.status import Status
 __all__ = ["NPY_NAME", "NotARunError", "impact_file", "open_run"]
 
 #: The binary impact table; read in preference to ``collisions.csv`` when both are there.
-NPY_NAME = "collisions.npy"
+NPY_NAME = COLLISIONS_NPY
 
 
 class NotARunError(RunDataError):
@@ -40,11 +40,8 @@ class NotARunError(RunDataError):
 def impact_file(run_dir: Path) -> Path | None:
     """The impact table of the run folder ``run_dir``: ``collisions.npy`` when present,
     else ``collisions.csv``; None when it has neither."""
-    for name in (NPY_NAME, CSV_NAME):
-        path = run_dir / name
-        if path.is_file():
-            return path
-    return None
+    path = data_file(run_dir)
+    return path if path.is_file() else None
 
 
 def open_run(run_dir: str | os.PathLike[str]) -> Result:
@@ -82,12 +79,8 @@ def open_run(run_dir: str | os.PathLike[str]) -> Result:
         checkpoint: dict[str, Any] | None = read_checkpoint(out / CHECKPOINT_NAME)
     except CheckpointError:
         checkpoint = None  # the tables are still there to read: only the outcome is lost
-    contacts = out / CONTACTS_NAME
-    trajectory = out / TRAJECTORY_NAME
-    sides = {
-        "contacts": contacts if contacts.is_file() else None,
-        "trajectory": trajectory if trajectory.is_file() else None,
-    }
+    # the side tables are in the impact table's format (contacts.npy beside collisions.npy)
+    sides = {name: side_file(out, name) for name in ("contacts", "trajectory")}
     if checkpoint is None:
         return Result(
             scene, RunFile(table, None), None, None, math.nan, {}, math.nan,

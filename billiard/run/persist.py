@@ -5,7 +5,10 @@ A streamed run (``simulate(..., out_dir=DIR)``) keeps three files in DIR:
 ``scene.toml``
     the fully resolved scene, written before the first impact.
 ``collisions.csv``
-    one row per impact, written in whole rows and synced at least once a second.
+    one row per impact, written in whole rows and synced at least once a second; or,
+    stored as binary (``store="npy"``, :mod:`billiard.run.store`), ``collisions.npy``:
+    typed rows, the count in its header rewritten after each flush. The side files
+    (``contacts``, ``trajectory``) are stored the same way.
 ``checkpoint.json``
     written atomically with every flush: the number of rows on disk and the complete
     :class:`~billiard.engine.state.EngineState` after the last of them. :func:`resume`
@@ -53,15 +56,18 @@ from billiard.run.output_size import (
 )
 from billiard.run.result import Result, RunFile
 from billiard.run.resume_checks import check_state
+from billiard.run.store import choose_store
 from billiard.runfile.checkpoint import (
     CheckpointError,
     read_checkpoint,
     write_checkpoint,
     write_text_atomic,
 )
-from billiard.runfile.csvfile import is_crc32
+from billiard.runfile.csvfile import _open_locked, is_crc32
+from billiard.runfile.npyfile import COLLISIONS, CONTACTS, TABLES, TRAJECTORY
+from billiard.runfile.npystream import NpyMark, NpyRecorder, SideNpy, check_side_npy
 from billiard.runfile.record import CONTACT_COLUMNS, TRAJECTORY_COLUMNS
-from billiard.runfile.sidecsv import CONTACTS_NAME, TRAJECTORY_NAME, SideCsv, check_side
+from billiard.runfile.sidecsv import SideCsv, check_side
 from billiard.runfile.stream import CsvMark, CsvRecorder, RowMismatchError, RunBusyError, Truncation
 from billiard.runfile.write_error import RunWriteError
 from billiard.scene.scene import scene_from_toml, scene_to_toml
@@ -71,6 +77,7 @@ from billiard.status import Status
 __all__ = [
     "CHECKPOINT_NAME",
     "CSV_NAME",
+    "NPY_NAME",
     "SCENE_NAME",
     "RunWriteError",
     "resume",
@@ -79,10 +86,43 @@ __all__ = [
 
 #: File names inside a run directory.
 CSV_NAME = "collisions.csv"
+NPY_NAME = COLLISIONS.npy_name
 SCENE_NAME = "scene.toml"
 CHECKPOINT_NAME = "checkpoint.json"
 
 OnRecord = Callable[[int], None]
+Stream = CsvRecorder | NpyRecorder
+
+
+def _store_of(stream: Stream) -> str:
+    return "npy" if isinstance(stream, NpyRecorder) else "csv"
+
+
+def _data_name(store: str) -> str:
+    """The impacts' file of a run stored as ``store``."""
+    return NPY_NAME if store == "npy" else CSV_NAME
+
+
+def _side_name(name: str, store: str) -> str:
+    """The file of the side table ``name`` (``contacts``, ``trajectory``) of a run
+    stored as ``store``."""
+    table = CONTACTS if name == "contacts" else TRAJECTORY
+    return table.npy_name if store == "npy" else table.csv_name
+
+
+def _drop_other_store(out: Path, store: str) -> None:
+    """Remove the files of the other store an earlier run left in ``out`` (a folder holds
+    one run: its rows in one store), each after taking its lock: a run still writing one
+    is left alone (:class:`RunBusyError`)."""
+    for table in TABLES:
+        path = out / (table.csv_name if store == "npy" else table.npy_name)
+        if not path.exists():
+            continue
+        fd = _open_locked(path)
+        try:
+            path.unlink()
+        finally:
+            os.close(fd)
 
 
 def run_streamed(
@@ -93,10 +133,17 @@ def run_streamed(
     progress: Progress | None = None,
     on_record: OnRecord | None = None,
     allow_large: bool = False,
+    store: str = "csv",
+    notify: Callable[[str], None] | None = None,
 ) -> Result:
     """Stream a run of ``sim`` (built by the caller, who may have given it its own impact
     law, e.g. to audit every impact) to ``out_dir``: write ``scene.toml`` first, then
     the records with checkpoints.
+
+    ``store``: ``csv`` (collisions.csv), ``npy`` (collisions.npy) or ``auto``
+    (:func:`billiard.run.store.choose_store`: binary for a large run, said in one line to
+    ``notify``); the files of the other store an earlier run left in ``out_dir`` are
+    removed.
 
     Raises:
         OutputSizeError: ``sim.sample_dt`` makes a trajectory.csv of more than 1 GB and
@@ -108,17 +155,25 @@ def run_streamed(
     total = sim.scene.run.collisions if collisions is None else int(collisions)
     resolved = sim.resolved_scene(total)
     samples = _samples(sim, total, sim.initial.t, 0, allow_large)
+    store, why = choose_store(store, total, samples)
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
-    # first take the CSV file (locked: a run still going on in DIR is left alone) ...
-    stream = CsvRecorder(out / CSV_NAME, autoflush=False)
+    # first take the data file (locked: a run still going on in DIR is left alone) ...
+    stream: Stream = (
+        NpyRecorder(out / NPY_NAME, autoflush=False)
+        if store == "npy"
+        else CsvRecorder(out / CSV_NAME, autoflush=False)
+    )
     try:
-        # ... then drop the checkpoint of an earlier run, which must not outlive its CSV
+        _drop_other_store(out, store)
+        # ... then drop the checkpoint of an earlier run, which must not outlive its rows
         (out / CHECKPOINT_NAME).unlink(missing_ok=True)
         write_text_atomic(out / SCENE_NAME, scene_to_toml(resolved))
     except BaseException:
         stream.close()
         raise
+    if why is not None and notify is not None:
+        notify(why)
     return _run_streamed(
         sim, total, out, stream, sim.start_state(), progress, on_record, samples=samples
     )
@@ -170,7 +225,12 @@ def resume(
     data = read_checkpoint(checkpoint_path)
     try:
         status = data["status"]
-        mark = CsvMark.from_dict(data["csv"])
+        store = data.get("store", "csv")
+        if store not in ("csv", "npy"):
+            raise CheckpointError(f"its store {store!r} is neither csv nor npy")
+        mark: CsvMark | NpyMark = (
+            NpyMark.from_dict(data["npy"]) if store == "npy" else CsvMark.from_dict(data["csv"])
+        )
         fingerprint = data["scene_sha256"]
         engine = data["engine"]
         stop_reason = data.get("stop_reason")
@@ -214,12 +274,13 @@ def resume(
         )
     total = scene.run.collisions if collisions is None else int(collisions)
     rows = mark.rows
-    csv_path = out / CSV_NAME
+    csv_path = out / _data_name(store)
     if csv_path.is_file() and csv_path.stat().st_size < mark.size:
         samples = _samples(sim, total, sim.initial.t, 0, allow_large)
         return _recompute(
-            out, scene, total, rows, progress, notify, on_record, sim.sample_dt, samples
-        )
+            out, scene, total, rows, progress, notify, on_record, sim.sample_dt, samples,
+            store,
+        )  # fmt: skip
     by_time = scene.run.duration is not None and collisions is None
     if status == "stopped" or (status == "complete" and (total <= rows or by_time)):
         if collisions is not None and total < rows:
@@ -261,11 +322,15 @@ def resume(
         check_state(state, sim, rows=rows, sample=sample, regimes=tuple(sim.impact.regimes))
     except CheckpointError as exc:
         raise CheckpointError(f"{checkpoint_path}: {exc}") from None
-    _check_sides(out, side_sizes, side_crcs, state.samples)
+    _check_sides(out, side_sizes, side_crcs, state.samples, store)
     sim.resolved_scene(total)  # validates the new total
     samples = _samples(sim, total, state.ball.t, state.impacts, allow_large)
     try:
-        stream, cut = CsvRecorder.reopen(csv_path, mark, autoflush=False)
+        stream: Stream
+        if isinstance(mark, NpyMark):
+            stream, cut = NpyRecorder.reopen(csv_path, mark, autoflush=False)
+        else:
+            stream, cut = CsvRecorder.reopen(csv_path, mark, autoflush=False)
     except CheckpointError as exc:
         if isinstance(exc, RunBusyError):
             raise
@@ -278,7 +343,8 @@ def resume(
                 f"(each checked against the recomputed impact)"
             )
         if cut.partial_bytes:
-            notes.append(f"dropped an unterminated last line ({cut.partial_bytes} bytes)")
+            what = "a row cut short" if store == "npy" else "an unterminated last line"
+            notes.append(f"dropped {what} ({cut.partial_bytes} bytes)")
         if not checked:
             notes.append(
                 "its checkpoint is of an earlier version, without the checksums of the "
@@ -302,26 +368,27 @@ def _recompute(
     on_record: OnRecord | None,
     sample: float | None = None,
     samples: SampleEstimate | None = None,
+    store: str = "csv",
 ) -> Result:
-    """Resume a run whose CSV file is shorter than its checkpoint says (cut short by
+    """Resume a run whose data file is shorter than its checkpoint says (cut short by
     hand, or restored from an older copy): the run is deterministic, so it is recomputed
     from the scene's initial state, each recomputed row is checked against the row on
     disk (the file is left as it is and the old checkpoint kept until every whole row
     has matched), and the run continues after them."""
-    csv_path = out / CSV_NAME
+    csv_path = out / _data_name(store)
+    recorder = NpyRecorder if store == "npy" else CsvRecorder
     try:
-        header = CsvRecorder.header_mark(csv_path)
+        header = recorder.header_mark(csv_path)
     except CheckpointError as exc:
         raise CheckpointError(f"{exc}; {_restart_hint(out)}") from None
     sim = Simulation(scene)  # a fresh engine: no memory of the checkpoint's state
     sim.sample_dt = sample
     sim.resolved_scene(total)  # validates the new total
-    stream, cut = CsvRecorder.reopen(csv_path, header, autoflush=False)
+    stream, cut = recorder.reopen(csv_path, header, autoflush=False)  # type: ignore[arg-type]
     if notify is not None:
+        what = "a row cut short" if store == "npy" else "an unterminated last line"
         partial = (
-            f" and an unterminated last line ({cut.partial_bytes} bytes), to be dropped"
-            if cut.partial_bytes
-            else ""
+            f" and {what} ({cut.partial_bytes} bytes), to be dropped" if cut.partial_bytes else ""
         )
         notify(
             f"{csv_path} holds {cut.rows} of the {checkpoint_rows} impacts its checkpoint "
@@ -340,7 +407,7 @@ def _continue(
     scene: Any,
     total: int,
     out: Path,
-    stream: CsvRecorder,
+    stream: Stream,
     start: EngineState,
     progress: Progress | None,
     on_record: OnRecord | None,
@@ -416,13 +483,21 @@ def _side_crcs(data: Any, sizes: Mapping[str, int]) -> dict[str, int | None]:
 
 
 def _check_sides(
-    out: Path, sizes: Mapping[str, int], crcs: Mapping[str, int | None], samples: int
+    out: Path,
+    sizes: Mapping[str, int],
+    crcs: Mapping[str, int | None],
+    samples: int,
+    store: str = "csv",
 ) -> None:
     """Check the side files' rows before the checkpoint (unchanged, and as many samples
     in trajectory.csv as the engine state made) before anything is written."""
     for name, size in sizes.items():
-        path = out / (CONTACTS_NAME if name == "contacts" else TRAJECTORY_NAME)
-        rows = check_side(path, size, crcs.get(name))
+        path = out / _side_name(name, store)
+        if store == "npy":
+            table = CONTACTS if name == "contacts" else TRAJECTORY
+            rows = check_side_npy(path, table, size, crcs.get(name))
+        else:
+            rows = check_side(path, size, crcs.get(name))
         if name == "trajectory" and rows != samples:
             raise CheckpointError(
                 f"{path} holds {rows} samples before the checkpoint, its engine state "
@@ -443,7 +518,7 @@ def _run_streamed(
     sim: Simulation,
     total: int,
     out: Path,
-    stream: CsvRecorder,
+    stream: Stream,
     start: EngineState,
     progress: Progress | None,
     on_record: OnRecord | None,
@@ -460,7 +535,16 @@ def _run_streamed(
     checkpoint_path = out / CHECKPOINT_NAME
     fingerprint = _fingerprint(sim)
     saved = [start.impacts]
-    sides: dict[str, SideCsv] = {}
+    store = _store_of(stream)
+    sides: dict[str, SideCsv | SideNpy] = {}
+
+    def side(name: str, columns: tuple[str, ...], size: int | None) -> SideCsv | SideNpy:
+        path = out / _side_name(name, store)
+        if store == "npy":
+            table = CONTACTS if name == "contacts" else TRAJECTORY
+            return SideNpy(path, table, size, crcs.get(name))
+        return SideCsv(path, columns, size, crcs.get(name))
+
     cut_rows: list[Any] = []
     crcs = side_crcs or {}
     try:
@@ -468,25 +552,21 @@ def _run_streamed(
         scene_file_sha256 = _sha256(read_limited(out / SCENE_NAME, MAX_SCENE_BYTES))
         if sim.phases:
             size = None if side_sizes is None else side_sizes.get("contacts")
-            sides["contacts"] = SideCsv(
-                out / CONTACTS_NAME, CONTACT_COLUMNS, size, crcs.get("contacts")
-            )
+            sides["contacts"] = side("contacts", CONTACT_COLUMNS, size)
             sim.on_contact = sides["contacts"].append
             # a phase cut by the run's end is written after the last checkpoint, which
             # does not count it: a resume cuts it off and redoes the phase whole
             sim.on_contact_cut = cut_rows.append
         if sim.sample_dt is not None:
             size = None if side_sizes is None else side_sizes.get("trajectory")
-            trajectory = SideCsv(
-                out / TRAJECTORY_NAME, TRAJECTORY_COLUMNS, size, crcs.get("trajectory")
-            )
+            trajectory = side("trajectory", TRAJECTORY_COLUMNS, size)
             sides["trajectory"] = trajectory
             if samples is None:  # pragma: no cover - every caller estimates them
                 raise AssertionError("a sampled run without its estimate")
             sim.on_sample = guard_samples(trajectory.append, samples, start.samples, sim.sample_dt)
     except BaseException:
-        for side in sides.values():
-            side.close()
+        for opened in sides.values():
+            opened.close()
         stream.close()
         raise
 
@@ -514,11 +594,12 @@ def _run_streamed(
                 "collisions": total,
                 "method": sim.method,
                 "scene_sha256": fingerprint,
-                "csv": mark.as_dict(),
+                **({"store": "npy", "npy": mark.as_dict()} if store == "npy" else {}),
+                **({"csv": mark.as_dict()} if store == "csv" else {}),
                 "engine": engine,
                 "sample": sim.sample_dt,
-                "side": {name: side.flush() for name, side in sides.items()},
-                "side_crc32": {name: side.crc32 for name, side in sides.items()},
+                "side": {name: opened.flush() for name, opened in sides.items()},
+                "side_crc32": {name: opened.crc32 for name, opened in sides.items()},
                 "scene_toml_sha256": scene_file_sha256,
                 **({"outcome": _outcome(sim)} if end else {}),
             },
@@ -568,12 +649,12 @@ def _run_streamed(
         stream.close()
         raise RunWriteError.after(
             exc, out, stream.rows_on_disk, saved[0],
-            csv=out / CSV_NAME, resumable=(out / CHECKPOINT_NAME).is_file(),
+            csv=out / _data_name(store), resumable=(out / CHECKPOINT_NAME).is_file(),
         ) from exc  # fmt: skip
     finally:
         stream.close()
-        for side in sides.values():
-            side.close()
+        for opened in sides.values():
+            opened.close()
     if request.signum:
         # the signal came after the last impact: the files are complete; let it act now
         signal.raise_signal(request.signum)
@@ -590,8 +671,8 @@ def _run_streamed(
         resumed_from=resumed_from,
         truncation=truncation,
         mode_times=sim.mode_times() if sim.phases or sim.sample_dt else None,
-        contacts=out / CONTACTS_NAME if "contacts" in sides else None,
-        trajectory=out / TRAJECTORY_NAME if "trajectory" in sides else None,
+        contacts=out / _side_name("contacts", store) if "contacts" in sides else None,
+        trajectory=out / _side_name("trajectory", store) if "trajectory" in sides else None,
         final_mode=sim.mode,
     )
 

@@ -1,5 +1,6 @@
-"""The outcome of a run: its records (in memory or in the run's CSV file), how it ended,
-a one-line summary, and its tables as DataFrames and Datasets (:mod:`billiard.run.frames`)."""
+"""The outcome of a run: its records (in memory or in the run's file, CSV or binary),
+how it ended, a one-line summary, and its tables as DataFrames and Datasets
+(:mod:`billiard.run.frames`)."""
 
 from __future__ import annotations
 
@@ -12,7 +13,8 @@ from typing import Any
 import numpy as np
 
 from billiard.run.frames import Table, TableError, check_table, to_pandas, to_xarray
-from billiard.runfile.record import MemoryRecorder, read_collisions, write_collisions
+from billiard.runfile.npystream import NpyRecorder
+from billiard.runfile.record import MemoryRecorder, read_collisions
 from billiard.runfile.stream import CsvRecorder, Truncation
 from billiard.scene.display import html_table, scene_rows
 from billiard.scene.scene import scene_to_toml
@@ -22,9 +24,9 @@ __all__ = ["Result", "RunFile"]
 
 
 class RunFile:
-    """A finished run's impact table on disk (``collisions.csv``, or any file
-    :func:`~billiard.runfile.record.read_collisions` reads), read-only, with the recorder
-    interface of a Result. Nothing is read before the columns are asked for.
+    """A finished run's impact table on disk (``collisions.csv`` or ``collisions.npy``, or
+    any file :func:`~billiard.runfile.record.read_collisions` reads), read-only, with the
+    recorder interface of a Result. Nothing is read before the columns are asked for.
 
     Args:
         path: the file.
@@ -51,8 +53,10 @@ class RunFile:
         return self._columns
 
     def write_csv(self, path: str | os.PathLike[str]) -> None:
-        if self.path.suffix != ".csv":
-            write_collisions(path, self.columns())
+        if self.path.suffix == ".npy":
+            from billiard.runfile.npyfile import COLLISIONS, export_csv
+
+            export_csv(self.path, path, COLLISIONS)
         elif Path(path).resolve() != self.path.resolve():
             Path(path).write_bytes(self.path.read_bytes())
 
@@ -79,7 +83,8 @@ class Result:
         counts: impacts per regime of the impact law, and how many of them relaunched
             a ball lying on the surface (``resting``).
         regimes: the impact law's regimes, in the order the summary lists them.
-        path: the streamed CSV file, or None for an in-memory run.
+        path: the streamed file of impacts (collisions.csv or collisions.npy), or None
+            for an in-memory run.
         final_time: simulated time the run reached (s): the last impact, or
             ``run.duration`` when that ended it.
         resumed_from: for a resumed run, the impacts already on disk when it started
@@ -97,7 +102,7 @@ class Result:
     def __init__(
         self,
         scene: Any,
-        recorder: MemoryRecorder | CsvRecorder | RunFile,
+        recorder: MemoryRecorder | CsvRecorder | NpyRecorder | RunFile,
         status: Status | None,
         stop_reason: str | None,
         wall_time: float,
@@ -150,14 +155,15 @@ class Result:
 
     def _side(self, name: str, source: Any) -> Table | None:
         if name not in self._sides:
-            columns = _side_columns(source)
+            columns = _side_columns(source, name)
             self._sides[name] = None if columns is None else Table(name, columns)
         return self._sides[name]
 
     @property
     def side_files(self) -> tuple[Path, ...]:
-        """The files a streamed run wrote beside its CSV file: contacts.csv under
-        ``contact.model = "phases"``, trajectory.csv with a sampling interval."""
+        """The files a streamed run wrote beside its impacts' file: contacts.csv (or
+        .npy) under ``contact.model = "phases"``, trajectory.csv (or .npy) with a
+        sampling interval."""
         return tuple(p for p in (self._contacts, self._trajectory) if isinstance(p, Path))
 
     @property
@@ -352,11 +358,11 @@ def _in_contact_message(scene: Any, mode: str | None) -> str:
     )
 
 
-def _side_columns(source: Any) -> dict[str, np.ndarray] | None:
+def _side_columns(source: Any, name: str) -> dict[str, np.ndarray] | None:
     if source is None:
         return None
     if isinstance(source, (str, os.PathLike)):
-        from billiard.runfile.sidecsv import read_side_csv
+        from billiard.runfile.tables import read_contacts, read_trajectory
 
-        return read_side_csv(source)
+        return (read_contacts if name == "contacts" else read_trajectory)(source)
     return source.columns()

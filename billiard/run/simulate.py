@@ -73,6 +73,8 @@ def simulate(
     on_record: Callable[[int], None] | None = None,
     sample: float | None = None,
     allow_large: bool = False,
+    store: str = "csv",
+    notify: Callable[[str], None] | None = None,
 ) -> Result:
     """Run a scene.
 
@@ -94,6 +96,11 @@ def simulate(
         allow_large: sample even when the trajectory may take more than 1 GB (of
             memory, or of ``trajectory.csv`` with ``out_dir``); see
             :mod:`billiard.run.output_size`.
+        store: with ``out_dir``, the files' format: ``"csv"`` (``collisions.csv``, the
+            default), ``"npy"`` (``collisions.npy``, typed binary rows: see
+            :mod:`billiard.runfile.npyfile`) or ``"auto"`` (binary when the CSV files
+            would be over 100 MB, :mod:`billiard.run.store`).
+        notify: called with a one-line note when ``store="auto"`` chose binary files.
 
     Returns:
         A :class:`Result`; a run that had to stop early (ball escaped, inelastic
@@ -127,7 +134,7 @@ def simulate(
     if out_dir is not None:
         return run_streamed(
             sim, out_dir, collisions=total, progress=progress, on_record=on_record,
-            allow_large=allow_large,
+            allow_large=allow_large, store=store, notify=notify,
         )  # fmt: skip
     recorder = MemoryRecorder()
     contacts = trajectory = None

@@ -1,3 +1,3 @@
-"""Records and the files of a run: impact records and rows, streamed CSV files, side files,
-checkpoints.
+"""Records and the files of a run: impact records and rows, streamed CSV files and their
+binary counterparts (``.npy`` rows), side files, checkpoints.
 """

@@ -15,13 +15,16 @@ tof        time since the previous impact (s); for n = 1 the time since the star
 regime     ``stick``, ``slip`` or ``elastic`` (the low-velocity rule)
 z          tangent angle of the boundary at the contact (rad; pi for the lid)
 energy     mechanical energy just after the impact (J), potential zero at q2 = 0
-wall       index of the wall hit (``0``, ``1``, ...) or ``lid``
+wall       index of the wall hit (``0``, ``1``, ...), ``-1`` for the lid (:data:`LID_WALL`)
 Rt, Rn     impulse on the ball along c1 and c2 (N s)
 s          abscissa of the contact point in the boundary frame (m)
 q3         rotation angle of the ball (rad), the integral of the spin
 =========  ===============================================================================
 
-Floats are written with :func:`repr`, so a CSV file reads back bit for bit.
+Floats are written with :func:`repr`, so a CSV file reads back bit for bit. ``wall`` is an
+integer in the file too; files written before it was (the lid as the word ``lid``) still
+read, the lid as ``-1``. A run may instead be stored as ``collisions.npy``, typed binary
+rows (:mod:`billiard.runfile.npyfile`); :func:`read_collisions` reads either.
 
 A streamed file (:mod:`billiard.runfile.stream`) only ever grows by whole rows; an unterminated
 last line, the remains of a write cut short by a kill, is skipped by the reader here.
@@ -39,7 +42,7 @@ from typing import Any, NamedTuple
 import numpy as np
 
 from billiard.kernels.layout import REGIMES
-from billiard.runfile.rows import column_arrays, format_rows, row_of, wall_label
+from billiard.runfile.rows import LID_WALL, column_arrays, format_rows, row_of, wall_code
 from billiard.scene.userfile import FileRefused, check_regular
 
 __all__ = [
@@ -51,6 +54,7 @@ __all__ = [
     "REQUIRED_COLUMNS",
     "TEXT_COLUMNS",
     "ImpactRecord",
+    "LID_WALL",
     "RunDataError",
     "MemoryRecorder",
     "read_collisions",
@@ -75,7 +79,7 @@ class ImpactRecord(NamedTuple):
     regime: str
     z: float
     energy: float
-    wall: str
+    wall: int
     Rt: float
     Rn: float
     s: float
@@ -114,10 +118,10 @@ TRAJECTORY_COLUMNS: tuple[str, ...] = ("t", "q1", "q2", "v1", "v2", "omega", "en
 COLUMNS: tuple[str, ...] = ImpactRecord._fields
 #: Columns every run file must have for plots and analyses (the first thirteen).
 REQUIRED_COLUMNS: tuple[str, ...] = COLUMNS[:13]
-#: Columns read as text; ``n`` is an integer, every other column a float.
-TEXT_COLUMNS: frozenset[str] = frozenset({"regime", "wall"})
+#: Columns read as text; ``n`` and ``wall`` are integers, every other column a float.
+TEXT_COLUMNS: frozenset[str] = frozenset({"regime"})
 _TEXT = TEXT_COLUMNS | {"mode", "end"}  # the latter two: contacts.csv, trajectory.csv
-_INTEGER = frozenset({"n"})
+_INTEGER = frozenset({"n", "wall"})
 #: Line terminator of the rows written: a plain newline, so that line tools (awk, cut,
 #: sort) see ``0.5`` and not ``0.5\r``. Files written with ``\r\n`` (by older versions)
 #: still read, and a resumed one is continued with its own terminator.
@@ -129,11 +133,15 @@ class RunDataError(ValueError):
     """A run's files cannot be read; the message is one line naming the file."""
 
 
-def _as_arrays(columns: dict[str, list[Any]]) -> dict[str, np.ndarray]:
+def _as_arrays(columns: dict[str, list[Any]], impacts: bool = True) -> dict[str, np.ndarray]:
+    """Arrays of the values of each column: those of ``collisions.csv`` (``impacts``), or
+    of a side table (contacts, samples), whose ``wall`` is text (``a+b``: two walls)."""
     out: dict[str, np.ndarray] = {}
     for name, values in columns.items():
-        if name in _TEXT:
+        if name in _TEXT or (name == "wall" and not impacts):
             out[name] = np.array(values, dtype=str)
+        elif name == "wall":
+            out[name] = np.array([wall_code(v) for v in values], dtype=np.int64)
         elif name in _INTEGER:
             out[name] = np.array(values, dtype=np.int64)
         else:
@@ -190,7 +198,8 @@ class MemoryRecorder:
     def columns(self) -> dict[str, np.ndarray]:
         if self._blocks:
             return column_arrays(self.names, self._blocks)
-        return _as_arrays(dict(zip(self.names, self._data, strict=True)))
+        columns = dict(zip(self.names, self._data, strict=True))
+        return _as_arrays(columns, impacts=self.names == COLUMNS)
 
     def write_csv(self, path: str | os.PathLike[str]) -> None:
         if not self._blocks:
@@ -213,26 +222,49 @@ def _fail(path: str | os.PathLike[str], problem: str) -> RunDataError:
 
 
 def read_collisions(path: str | os.PathLike[str]) -> dict[str, np.ndarray]:
-    """Read a run's ``collisions.csv`` into numpy arrays, one per column.
+    """Read a run's impacts, ``collisions.csv`` or ``collisions.npy``, into numpy arrays,
+    one per column; the file's contents tell which it is (a ``.npy`` file starts with
+    NumPy's magic bytes).
 
-    The first non-blank line that does not start with ``#`` is the header; blank lines
-    and ``#`` comment lines are skipped, and so is an unterminated last row (a write cut
-    short when the run was killed; resuming the run completes it).
+    CSV: the first non-blank line that does not start with ``#`` is the header; blank
+    lines and ``#`` comment lines are skipped, and so is an unterminated last row (a
+    write cut short when the run was killed; resuming the run completes it). A file as
+    billiard writes it is parsed in bulk (:mod:`billiard.runfile.csvbulk`), any other one
+    line by line; both give the same values, bit for bit.
+
+    Binary (:mod:`billiard.runfile.npyfile`): the rows its header counts; the numeric
+    columns are read-only views of the file mapped into memory (nothing is read before
+    it is used), ``regime`` is decoded from its codes.
 
     Returns:
         A dict column name -> 1-D array with one entry per impact, in file order, with
-        the same dtypes as ``Result.columns``: ``n`` int64, ``regime`` and ``wall``
-        strings, every other column of :data:`COLUMNS` float64 in SI units (s, m, m/s,
-        rad/s, J, N s). Extra columns are kept (float64 when every value is a number,
-        else strings). A file with a header and no rows gives arrays of length 0.
+        the same dtypes as ``Result.columns``: ``n`` and ``wall`` int64 (``wall`` -1 for
+        the lid, :data:`LID_WALL`; the word ``lid`` of older CSV files reads as -1),
+        ``regime`` strings, every other column of :data:`COLUMNS` float64 in SI units (s,
+        m, m/s, rad/s, J, N s). Extra columns of a CSV file are kept (float64 when every
+        value is a number, else strings). A file with a header and no rows gives arrays of
+        length 0.
 
     Raises:
         RunDataError: the file is missing or unreadable, has no header, lacks one of
             :data:`REQUIRED_COLUMNS`, has a row with the wrong number of fields, a value
-            that is not of its column's type, or impact times that decrease.
+            that is not of its column's type, or impact times that decrease (CSV); or its
+            binary header is not that of a run file or promises more rows than it holds.
     """
     try:
         check_regular(path)  # /dev/zero or a pipe would be read without end
+        with open(path, "rb") as raw:
+            start = raw.read(len(NPY_MAGIC))
+        if start == NPY_MAGIC:
+            from billiard.runfile.npyfile import COLLISIONS, read_table
+
+            return read_table(path, COLLISIONS)
+        from billiard.runfile.csvbulk import read_bulk
+
+        columns = read_bulk(path, COLUMNS, REQUIRED_COLUMNS)
+        if columns is not None:
+            _check_times(path, columns["t"], None)
+            return columns
         with open(path, newline="", encoding="utf-8") as handle:
             return _read_blocks(path, handle)
     except FileRefused as exc:
@@ -241,6 +273,20 @@ def read_collisions(path: str | os.PathLike[str]) -> dict[str, np.ndarray]:
         raise _fail(path, "file not found") from None
     except (OSError, UnicodeDecodeError) as exc:
         raise _fail(path, f"cannot read: {exc}") from None
+
+
+#: The first bytes of a ``.npy`` file (NumPy's format), by which a binary run file is
+#: told from a CSV one.
+NPY_MAGIC = b"\x93NUMPY"
+
+
+def _check_times(path: str | os.PathLike[str], t: np.ndarray, lines: np.ndarray | None) -> None:
+    """Refuse impact times that decrease; ``lines``: the file's line number of each row
+    (None: the rows are lines 2, 3, ... of a file without blank or comment lines)."""
+    if t.size > 1 and np.any(np.diff(t) < 0):
+        first_bad = int(np.argmax(np.diff(t) < 0)) + 1
+        line = first_bad + 2 if lines is None else int(lines[first_bad])
+        raise _fail(path, f"line {line}: impact times decrease (column t must be non-decreasing)")
 
 
 #: rows parsed at a time: a long run's file is turned into arrays block by block, so
@@ -303,13 +349,11 @@ def _read_blocks(path: str | os.PathLike[str], handle: Any) -> dict[str, np.ndar
                 columns[name] = np.array([float(cell) for cell in cells], dtype=float)
             except ValueError:
                 columns[name] = np.array(cells, dtype=str)
-    if columns["n"].dtype != np.int64:
-        columns["n"] = columns["n"].astype(np.int64)
-    t = columns["t"]
-    if t.size > 1 and np.any(np.diff(t) < 0):
-        first_bad = int(np.argmax(np.diff(t) < 0)) + 1
-        line = int(np.concatenate(numbers)[first_bad])
-        raise _fail(path, f"line {line}: impact times decrease (column t must be non-decreasing)")
+    for name in _INTEGER:
+        if columns[name].dtype != np.int64:
+            columns[name] = columns[name].astype(np.int64)
+    if columns["t"].size > 1:
+        _check_times(path, columns["t"], np.concatenate(numbers))
     return columns
 
 
@@ -346,15 +390,20 @@ def _read_block(
         if name not in COLUMNS:
             parts[name].append(cells)
             continue
-        kind = int if name in _INTEGER else float
+        kind: Any = int if name in _INTEGER else float
+        if name == "wall":
+            kind = wall_code  # an int, or the word lid of files written before
+        dtype = float if kind is float else int
         try:
-            parts[name].append(np.array([kind(cell) for cell in cells], dtype=kind))
+            parts[name].append(np.array([kind(cell) for cell in cells], dtype=dtype))
         except ValueError:
             for (number, _), cell in zip(block, cells, strict=True):
                 try:
                     kind(cell)
                 except ValueError:
-                    what = "an integer" if kind is int else "a number"
+                    what = {int: "an integer", wall_code: "an integer (or lid)"}.get(
+                        kind, "a number"
+                    )
                     raise _fail(
                         path, f"line {number}: column {name}: {cell[:40]!r} is not {what}"
                     ) from None
@@ -383,6 +432,6 @@ def record_of(row: Sequence[float]) -> Any:
         REGIMES[int(row[10])],
         row[11],
         row[12],
-        wall_label(row[13]),
+        int(row[13]),
         *row[14:18],
     )

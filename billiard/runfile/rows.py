@@ -4,7 +4,8 @@
 A run on the kernels hands its rows to the recorders as 2-D float64 arrays, one row per
 impact; these helpers turn them into :class:`~billiard.runfile.record.ImpactRecord` objects,
 into column arrays, and into ``collisions.csv`` lines with exactly the bytes a
-:class:`csv.writer` writes for the records (floats with :func:`repr`).
+:class:`csv.writer` writes for the records (floats with :func:`repr`). The wall code is
+written as the integer it is: the wall's index, ``-1`` for the lid (:data:`LID_WALL`).
 
 Compiled, the lines are written by :func:`billiard.kernels.float_text.format_rows`:
 ``repr``'s bytes, several times faster than ``repr`` itself (formatting rows took most
@@ -27,16 +28,37 @@ __all__ = [
     "column_arrays",
     "format_rows",
     "format_rows_bytes",
+    "LID_WALL",
+    "regime_labels",
     "row_of",
+    "wall_code",
     "wall_label",
 ]
 
 _N, _REGIME, _WALL = 0, 10, 13
 
+#: The ``wall`` column's code of an impact on the lid (the walls are numbered from 0).
+LID_WALL = int(LID_LABEL)
+
+
+def wall_code(wall: Any) -> int:
+    """The ``wall`` column's integer of a wall: an int, or its text as files written
+    before the column was an integer hold it (``"0"``, ``"1"``, ... or ``"lid"``).
+
+    Raises:
+        ValueError: ``wall`` is neither an integer nor ``lid``.
+    """
+    if isinstance(wall, str):
+        text = wall.strip()
+        return LID_WALL if text == "lid" else int(text)
+    if isinstance(wall, float) and not wall.is_integer():
+        raise ValueError(f"wall {wall!r} is not an integer")
+    return int(wall)
+
 
 def wall_label(code: float) -> str:
-    """The ``wall`` column's text of a wall code: ``lid`` or the wall's index."""
-    return "lid" if code == LID_LABEL else str(int(code))
+    """The ``wall`` column's text of a wall code: the integer (``-1`` for the lid)."""
+    return str(int(code))
 
 
 def as_block(buffer: Any, start: int, stop: int) -> np.ndarray:
@@ -52,8 +74,7 @@ def row_of(record: Sequence[Any]) -> list[float]:
     """Inverse of :func:`billiard.runfile.record.record_of`."""
     row = [float(v) if i not in (_REGIME, _WALL) else 0.0 for i, v in enumerate(record)]
     row[_REGIME] = float(REGIMES.index(record[_REGIME]))
-    wall = record[_WALL]
-    row[_WALL] = LID_LABEL if wall == "lid" else float(int(wall))
+    row[_WALL] = float(wall_code(record[_WALL]))
     return row
 
 
@@ -95,8 +116,10 @@ def _constants() -> tuple[np.ndarray, np.ndarray, np.ndarray, int]:
         encoded = [label.encode("ascii") for label in REGIMES]
         labels = np.frombuffer(b"".join(encoded), dtype=np.uint8)
         starts = np.cumsum([0] + [len(label) for label in encoded], dtype=np.int64)
-        lid = np.frombuffer(b"lid", dtype=np.uint8)
-        # n and the wall (an int or "lid"), the regime, the other columns as floats,
+        # the lid's code is written as the integer it is (the formatter's lid argument
+        # holds its bytes)
+        lid = np.frombuffer(str(LID_WALL).encode("ascii"), dtype=np.uint8)
+        # n and the wall (ints), the regime, the other columns as floats,
         # and the commas between the NCOL columns
         row_bytes = (
             2 * max(MAX_INT_BYTES, lid.size)
@@ -145,13 +168,24 @@ def _format_rows_repr(block: np.ndarray, line_end: str) -> str:
     return line_end.join(lines) + line_end
 
 
-def _labels(codes: np.ndarray, label: Any) -> np.ndarray:
-    """String array of ``label(code)`` per entry, as narrow as ``np.array(list, str)``."""
+def regime_labels(codes: np.ndarray) -> np.ndarray:
+    """The ``regime`` column's labels (:data:`~billiard.kernels.layout.REGIMES`) of an
+    array of regime codes, as narrow a string array as ``np.array(labels, str)``: every
+    reader of a run file gives the column this way.
+
+    Raises:
+        ValueError: a code that is not one of the regimes' (nor an integer).
+    """
+    codes = np.asarray(codes)
     if codes.size == 0:
         return np.array([], dtype=str)
-    unique, inverse = np.unique(codes, return_inverse=True)
-    names = np.array([label(code) for code in unique.tolist()], dtype=str)
-    return names[inverse.reshape(codes.shape)]
+    whole = codes.astype(np.int64)
+    if not (np.all(whole == codes) and whole.min() >= 0 and whole.max() < len(REGIMES)):
+        bad = codes[(whole != codes) | (whole < 0) | (whole >= len(REGIMES))][0].item()
+        raise ValueError(f"regime code {bad!r} is not one of 0 to {len(REGIMES) - 1}")
+    present = np.bincount(whole, minlength=len(REGIMES)) > 0
+    width = max(len(label) for label, used in zip(REGIMES, present, strict=True) if used)
+    return np.array(REGIMES, dtype=f"<U{width}")[whole]
 
 
 def column_arrays(names: Sequence[str], blocks: Iterable[np.ndarray]) -> dict[str, np.ndarray]:
@@ -167,9 +201,9 @@ def column_arrays(names: Sequence[str], blocks: Iterable[np.ndarray]) -> dict[st
         if index == _N:
             out[name] = column.astype(np.int64)
         elif index == _REGIME:
-            out[name] = _labels(column, lambda code: REGIMES[int(code)])
+            out[name] = regime_labels(column)
         elif index == _WALL:
-            out[name] = _labels(column, wall_label)
+            out[name] = column.astype(np.int64)
         else:
             out[name] = column
     return out

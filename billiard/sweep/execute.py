@@ -457,7 +457,15 @@ def load_sweep_dir(directory: Path) -> Sweep:
 
 
 #: Files of a ``billiard run`` folder: a sweep there would replace its scene.toml.
-_RUN_FILES = ("collisions.csv", "checkpoint.json", "contacts.csv", "trajectory.csv")
+_RUN_FILES = (
+    "collisions.csv",
+    "collisions.npy",
+    "checkpoint.json",
+    "contacts.csv",
+    "contacts.npy",
+    "trajectory.csv",
+    "trajectory.npy",
+)
 #: Files a sweep writes (besides its definition) that it must not replace unasked.
 _SWEEP_OUTPUTS = (
     SCENE_NAME,

@@ -13,6 +13,7 @@ from typing import Any
 
 import numpy as np
 
+from billiard.runfile.record import LID_WALL
 from billiard.sweep.attractor import classify, contact_class, find_period
 
 __all__ = ["PointTask", "measure_point"]
@@ -134,7 +135,7 @@ def _measure(task: PointTask) -> dict[str, Any]:
         return record
     q2, tof = post["q2"].astype(float), post["tof"].astype(float)
     elastic_share = float(np.mean(post["regime"] == "elastic"))
-    lid_share = float(np.mean(post["wall"] == "lid"))
+    lid_share = float(np.mean(post["wall"] == LID_WALL))
     measured = dict(
         impacts=n,
         total_impacts=total,

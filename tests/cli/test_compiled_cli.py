@@ -75,7 +75,7 @@ def test_user_curve_compiled_equals_interpreted(tmp_path):
 @pytest.mark.slow
 @pytest.mark.parametrize(("name", "drag"), [("wedge-6.6hz", "none"), ("parabola-5.4hz", "fowles")])
 def test_million_impacts_compiled_equals_interpreted(name, drag, tmp_path):
-    args = [name, "--set", f"air.drag={drag}", "--collisions", "1000000"]
+    args = [name, "--set", f"air.drag={drag}", "--collisions", "1000000", "--store", "csv"]
     interpreted, fast = _both(args, tmp_path)
     assert interpreted.endswith("(1000001 lines)"), interpreted
     assert fast == interpreted

@@ -63,6 +63,7 @@ def test_every_command_is_walked():
         "derive",
         "scenes",
         "run",
+        "export",
         "calibrate",
         "plot",
         "lyapunov",

@@ -9,7 +9,7 @@ import pytest
 
 from billiard.errors import GeometryError
 from billiard.run.simulate import simulate
-from billiard.runfile.record import COLUMNS, read_collisions
+from billiard.runfile.record import COLUMNS, LID_WALL, read_collisions
 from billiard.scene.scene import load_scene, replace, with_values
 from billiard.scene.spec import InitialSpec
 
@@ -32,7 +32,7 @@ def test_columns_contract_and_types():
     assert len(result) == 300 and all(len(v) == 300 for v in c.values())
     assert c["n"].tolist() == list(range(1, 301))
     assert set(c["regime"]) <= {"stick", "slip", "elastic"}
-    assert set(c["wall"]) <= {"0", "1", "lid"}
+    assert c["wall"].dtype == np.int64 and set(c["wall"].tolist()) <= {0, 1, LID_WALL}
     assert np.all(np.diff(c["t"]) >= 0.0) and np.all(c["tof"] >= 0.0)
     assert np.allclose(np.cumsum(c["tof"]), c["t"], rtol=0, atol=1e-12)
     assert sum(result.counts[k] for k in ("stick", "slip", "elastic")) == 300
@@ -54,7 +54,7 @@ def test_recorded_quantities_are_consistent():
     un = np.cos(c["z"]) * c["v2"] - np.sin(c["z"]) * c["v1"]
     assert np.allclose(c["u4"], u4, atol=1e-14) and np.allclose(c["un"], un, atol=1e-14)
     # the contact point lies on the curve, under the ball, with the recorded tangent
-    walls = c["wall"] != "lid"
+    walls = c["wall"] != LID_WALL
     assert np.allclose(np.tan(c["z"][walls]), 52.0 * c["s"][walls], rtol=1e-9, atol=1e-12)
     # the rotation angle integrates the spin over each flight
     q3 = np.concatenate([[0.0], np.cumsum(c["omega"][:-1] * c["tof"][1:])])
@@ -229,4 +229,4 @@ def test_one_run_file_format_read_back_with_the_same_dtypes(tmp_path):
     for name in COLUMNS:
         assert memory[name].dtype == read[name].dtype == streamed[name].dtype, name
         np.testing.assert_array_equal(memory[name], read[name])
-    assert read["n"].dtype == np.int64 and read["wall"].dtype.kind == "U"
+    assert read["n"].dtype == np.int64 and read["wall"].dtype == np.int64

@@ -267,6 +267,8 @@ def test_sigint_mid_run_keeps_rows_and_says_how_to_resume(tmp_path, long_referen
         "parabola-5.4hz",
         "--collisions",
         str(LONG),
+        "--store",
+        "csv",  # a run this long would be stored as binary rows by default
         "--out",
         str(out),
         "--no-plot",
@@ -309,6 +311,8 @@ def test_sigkill_mid_run_then_resume(tmp_path, long_reference):
         "parabola-5.4hz",
         "--collisions",
         str(LONG),
+        "--store",
+        "csv",  # a run this long would be stored as binary rows by default
         "--out",
         str(out),
         "--no-plot",

@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 from billiard.run.simulate import Simulation
-from billiard.runfile.record import MemoryRecorder
+from billiard.runfile.record import LID_WALL, MemoryRecorder
 from billiard.scene.scene import load_scene, with_values
 from billiard.status import Status
 
@@ -131,7 +131,7 @@ def test_a_ball_rolling_up_a_wall_meets_the_lid():
     assert reason is None
     level = sim.boundary.lid.level
     assert phases[1].end == "impact" and phases[1].q2_end == pytest.approx(level, abs=1e-12)
-    assert "lid" in set(columns["wall"].tolist())
+    assert LID_WALL in set(columns["wall"].tolist())
     worst = min(clearances(sim, columns, phases), key=lambda item: item[1])
     assert worst[1] >= -GAP_LIMIT, worst
     for p in phases:

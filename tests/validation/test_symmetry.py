@@ -33,6 +33,7 @@ import numpy as np
 import pytest
 
 from billiard.run.simulate import BallState, Simulation, simulate
+from billiard.runfile.record import LID_WALL
 from billiard.scene.scene import load_scene, with_values
 
 SCENES = ["parabola-5.4hz", "hyperbola-4.5hz", "wedge-6.6hz", "hyperbola-5.8hz"]
@@ -97,7 +98,7 @@ def test_mirror_and_restart_impact_by_impact(name, drag):
     sim, sim_mirror = Simulation(scene), Simulation(mirrored(scene))
     # the wedge's two walls trade places; the smooth curves have a single wall
     swap = (
-        {"0": "1", "1": "0", "lid": "lid"} if name.startswith("wedge") else {"0": "0", "lid": "lid"}
+        {0: 1, 1: 0, LID_WALL: LID_WALL} if name.startswith("wedge") else {0: 0, LID_WALL: LID_WALL}
     )
     worst_mirror = worst_restart = 0.0
     for n in range(impacts - 1):
