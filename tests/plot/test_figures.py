@@ -13,6 +13,7 @@ from matplotlib.colors import to_rgba
 from billiard import plot
 from billiard.analysis.camera import camera_filter
 from billiard.plot.flights import positions_at
+from billiard.runfile.record import LID_WALL
 from tests.plot_support import (
     C_CURVE,
     MASS,
@@ -71,9 +72,9 @@ def test_return_map_plots_consecutive_heights(bounce_columns):
 def with_lid_impacts(columns: dict[str, np.ndarray], rows: list[int], height: float):
     """A copy of ``columns`` in which ``rows`` are lid impacts at centre height ``height``."""
     out = {name: np.array(values, copy=True) for name, values in columns.items()}
-    out["wall"] = np.array(["0"] * out["n"].size, dtype="U3")
+    out["wall"] = np.zeros(out["n"].size, dtype=np.int64)
     for row in rows:
-        out["wall"][row] = "lid"
+        out["wall"][row] = LID_WALL
         out["z"][row] = math.pi
         out["q2"][row] = height
     return out

@@ -93,7 +93,7 @@ def test_right_angle_wedge_separates_into_two_conserved_energies():
     assert max(drift_r, drift_l) <= 4 * impacts * EPS
     # both walls were hit many times and the split of energy is far from trivial
     walls = c["wall"]
-    assert np.sum(walls == "0") > 1000 and np.sum(walls == "1") > 1000
+    assert np.sum(walls == 0) > 1000 and np.sum(walls == 1) > 1000
     assert 0.1 < e_r0 / total < 0.9
 
 
