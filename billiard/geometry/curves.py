@@ -24,6 +24,8 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from types import ModuleType
 
+import numpy as np
+
 from billiard.derivation.contenthash import hash_matches
 from billiard.derivation.expr import BUILTIN_CURVES, is_curve_name, parse_curve
 from billiard.geometry.walls import CURVE_FORMAT, Wall
@@ -71,6 +73,22 @@ class CurveModel:
     def f(self, x: float) -> float:
         """Height of the curve at x (m): the maximum of the walls."""
         return max(w.f(x, w.p) for w in self.walls)
+
+    def samples(self, lo: float, hi: float, count: int) -> tuple[np.ndarray, np.ndarray]:
+        """``(x, f(x))`` (m) on ``count`` points from ``lo`` to ``hi`` (m), plus the
+        curve's breakpoints inside that range (so that a kink, e.g. a wedge's vertex, is
+        drawn sharp); f is NaN where the curve is undefined."""
+        grid = np.linspace(lo, hi, count)
+        kinks = [b for b in self.breakpoints if lo < b < hi]
+        if kinks:
+            grid = np.unique(np.concatenate([grid, kinks]))
+        height = np.empty(grid.shape)
+        for i, x in enumerate(grid):
+            try:
+                height[i] = self.f(float(x))
+            except (ValueError, ArithmeticError):
+                height[i] = np.nan
+        return grid, height
 
 
 def is_expression(curve: str) -> bool:

@@ -65,15 +65,4 @@ def boundary_outline(
 ) -> tuple[np.ndarray, np.ndarray]:
     """``(x, f(x))`` (m) on ``count`` points from ``lo`` to ``hi`` (m), plus the curve's
     breakpoints inside that range."""
-    curve = _curve(scene)
-    grid = np.linspace(lo, hi, count)
-    kinks = [b for b in curve.breakpoints if lo < b < hi]
-    if kinks:
-        grid = np.unique(np.concatenate([grid, kinks]))
-    out = np.empty(grid.shape)
-    for i, xi in enumerate(grid):
-        try:
-            out[i] = curve.f(float(xi))
-        except (ValueError, ArithmeticError):
-            out[i] = np.nan
-    return grid, out
+    return _curve(scene).samples(lo, hi, count)

@@ -15,9 +15,10 @@ from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
 
-from billiard.scene.userfile import FileRefused, read_limited
+from billiard.scene.userfile import FileRefused, open_regular, read_limited
 
 __all__ = [
+    "open_checked",
     "CHECKPOINT_FORMAT",
     "CHECKPOINT_VERSION",
     "CheckpointError",
@@ -40,6 +41,23 @@ READABLE_VERSIONS = (2, 3)
 class CheckpointError(ValueError):
     """A run directory cannot be resumed: the checkpoint is missing, corrupt or does not
     match the CSV file or the scene. The message is one line."""
+
+
+def open_checked(path: Path) -> int:
+    """A descriptor of the run file ``path`` for reading, to check it against a
+    checkpoint (the caller closes it).
+
+    Raises:
+        CheckpointError: the file is missing, not a regular file, or cannot be opened.
+    """
+    try:
+        return open_regular(path)
+    except FileNotFoundError:
+        raise CheckpointError(f"{path} is missing") from None
+    except FileRefused as exc:
+        raise CheckpointError(f"{path} {exc.reason}") from None
+    except OSError as exc:
+        raise CheckpointError(f"{path} cannot be read: {exc.strerror or exc}") from None
 
 
 def _fsync_directory(directory: Path) -> None:

@@ -30,7 +30,7 @@ from typing import Any
 
 import numpy as np
 
-from billiard.runfile.checkpoint import CheckpointError
+from billiard.runfile.checkpoint import CheckpointError, open_checked
 from billiard.runfile.csvfile import (
     RowMismatchError,
     Truncation,
@@ -52,7 +52,6 @@ from billiard.runfile.npyfile import (
     rows_of_records,
 )
 from billiard.runfile.rows import NCOL, row_of
-from billiard.scene.userfile import FileRefused, open_regular
 
 __all__ = ["NpyMark", "NpyRecorder", "SideNpy", "check_side_npy"]
 
@@ -517,14 +516,7 @@ def check_side_npy(path: Path, table: Table, size: int, crc32: int | None) -> in
         CheckpointError: the file is missing, not a regular file, not a binary file of
             ``table``, shorter than ``size``, or its rows before it were changed.
     """
-    try:
-        fd = open_regular(path)
-    except FileNotFoundError:
-        raise CheckpointError(f"{path} is missing") from None
-    except FileRefused as exc:
-        raise CheckpointError(f"{path} {exc.reason}") from None
-    except OSError as exc:
-        raise CheckpointError(f"{path} cannot be read: {exc.strerror or exc}") from None
+    fd = open_checked(path)
     head = header_size(table.dtype)
     try:
         _check_header(path, _read_at(fd, head, 0), table)

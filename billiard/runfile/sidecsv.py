@@ -15,10 +15,10 @@ from typing import Any
 
 import numpy as np
 
-from billiard.runfile.checkpoint import CheckpointError
+from billiard.runfile.checkpoint import CheckpointError, open_checked
 from billiard.runfile.csvfile import prefix_crc32
 from billiard.runfile.record import _format
-from billiard.scene.userfile import FileRefused, open_regular, read_limited
+from billiard.scene.userfile import read_limited
 
 __all__ = ["CONTACTS_NAME", "TRAJECTORY_NAME", "SideCsv", "check_side", "read_side_csv"]
 
@@ -114,14 +114,7 @@ def check_side(path: Path, size: int, crc32: int | None) -> int:
         CheckpointError: the file is missing, not a regular file, shorter than ``size``,
             or its first ``size`` bytes were changed.
     """
-    try:
-        fd = open_regular(path)
-    except FileNotFoundError:
-        raise CheckpointError(f"{path} is missing") from None
-    except FileRefused as exc:
-        raise CheckpointError(f"{path} {exc.reason}") from None
-    except OSError as exc:
-        raise CheckpointError(f"{path} cannot be read: {exc.strerror or exc}") from None
+    fd = open_checked(path)
     try:
         info = os.fstat(fd)
         if info.st_size < size:

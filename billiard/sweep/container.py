@@ -40,16 +40,7 @@ def wall_outline(scene: Scene, lo: float, hi: float, count: int = 801) -> tuple[
     """
     curve = load_curve(scene.boundary.curve, dict(scene.boundary.parameters))
     dx, dy = start_offset(scene)
-    grid = np.linspace(lo - dx, hi - dx, count)  # the boundary's own x
-    kinks = [b for b in curve.breakpoints if lo - dx < b < hi - dx]
-    if kinks:
-        grid = np.unique(np.concatenate([grid, kinks]))
-    height = np.empty(grid.shape)
-    for i, x in enumerate(grid):
-        try:
-            height[i] = curve.f(float(x))
-        except (ValueError, ArithmeticError):
-            height[i] = np.nan
+    grid, height = curve.samples(lo - dx, hi - dx, count)  # in the boundary's own x
     return grid + dx, height + dy
 
 
