@@ -38,7 +38,11 @@ def in_tmp(tmp_path, monkeypatch):
 # run
 
 
-@pytest.mark.parametrize("value", ["nan", "0", "-1", "inf", "abc", "1/0"])
+@pytest.mark.parametrize(
+    "value",
+    # each refusal starts a process: two in the default suite, the rest with the slow tests
+    ["nan", "0", *(pytest.param(v, marks=pytest.mark.slow) for v in ("-1", "inf", "abc", "1/0"))],
+)
 def test_run_frame_interval_is_checked_before_the_run(in_tmp, capsys, value):
     out = in_tmp / "out"
     code = main(["run", "parabola-5.4hz", "--collisions", "5", "--out", str(out)])

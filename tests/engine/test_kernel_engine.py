@@ -43,8 +43,21 @@ def _first_difference(a: bytes, b: bytes) -> str:
     return f"lengths {len(a)} and {len(b)}"
 
 
+#: The cases of the default suite: each scene once, and the drag kernels on the parabola;
+#: the other four pairs run with the slow tests (the kernels they use are covered here).
+DEFAULT_CASES = {"parabola-5.4hz-fowles", "wedge-6.6hz-none", "hyperbola-5.8hz-none"}
+
+
 @pytest.fixture(
-    scope="module", params=[pytest.param(case.values, id=case.id) for case in pinned_cases()]
+    scope="module",
+    params=[
+        pytest.param(
+            case.values,
+            id=case.id,
+            marks=() if case.id in DEFAULT_CASES else (pytest.mark.slow,),
+        )
+        for case in pinned_cases()
+    ],
 )
 def both_runs(request, tmp_path_factory) -> tuple[str, bytes, bytes]:
     """The pin's key and the collisions.csv bytes of one paper scene, interpreted and
