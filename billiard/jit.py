@@ -254,6 +254,7 @@ _running_lock = threading.Lock()
 #: :func:`on_first_compile`), and whether this process has called it
 _compile_all: Callable[[], Any] | None = None
 _compile_all_called = False
+_compile_all_lock = threading.Lock()
 
 
 def on_first_compile(hook: Callable[[], Any] | None) -> None:
@@ -320,16 +321,19 @@ def compiling(function: Any) -> Iterator[None]:
 
 
 def _first_compile() -> None:
-    """The hook of :func:`on_first_compile`, once per process (not within a block)."""
+    """The hook of :func:`on_first_compile`, once per process (not within a block); a
+    block of another thread meanwhile waits for it, so that it loads what the hook
+    compiled rather than compile it a second time."""
     global _compile_all_called
-    hook = _compile_all
-    if hook is None or _compile_all_called or _running:
+    if _compile_all is None or _compile_all_called or _running:
         return
-    with _running_lock:
+    with _compile_all_lock:
         if _compile_all_called:
             return
-        _compile_all_called = True
-    hook()
+        try:
+            _compile_all()
+        finally:
+            _compile_all_called = True
 
 
 @contextlib.contextmanager

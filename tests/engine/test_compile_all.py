@@ -70,6 +70,34 @@ def test_the_hook_runs_once_before_the_first_block(monkeypatch, capsys):
 
 
 @compiled
+def test_a_block_in_another_thread_waits_for_the_hook(monkeypatch):
+    import threading
+
+    from billiard.kernels import rest
+
+    events = []
+
+    def hook():
+        events.append("hook starts")
+        time.sleep(0.3)
+        events.append("hook ends")
+
+    def block(name):
+        with jit.compiling(rest.offset_heights):
+            events.append(name)
+
+    monkeypatch.setattr(jit, "_compile_all", hook)
+    monkeypatch.setattr(jit, "_compile_all_called", False)
+    first = threading.Thread(target=block, args=("first block",))
+    first.start()
+    time.sleep(0.1)  # within the hook
+    block("second block")
+    first.join()
+    assert events[:2] == ["hook starts", "hook ends"]
+    assert sorted(events[2:]) == ["first block", "second block"]
+
+
+@compiled
 def test_the_engine_registers_the_hook():
     assert jit._compile_all is compile_all.compile_all
 
