@@ -48,6 +48,7 @@ __all__ = [
     "KERNEL_SOURCES",
     "STAMP_FILE",
     "all_compiled",
+    "cache_stamped",
     "cfunc",
     "compile_family",
     "compiling",
@@ -142,6 +143,12 @@ def _refresh(folder: Path, text: str) -> bool:
     part.write_text(text, encoding="ascii")
     os.replace(part, stamp)
     return True
+
+
+def cache_stamped() -> bool:
+    """True when the kernels' cache has a stamp for these sources: numba can cache
+    them (False: no folder could be written, each process compiles what it needs)."""
+    return _stamped_folder(_KERNELS) is not None
 
 
 def _stamped_folder(kernels: Path) -> Path | None:

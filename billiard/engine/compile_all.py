@@ -14,10 +14,12 @@ process; two processes compile on two cores at once.
 
 Not compiled here (each on its first use, with its own notice): method ``rk4``'s fixed
 steps, a curve with more than two walls, and the wall functions of a curve other than
-the wedge and the parabola (well under a second each). Where no worker can be started,
-nothing is marked and each kernel compiles on its first use as before; a worker whose run
-fails leaves what it did not reach to compile on first use, and the cache is marked all
-the same (the workers are not started again in every process).
+the wedge and the parabola (well under a second each). Where numba cannot cache (no
+folder for the kernels' cache can be written) nothing is compiled ahead, and where no
+worker can be started nothing is marked: each kernel compiles on its first use as
+before. A worker whose run fails leaves what it did not reach to compile on first use,
+and the cache is marked all the same (the workers are not started again in every
+process).
 
 :func:`run_jobs` runs jobs in this process: what a worker does.
 """
@@ -112,6 +114,8 @@ def compile_all() -> bool:
     (or this is a worker); returns True when the workers ran and the cache is marked."""
     if not _jit.ENABLED or os.environ.get(_WORKER_ENV) or _jit.all_compiled():
         return False
+    if not _jit.cache_stamped():
+        return False  # nothing can be cached: each process compiles what it needs
     print(ALL_NOTICE, file=sys.stderr, flush=True)
     started = time.perf_counter()
     env = {**os.environ, _WORKER_ENV: "1"}

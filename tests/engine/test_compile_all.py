@@ -49,6 +49,10 @@ def test_a_marked_cache_or_a_worker_starts_no_compile(cache_dir, monkeypatch, ca
     (cache_dir / jit.ALL_COMPILED_FILE).unlink()
     monkeypatch.setenv("BILLIARD_COMPILE_WORKER", "1")
     assert compile_all.compile_all() is False
+    monkeypatch.delenv("BILLIARD_COMPILE_WORKER")
+    (cache_dir / jit.STAMP_FILE).unlink()  # no stamp: numba cannot cache here
+    assert not jit.cache_stamped()
+    assert compile_all.compile_all() is False
     assert capsys.readouterr().err == ""
 
 
