@@ -19,13 +19,18 @@ the simulated time it reached, and is not compared.
 from __future__ import annotations
 
 import math
+import os
 import statistics
+import subprocess
+import sys
+import tempfile
 import time
 from collections.abc import Callable
 from dataclasses import dataclass
 
 from billiard.generated import contact as _c
 
+import billiard
 from billiard.engine.simulation import Simulation
 from billiard.runfile.record import MemoryRecorder
 from billiard.scene.scene import PAPER_SCENES, Scene, load_scene, scene_from_dict, with_values
@@ -37,6 +42,14 @@ MODELS = ("impacts", "phases")
 CHATTER_SHARE = 0.5
 #: the issue's target there: a contact phase at least this many times cheaper
 TARGET = 10.0
+#: the target on the paper's scenes: phases never dearer than the hops they replace
+PAPER_TARGET = 1.0
+#: the target on one contact phase, all in (us of CPU)
+PHASE_TARGET_US = 15.0
+#: the cases whose phases run makes at least this many contact phases give its cost
+PHASE_COUNT = 100
+#: the target on the first-use compile of every kernel (s of wall time)
+COMPILE_TARGET = 20.0
 #: a ratio within this of 1 is "about equal": the spread of single times on this machine
 NOISE = 0.1
 #: the flat floor of the drop and table cases (derived on first use, as in the tests)
@@ -56,6 +69,13 @@ class Case:
     what: str  # one line for the table
     build: Callable[[str], Scene]  # the scene under a contact model
     longest: float = math.inf  # s, the case's own limit on the simulated duration
+
+    @property
+    def target(self) -> float:
+        """The least ratio impacts / phases the issue asks for: >= 1x on the paper's
+        scenes, >= 10x on the closed-form cases (where chatter, rest or a contact
+        phase dominates)."""
+        return PAPER_TARGET if self.kind == "paper" else TARGET
 
 
 def _with_model(scene: Scene, model: str, **changes) -> Scene:
@@ -264,7 +284,13 @@ def measure_case(
     for _ in range(repeats):
         for m in models:
             runs[m].append(run_once(scenes[m], duration, max_impacts))
-    out: dict = {"case": case.name, "kind": case.kind, "what": case.what, "duration": duration}
+    out: dict = {
+        "case": case.name,
+        "kind": case.kind,
+        "what": case.what,
+        "duration": duration,
+        "target": case.target,
+    }
     for m in models:
         first = dict(runs[m][0])
         cpus = [r["cpu"] for r in runs[m]]
@@ -288,7 +314,19 @@ def measure_case(
             (a["cpu_per_s"] / b["cpu_per_s"] if b["cpu_per_s"] > 0 else math.inf) if both else None
         )
         out["chatter"] = a["resting_share"] >= CHATTER_SHARE
+        out["phase_us"] = phase_cost(a, b)
     return out
+
+
+def phase_cost(impacts: dict, phases: dict) -> float | None:
+    """CPU (us) of one contact phase all in, from the phases run: its CPU less what its
+    impacts cost at the impact model's CPU per impact in the same case, over its contact
+    phases; None with fewer than :data:`PHASE_COUNT` phases (a few phases that each last
+    seconds do not measure the cost of one)."""
+    if phases["phases"] < PHASE_COUNT or not impacts["impacts"]:
+        return None
+    per_impact = impacts["cpu"] / impacts["impacts"]
+    return 1e6 * (phases["cpu"] - per_impact * phases["impacts"]) / phases["phases"]
 
 
 def measure(cfg) -> dict:
@@ -307,8 +345,16 @@ def measure(cfg) -> dict:
             f"{'-' if ratio is None else f'{ratio:.3g}'} ({time.perf_counter() - began:.0f} s)",
             flush=True,
         )
+    began = time.perf_counter()
+    compiled = measure_compile()
+    print(
+        f"  contact first-use compile: {compiled['compile_s']:.1f} s, "
+        f"{compiled['waits']} wait(s) ({time.perf_counter() - began:.0f} s)",
+        flush=True,
+    )
     return {
         "rows": rows,
+        "compile": compiled,
         "repeats": cfg.contact_repeats,
         "paper_duration": cfg.contact_paper_duration,
         "duration": cfg.contact_duration,
@@ -347,3 +393,87 @@ def verdict(rows: list[dict]) -> dict:
         "equal": [r["case"] for r in equal],
         "met": bool(compared) and not short,
     }
+
+
+#: the runs of the first-use compile, in a fresh cache, one process each: the first
+#: impacts-model run of a paper scene, then one with air drag, then one under phases,
+#: then the first again (warm: what the first costs without compiling)
+COMPILE_RUNS: tuple[tuple[str, tuple[str, ...]], ...] = (
+    ("wedge-6.6hz", ()),
+    ("parabola-5.4hz", ()),
+    ("wedge-6.6hz", ("--set", "contact.model=phases")),
+    ("wedge-6.6hz", ()),
+)
+#: what a compile notice starts with (billiard.jit, billiard.engine.compile_all)
+_NOTICE = "billiard: compiling"
+
+
+def measure_compile() -> dict:
+    """The first-use compile: :data:`COMPILE_RUNS` as ``billiard run SCENE --collisions
+    100`` in fresh processes, with an empty numba cache (``NUMBA_CACHE_DIR`` in a new
+    folder); each run's wall time (s) and compile notices. The compile is the first
+    run's wall time less the last's (the same run, warm); the waits are the runs that
+    printed a notice."""
+    root = str(os.path.dirname(os.path.dirname(os.path.abspath(billiard.__file__))))
+    runs = []
+    with tempfile.TemporaryDirectory(prefix="billiard-bench-compile-") as folder:
+        env = {**os.environ, "NUMBA_CACHE_DIR": os.path.join(folder, "cache")}
+        env["PYTHONPATH"] = os.pathsep.join(p for p in (root, env.get("PYTHONPATH")) if p)
+        env.pop("NUMBA_DISABLE_JIT", None)
+        for i, (scene, extra) in enumerate(COMPILE_RUNS):
+            command = [sys.executable, "-m", "billiard.cli", "run", scene, *extra]
+            command += ["--collisions", "100", "--no-plot", "--out", os.path.join(folder, str(i))]
+            began = time.perf_counter()
+            done = subprocess.run(command, env=env, cwd=folder, capture_output=True, text=True)
+            wall = time.perf_counter() - began
+            notices = [x for x in done.stderr.splitlines() if x.startswith(_NOTICE)]
+            runs.append(
+                {
+                    "run": " ".join([scene, *extra]),
+                    "wall": wall,
+                    "notices": notices,
+                    "ok": done.returncode == 0,
+                }
+            )
+    return {
+        "runs": runs,
+        "compile_s": runs[0]["wall"] - runs[-1]["wall"],
+        "waits": sum(bool(r["notices"]) for r in runs),
+        "target": COMPILE_TARGET,
+    }
+
+
+def case_target(row: dict) -> float:
+    """The ratio target of a measured case (results saved before targets were per case:
+    from its kind)."""
+    return row.get("target") or (PAPER_TARGET if row["kind"] == "paper" else TARGET)
+
+
+def ratio_targets(rows: list[dict], kind: str) -> dict:
+    """The ratio target on the cases of ``kind`` ("paper", "closed form"): the target,
+    the cases compared, those short of it and those not compared."""
+    mine = [r for r in rows if r["kind"] == kind]
+    compared = [r for r in mine if r.get("ratio") is not None]
+    target = case_target(mine[0]) if mine else (PAPER_TARGET if kind == "paper" else TARGET)
+    return {
+        "target": target,
+        "compared": [r["case"] for r in compared],
+        "short": [r["case"] for r in compared if r["ratio"] < case_target(r)],
+        "not_compared": [r["case"] for r in mine if r.get("ratio") is None],
+        "met": bool(compared)
+        and all(r["ratio"] >= case_target(r) for r in compared)
+        and len(compared) == len(mine),
+    }
+
+
+def phase_costs(rows: list[dict]) -> list[tuple[str, float]]:
+    """(case, us of CPU per contact phase all in) where the phases run made enough
+    phases to tell (:func:`phase_cost`)."""
+    out = []
+    for r in rows:
+        us = r.get("phase_us")
+        if us is None and "impacts" in r and "phases" in r:
+            us = phase_cost(r["impacts"], r["phases"])
+        if us is not None:
+            out.append((r["case"], us))
+    return out

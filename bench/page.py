@@ -107,18 +107,7 @@ def key_figures(results: dict) -> str:
     if "throughput" in s and "compiled_startup" in s["throughput"]:
         rows += _throughput_rows(s["throughput"])
     if "contact" in s:
-        c = s["contact"]
-        v = contact_mod.verdict(c["rows"])
-        by = {r["case"]: r for r in c["rows"]}
-        ratios = [by[n]["ratio"] for n in v["compared"]]
-        if ratios:
-            rows.append(
-                [
-                    "contact phases against the hops they replace, where chatter dominates",
-                    f"CPU of the impacts over the phases: {_span(ratios, '.3g', 'x')}",
-                    f">= {c['target']:g}x: met in {len(ratios) - len(v['short'])} of {len(ratios)}",
-                ]
-            )
+        rows += report.contact_targets(s["contact"])
     if "io" in s:
         rows += runio.target_rows(s["io"])
     verdicts = [row[2] for row in report.target_rows(results)]
@@ -589,15 +578,25 @@ def section_contact(c: dict, command: str) -> str:
             r["case"],
             f"{100 * r['impacts']['resting_share']:.0f} %",
             report.ratio_text(r.get("ratio")),
+            _case_verdict(r),
         ]
         for r in c["rows"]
     ]
     parts.append(
-        table(["case", 'impacts that relaunch a resting ball ("impacts")', "ratio"], rows) + "\n"
+        table(["case", 'impacts that relaunch a resting ball ("impacts")', "ratio", "target"], rows)
+        + "\n"
     )
     parts.append(report.contact_findings(c) + "\n")
     parts.append(CONTACT_CONCLUSIONS)
     return "\n".join(parts)
+
+
+def _case_verdict(row: dict) -> str:
+    """A case's ratio target and whether it is met."""
+    target = contact_mod.case_target(row)
+    if row.get("ratio") is None:
+        return f">= {target:g}x: not compared"
+    return f">= {target:g}x: {'met' if row['ratio'] >= target else 'not met'}"
 
 
 CONTACT_CONCLUSIONS = """What it means: a contact phase pays where it replaces the hops of a

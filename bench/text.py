@@ -200,6 +200,19 @@ requested duration and the rest of it counts as time in contact (the "ended" col
 says "at rest"). A run that
 stops for another reason (an inelastic collapse, the impact cap) is measured over the
 time it reached and not compared.
+
+The targets: the ratio >= 1x on each paper scene (phases never dearer than the hops they
+replace) and >= 10x on each closed-form case (where rest, chatter or one long phase
+dominates); a case not compared misses its target. One contact phase, all in: the CPU of
+the phases run less what its impacts cost at the impact model's CPU per impact in the
+same case, over its contact phases, on the cases with at least 100 phases (the paper's
+chaotic scenes; a closed-form case makes one phase, which measures its integration, not
+the cost of a phase); target <= 15 us. The first-use compile: `billiard run SCENE
+--collisions 100 --no-plot` in fresh processes with an empty numba cache
+(`NUMBA_CACHE_DIR` in a new folder): the wedge, then the parabola (air drag, one wall),
+then the wedge under phases, then the wedge again; the compile is the first run's wall
+time less the last's, the waits are the runs that printed a compile notice; target
+<= 20 s in one wait.
 """
 
 CONTACT_AFTER = """Why the ratios are what they are. Both models make their impacts on the

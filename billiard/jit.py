@@ -41,17 +41,22 @@ from pathlib import Path
 from typing import Any, TypeVar
 
 __all__ = [
+    "ALL_COMPILED_FILE",
     "COMPILED_NOTICE",
     "COMPILE_NOTICE",
     "ENABLED",
     "KERNEL_SOURCES",
     "STAMP_FILE",
+    "all_compiled",
+    "cache_stamped",
     "cfunc",
     "compile_family",
     "compiling",
     "jit",
     "kernel_source_hash",
+    "mark_all_compiled",
     "numba_problem",
+    "on_first_compile",
     "refresh_kernel_cache",
 ]
 
@@ -66,6 +71,9 @@ KERNEL_SOURCES = (
 #: the stamp of the kernels' cache: the :func:`kernel_source_hash` (hex) their cache
 #: was last invalidated for, in the kernels' ``__pycache__``
 STAMP_FILE = "billiard-kernels.sha256"
+#: beside the stamp: the stamp's text once every kernel a run can need has been
+#: compiled into that cache together (:func:`mark_all_compiled`); removed with the cache
+ALL_COMPILED_FILE = "billiard-kernels.compiled"
 _source_hash: bytes | None = None
 
 
@@ -127,6 +135,7 @@ def _refresh(folder: Path, text: str) -> bool:
     except (OSError, UnicodeDecodeError):
         pass  # none yet, or unreadable: removed below
     folder.mkdir(parents=True, exist_ok=True)
+    (folder / ALL_COMPILED_FILE).unlink(missing_ok=True)
     for pattern in ("*.nbi", "*.nbc"):
         for path in folder.glob(pattern):
             path.unlink(missing_ok=True)
@@ -134,6 +143,58 @@ def _refresh(folder: Path, text: str) -> bool:
     part.write_text(text, encoding="ascii")
     os.replace(part, stamp)
     return True
+
+
+def cache_stamped() -> bool:
+    """True when the kernels' cache has a stamp for these sources: numba can cache
+    them (False: no folder could be written, each process compiles what it needs)."""
+    return _stamped_folder(_KERNELS) is not None
+
+
+def _stamped_folder(kernels: Path) -> Path | None:
+    """The folder of :func:`_cache_folders` whose stamp reads the kernels' source hash
+    (the cache numba uses now), or None."""
+    text = kernel_source_hash().hex() + "\n"
+    for folder in _cache_folders(kernels):
+        try:
+            if (folder / STAMP_FILE).read_text(encoding="ascii") == text:
+                return folder
+        except (OSError, UnicodeDecodeError):
+            continue
+    return None
+
+
+def _mark(stamp: str) -> str:
+    """The text of the mark for a stamp's text: the stamp and numba's version (a new
+    numba compiles anew)."""
+    return f"{stamp}numba {getattr(numba, '__version__', '')}\n"
+
+
+def all_compiled() -> bool:
+    """True when every kernel a run can need is in numba's cache for these sources (the
+    mark of :func:`mark_all_compiled` beside the stamp reads the stamp's text)."""
+    folder = _stamped_folder(_KERNELS)
+    if folder is None:
+        return False
+    try:
+        stamp = (folder / STAMP_FILE).read_text(encoding="ascii")
+        return (folder / ALL_COMPILED_FILE).read_text(encoding="ascii") == _mark(stamp)
+    except (OSError, UnicodeDecodeError):
+        return False
+
+
+def mark_all_compiled() -> None:
+    """Record beside the stamp that every kernel a run can need is now in the cache
+    (nothing where the folder cannot be written: the next process compiles them again)."""
+    folder = _stamped_folder(_KERNELS)
+    if folder is None:
+        return
+    try:
+        part = folder / f"{ALL_COMPILED_FILE}.{os.getpid()}.part"
+        part.write_text(_mark((folder / STAMP_FILE).read_text(encoding="ascii")), encoding="ascii")
+        os.replace(part, folder / ALL_COMPILED_FILE)
+    except (OSError, UnicodeDecodeError):
+        pass
 
 
 def _cache_folders(kernels: Path) -> list[Path]:
@@ -196,6 +257,20 @@ _announced: set[str] = set()
 #: (numba compiles one function at a time: the others wait for it, or are within it)
 _running = 0
 _running_lock = threading.Lock()
+#: what compiles every kernel a run can need, together (set by the engine:
+#: :func:`on_first_compile`), and whether this process has called it
+_compile_all: Callable[[], Any] | None = None
+_compile_all_called = False
+_compile_all_lock = threading.Lock()
+
+
+def on_first_compile(hook: Callable[[], Any] | None) -> None:
+    """Have ``hook`` called once per process, before the first block of
+    :func:`compiling`: it compiles every kernel a run can need at once (one notice, one
+    wait) unless they are all in the cache already, so that the blocks that follow load
+    them. None: no hook (each block compiles what it needs, with its own notice)."""
+    global _compile_all
+    _compile_all = hook
 
 
 def compile_family(function: Any) -> str | None:
@@ -237,6 +312,7 @@ def compiling(function: Any) -> Iterator[None]:
         yield
         return
     _ready()
+    _first_compile()
     with _running_lock:
         _running += 1
         first = _running == 1
@@ -249,6 +325,22 @@ def compiling(function: Any) -> Iterator[None]:
     finally:
         with _running_lock:
             _running -= 1
+
+
+def _first_compile() -> None:
+    """The hook of :func:`on_first_compile`, once per process (not within a block); a
+    block of another thread meanwhile waits for it, so that it loads what the hook
+    compiled rather than compile it a second time."""
+    global _compile_all_called
+    if _compile_all is None or _compile_all_called or _running:
+        return
+    with _compile_all_lock:
+        if _compile_all_called:
+            return
+        try:
+            _compile_all()
+        finally:
+            _compile_all_called = True
 
 
 @contextlib.contextmanager

@@ -6,9 +6,11 @@ progress.
 :mod:`~billiard.engine.event_step` and :mod:`~billiard.engine.contact_phases` (one event,
 and the contact phases, on the models' classes), :mod:`~billiard.engine.state` (the ball
 and the engine state), :mod:`~billiard.engine.ctx` (the kernels' state vector from a
-simulation), :mod:`~billiard.engine.interrupt` and :mod:`~billiard.engine.progress`.
+simulation), :mod:`~billiard.engine.interrupt` and :mod:`~billiard.engine.progress`;
+:mod:`~billiard.engine.compile_all` (every kernel compiled together, once).
 """
 
+from billiard.engine import compile_all as _compile_all  # noqa: F401  (the first-compile hook)
 from billiard.engine.simulation import Simulation
 
 __all__ = ["Simulation"]

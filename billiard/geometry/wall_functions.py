@@ -12,6 +12,7 @@ from typing import Any
 from billiard import jit as _jit
 
 __all__ = [
+    "WALL_SLOTS",
     "WallFunction",
     "WallTable",
     "near_functions",
@@ -19,6 +20,11 @@ __all__ = [
     "wall_functions",
 ]
 
+#: the entries of each row of a :class:`WallTable` at least: a curve with fewer walls
+#: has its last wall's functions repeated (never called: the kernels call a wall by its
+#: index), so that every curve of up to this many walls gives the kernels one type and
+#: they compile once for all of them (the paper's curves have one or two walls)
+WALL_SLOTS = 2
 _SIGNATURES: dict[int, Any] = {}
 _compiled_walls: dict[Any, Any] = {}
 
@@ -39,14 +45,17 @@ class WallTable(tuple):
     item by item on every call of a compiled kernel, some microseconds per function,
     which a contact phase, called once or more per impact, would pay each time. The
     type is given to numba by its documented typing hook
-    (``numba.extending.typeof_impl``)."""
+    (``numba.extending.typeof_impl``). Rows shorter than :data:`WALL_SLOTS` are
+    padded with their last entry."""
 
     numba_type: Any
 
     def __new__(cls, rows: Any) -> WallTable:
         import numba
 
-        table = super().__new__(cls, (tuple(row) for row in rows))
+        rows = [tuple(row) for row in rows]
+        rows = [row + row[-1:] * (WALL_SLOTS - len(row)) for row in rows]
+        table = super().__new__(cls, rows)
         table.numba_type = numba.typeof(tuple(table))
         return table
 

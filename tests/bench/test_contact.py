@@ -136,3 +136,52 @@ def test_the_report_shows_the_measured_case(bowl):
     assert "| bowl at rest | impacts |" in text
     assert ratio_text(bowl["ratio"]) in text  # as the report formats a ratio
     assert "billiard bench --only contact" in text
+
+
+def case(name, kind, ratio):
+    return {"case": name, "kind": kind, "ratio": ratio, "target": 1.0 if kind == "paper" else 10.0}
+
+
+def test_the_targets_are_per_kind_with_met_or_not():
+    rows = [
+        case("wedge", "paper", 0.2),
+        case("bowl", "paper", 1.5),
+        case("rest", "closed form", 80.0),
+        case("table", "closed form", 12.0),
+        case("slide", "closed form", None),
+    ]
+    paper = contact.ratio_targets(rows, "paper")
+    assert (paper["target"], paper["short"], paper["met"]) == (1.0, ["wedge"], False)
+    closed = contact.ratio_targets(rows, "closed form")
+    assert closed["compared"] == ["rest", "table"] and closed["short"] == []
+    assert closed["not_compared"] == ["slide"] and not closed["met"]  # one not compared
+    assert contact.ratio_targets(rows[2:4], "closed form")["met"]
+    # results saved before the targets were per case: from the kind
+    assert contact.case_target({"kind": "paper"}) == contact.PAPER_TARGET
+    assert contact.case_target({"kind": "closed form"}) == contact.TARGET
+
+
+def test_a_phase_costs_the_phases_run_less_its_impacts_over_its_phases():
+    impacts = {"cpu": 0.02, "impacts": 10_000}  # 2 us per impact
+    phases = {"cpu": 0.05, "impacts": 5_000, "phases": 400}
+    assert contact.phase_cost(impacts, phases) == pytest.approx(1e6 * (0.05 - 0.01) / 400)
+    assert contact.phase_cost(impacts, {**phases, "phases": contact.PHASE_COUNT - 1}) is None
+    rows = [{"case": "wedge", "impacts": impacts, "phases": phases}]
+    assert contact.phase_costs(rows) == [("wedge", pytest.approx(100.0))]
+
+
+def test_the_targets_table_judges_the_phase_cost_and_the_compile():
+    from bench.report import contact_targets
+
+    rows = [case("wedge", "paper", 1.2), case("rest", "closed form", 50.0)]
+    rows[0]["phase_us"] = 12.0
+    runs = [{"run": "wedge-6.6hz", "wall": 19.0, "notices": ["billiard: compiling"], "ok": True}]
+    runs.append({"run": "wedge-6.6hz", "wall": 1.0, "notices": [], "ok": True})
+    compiled = {"runs": runs, "compile_s": 18.0, "waits": 1, "target": 20.0}
+    c = {"rows": rows, "compile": compiled}
+    verdicts = [row[2] for row in contact_targets(c)]
+    assert verdicts == ["met", "met", "met", "met"]
+    rows[0]["phase_us"], compiled["waits"] = 16.0, 2
+    verdicts = [row[2] for row in contact_targets(c)]
+    assert verdicts[2:] == ["not met in 1 of 1", "not met"]
+    assert len(contact_targets({"rows": rows})) == 3  # no compile measured: no row

@@ -20,8 +20,10 @@ compiled = pytest.mark.skipif(not jit.ENABLED, reason=f"numba unavailable: {jit.
 
 @pytest.fixture
 def fresh_notices(monkeypatch):
-    """No family announced yet in this process, short delays."""
+    """No family announced yet in this process, short delays, no compile of every
+    kernel at the first block (tests/engine/test_compile_all.py tests that)."""
     monkeypatch.setattr(jit, "_announced", set())
+    monkeypatch.setattr(jit, "_compile_all_called", True)
     monkeypatch.setattr(jit, "COMPILE_NOTICE_AFTER", 0.05)
 
 

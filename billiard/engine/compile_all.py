@@ -1,0 +1,142 @@
+"""Every kernel a run can need, compiled together: one notice and one wait, once per
+install or update, instead of a wait for each family of kernels on the first run that
+needs it (the impact loop, again for a curve with another number of walls, the contact
+phases, the CSV formatting, the resting-position scan).
+
+:func:`compile_all` is :mod:`billiard.jit`'s first-compile hook
+(:func:`billiard.jit.on_first_compile`): before the first block of a process that may
+compile a kernel, it looks for the mark that every kernel is in numba's cache
+(:func:`billiard.jit.all_compiled`); without it, it runs :data:`JOBS` (short runs of
+the paper's scenes) in :data:`WORKERS` fresh interpreters side by side, which compile
+and cache what those runs need, and marks the cache. The process that asked then loads
+each kernel from the cache in milliseconds. numba compiles one function at a time in a
+process; two processes compile on two cores at once.
+
+Not compiled here (each on its first use, with its own notice): method ``rk4``'s fixed
+steps, a curve with more than two walls, and the wall functions of a curve other than
+the wedge and the parabola (well under a second each). Where numba cannot cache (no
+folder for the kernels' cache can be written) nothing is compiled ahead, and where no
+worker can be started nothing is marked: each kernel compiles on its first use as
+before. A worker whose run fails leaves what it did not reach to compile on first use,
+and the cache is marked all the same (the workers are not started again in every
+process).
+
+:func:`run_jobs` runs jobs in this process: what a worker does.
+"""
+
+from __future__ import annotations
+
+import os
+import subprocess
+import sys
+import time
+from typing import Any
+
+from billiard import jit as _jit
+
+__all__ = ["ALL_NOTICE", "ALL_NOTICE_DONE", "JOBS", "WORKERS", "compile_all", "run_jobs"]
+
+#: printed before the kernels compile together
+ALL_NOTICE = (
+    "billiard: compiling the engine's kernels with numba, once per install or update "
+    "(about half a minute); cached for later runs"
+)
+#: printed when they are compiled
+ALL_NOTICE_DONE = "billiard: compiled the engine's kernels in {seconds:.1f} s"
+#: (scene, changed keys, impacts, CSV, rolling): short runs that together need every
+#: kernel a run of a curve of up to two walls can need (the wall tables of such curves
+#: share one type: :data:`billiard.geometry.wall_functions.WALL_SLOTS`); ``CSV``: the
+#: CSV formatting too; ``rolling``: the ball starts at rest on the bowl's wall 2 mm from
+#: its vertex. Duration-limited where the ball makes no impact.
+JOBS: tuple[tuple[str, dict[str, Any], int, bool, bool], ...] = (
+    # the impact loop (exact flight and air drag), the resting scan
+    ("wedge-6.6hz", {}, 20, False, False),
+    # the CSV formatting, the contact phases of a ball rolling in the bowl, then the hold
+    # of a ball in the vertex: neither flies (the impact loop is the other worker's)
+    (
+        "parabola-5.4hz",
+        {"drive.amplitude": 0.0, "contact.model": "phases", "run.duration": 0.05},
+        1,
+        True,
+        True,
+    ),
+    (
+        "wedge-6.6hz",
+        {"drive.amplitude": 0.0, "contact.model": "phases", "run.duration": 0.05},
+        1,
+        False,
+        False,
+    ),
+)
+#: the jobs of each worker process, run side by side (numba compiles one function at a
+#: time in a process: two processes compile on two cores)
+WORKERS: tuple[tuple[int, ...], ...] = ((0,), (1, 2))
+#: what a worker runs
+_WORKER = "from billiard.engine.compile_all import run_jobs; run_jobs({jobs})"
+#: set in a worker's environment: its own first compile calls no hook
+_WORKER_ENV = "BILLIARD_COMPILE_WORKER"
+
+
+def _rolling_start(scene: Any) -> dict[str, float]:
+    """The initial keys of a ball at rest on the bowl's wall 2 mm from its vertex."""
+    from billiard.generated import contact as _c
+
+    p = dict(scene.boundary.parameters)
+    a, c, s = p.get("a", 26.0), p.get("c", 0.0063), 2e-3
+    q1, q2, _, _ = _c.centre_state(
+        s, 0.0, a * s * s + c, 2 * a * s, 2 * a, 0.0, 0.0, 0.0, 0.0, scene.ball.radius
+    )
+    return {"initial.q1": q1, "initial.q2": q2, "initial.v1": 0.0, "initial.v2": 0.0}
+
+
+def run_jobs(jobs: list[int]) -> None:
+    """Run :data:`JOBS` ``jobs`` in this process (each compiles what it needs)."""
+    import numpy as np
+
+    from billiard.engine.simulation import Simulation
+    from billiard.runfile.record import COLUMNS, MemoryRecorder
+    from billiard.runfile.rows import format_rows_bytes
+    from billiard.scene.scene import load_scene, with_values
+
+    for index in jobs:
+        name, changes, impacts, csv, rolling = JOBS[index]
+        scene = load_scene(name)
+        if rolling:
+            changes = {**changes, **_rolling_start(scene)}
+        scene = with_values(scene, changes)
+        if csv:
+            format_rows_bytes(np.zeros((1, len(COLUMNS))), "\n")
+        Simulation(scene).run(impacts, MemoryRecorder())
+
+
+def compile_all() -> bool:
+    """Compile every kernel a run can need, together, unless the cache has them all
+    (or this is a worker); returns True when the workers ran and the cache is marked."""
+    if not _jit.ENABLED or os.environ.get(_WORKER_ENV) or _jit.all_compiled():
+        return False
+    if not _jit.cache_stamped():
+        return False  # nothing can be cached: each process compiles what it needs
+    print(ALL_NOTICE, file=sys.stderr, flush=True)
+    started = time.perf_counter()
+    env = {**os.environ, _WORKER_ENV: "1"}
+    try:
+        workers = [
+            subprocess.Popen(
+                [sys.executable, "-c", _WORKER.format(jobs=list(jobs))],
+                env=env,
+                stdout=subprocess.DEVNULL,
+                stderr=subprocess.DEVNULL,
+            )
+            for jobs in WORKERS
+        ]
+    except OSError:
+        return False  # no process to start: each kernel compiles on its first use
+    for worker in workers:
+        worker.wait()
+    _jit.mark_all_compiled()
+    seconds = time.perf_counter() - started
+    print(ALL_NOTICE_DONE.format(seconds=seconds), file=sys.stderr, flush=True)
+    return True
+
+
+_jit.on_first_compile(compile_all)
