@@ -73,8 +73,9 @@ from .layout import (
 #: time resolution (s) of a phase's end
 EVENT_TOL = 1e-13
 #: A phase that starts touching another wall (its gap zero to rounding, possibly just
-#: below zero, as in the wedge's vertex) ends with an impact there at once when the
-#: centre then goes deeper into it than this (m; the impact locator's resolution).
+#: below zero, as in the wedge's vertex) ends with an impact there when the centre then
+#: goes deeper into it than this (m; the impact locator's resolution): at once, or where
+#: the gap returns to zero if the ball first moved away (:func:`touched_root`).
 CONTACT_GAP = 1e-12
 #: absolute error allowed per step on s (m), s_dot (m/s) and u3 (rad/s), added to rtol
 #: times the size of each
@@ -179,8 +180,9 @@ def first_root(ctx, p, walls, i, a, b, fa):
 
 @inline
 def touched_root(ctx, p, walls, i, a, b, fa):
-    """The impact on another wall touched at a (condition i, its gap, zero to rounding
-    there, possibly below: the wedge's vertex) and entered deeper than CONTACT_GAP by b.
+    """The impact on another surface touched at a (condition i, its gap, zero to
+    rounding there, possibly below: the wedge's vertex, a wall meeting the lid) and
+    entered deeper than CONTACT_GAP by b.
     A ball that goes into that wall at once meets it at a. A ball that first moves away
     from it (leaving the vertex along its own wall) and is turned back within the step
     meets it where the gap falls back to zero: the impact at a would have no impulse, and
