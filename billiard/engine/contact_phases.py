@@ -20,6 +20,7 @@ from billiard.kernels.rules import (
     ZERO_FLIGHT_LIMIT,
     compensated_add,
 )
+from billiard.models.corner import is_impact
 from billiard.models.hold import HELD
 from billiard.models.impact import Contact
 from billiard.runfile.record import ContactRecord, ImpactRecord
@@ -322,14 +323,18 @@ class ContactPhases:
             self._check_in_container(wall, s1, t)
         if reason == "impact":
             self._mode, self._contact = "flight", ()
-            return self._impact_from_contact(end.other, index, t, tau, theta, q3)
+            impact = self._impact_from_contact(end.other, index, t, tau, theta, q3)
+            if impact is not None:
+                return impact
         return record
 
     def _impact_from_contact(
         self, other: int, index: int, t: float, tau: float, theta: float, q3: float
-    ) -> ImpactRecord:
+    ) -> ImpactRecord | None:
         """The ball in contact with one wall reaches another (the wedge's vertex), the
-        lid, or the escape level (which ends the run)."""
+        lid, or the escape level (which ends the run). None when the contact gives no
+        impulse (see :func:`billiard.models.corner.is_impact`): no impact, neither
+        recorded nor counted; the ball goes on from its state as after an impact."""
         j = other if other < index else other + 1
         surface = self.boundary.surfaces[j]
         ball = self._ball
@@ -351,6 +356,10 @@ class ContactPhases:
             ax, ay = (a1 - ab, a2) if self.drive.horizontal else (a1, a2 - ab)
             pressing = surface.gap_accel(px, py, vx, vy, ax, ay, self.warm[j]) < 0.0
         res = self.impact.apply(ball, Contact(z, vb1, vb2, pressing))
+        if not is_impact(res):
+            if not self._hold_after(index, j, theta, res, t):
+                self._land(j, s_o, theta, res, t)
+            return None
         sc = self.scene
         u4, un = _ball.frame_velocity(res.u1, res.u2, z)
         energy = _ball.energy(ball.q2, res.u1, res.u2, res.u3, sc.ball.mass, sc.ball.radius,

@@ -73,8 +73,9 @@ from .layout import (
 #: time resolution (s) of a phase's end
 EVENT_TOL = 1e-13
 #: A phase that starts touching another wall (its gap zero to rounding, possibly just
-#: below zero, as in the wedge's vertex) ends with an impact there at once when the
-#: centre then goes deeper into it than this (m; the impact locator's resolution).
+#: below zero, as in the wedge's vertex) ends with an impact there when the centre then
+#: goes deeper into it than this (m; the impact locator's resolution): at once, or where
+#: the gap returns to zero if the ball first moved away (:func:`touched_root`).
 CONTACT_GAP = 1e-12
 #: absolute error allowed per step on s (m), s_dot (m/s) and u3 (rad/s), added to rtol
 #: times the size of each
@@ -178,6 +179,37 @@ def first_root(ctx, p, walls, i, a, b, fa):
 
 
 @inline
+def touched_root(ctx, p, walls, i, a, b, fa):
+    """The impact on another surface touched at a (condition i, its gap, zero to
+    rounding there, possibly below: the wedge's vertex, a wall meeting the lid) and
+    entered deeper than CONTACT_GAP by b.
+    A ball that goes into that wall at once meets it at a. A ball that first moves away
+    from it (leaving the vertex along its own wall) and is turned back within the step
+    meets it where the gap falls back to zero: the impact at a would have no impulse, and
+    the phase that follows would end at a again, a cycle at one instant. Told apart by
+    the gap halfway to where the centre is CONTACT_GAP inside the wall: still inside
+    (entered at once), or outside (away and back)."""
+    if fa + CONTACT_GAP <= 0.0:
+        return a
+    # the first time in (a, b] the centre is CONTACT_GAP inside the wall
+    lo, hi = a, b
+    flo = fa + CONTACT_GAP
+    fhi = condition_at(ctx, p, walls, i, b) + CONTACT_GAP
+    side = 0
+    for _ in range(200):
+        if hi - lo <= EVENT_TOL:
+            break
+        m = secant_point(lo, hi, flo, fhi)
+        fm = condition_at(ctx, p, walls, i, m) + CONTACT_GAP
+        lo, hi, flo, fhi, side = narrow(lo, hi, flo, fhi, m, fm, side)
+    mid = 0.5 * (a + hi)
+    f_mid = condition_at(ctx, p, walls, i, mid)
+    if f_mid <= 0.0:
+        return a
+    return first_root(ctx, p, walls, i, mid, hi, f_mid)
+
+
+@inline
 def begin(ctx, p, walls):
     """Start a phase from y = ctx[PH_Y:] at tau = 0 (constants, wall, mode, limit and the
     first sample time PH_NEXT set): the first derivative, step and conditions."""
@@ -248,16 +280,15 @@ def step(ctx, p, walls):
     end_t, end_i = t_b, -1
     for i in range(n_conditions(ctx)):
         a, b = ctx[PH_CPREV + i], ctx[PH_CNEW + i]
-        if (
-            (a > 0.0 and 0.0 >= b)
-            or (a == 0.0 and b < 0.0)
+        t_root = -1.0
+        if i >= 4 and b < -CONTACT_GAP and (a < 0.0 or (tau == 0.0 and a <= CONTACT_GAP)):
             # another wall touched at the start (the wedge's vertex: its gap is 0 to
-            # rounding, either sign) and then entered: an impact at the start
-            or (i >= 4 and a < 0.0 and b < -CONTACT_GAP)
-        ):
+            # rounding, either sign) and then entered
+            t_root = touched_root(ctx, p, walls, i, tau, t_b, a)
+        elif (a > 0.0 and 0.0 >= b) or (a == 0.0 and b < 0.0):
             t_root = first_root(ctx, p, walls, i, tau, t_b, a)
-            if end_i < 0 or t_root < end_t:
-                end_t, end_i = t_root, i
+        if t_root >= 0.0 and (end_i < 0 or t_root < end_t):
+            end_t, end_i = t_root, i
     ctx[PH_END_T] = end_t
     ctx[PH_END_I] = float(end_i)
     if end_i >= 0:

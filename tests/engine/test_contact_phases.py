@@ -106,3 +106,44 @@ def test_cli_bad_sample_is_one_line(tmp_path, capsys):
     assert main(["run", "wedge-6.6hz", "--sample", "-1", "--out", str(tmp_path / "x")]) != 0
     err = capsys.readouterr().err.strip()
     assert "--sample" in err and "\n" not in err
+
+
+def test_a_contact_with_no_impulse_is_neither_recorded_nor_counted():
+    # a still frictionless wedge, the ball sliding out of the vertex up the left wall; it
+    # meets the right wall on its way back. An impact law that gives no impulse there
+    # (as for a ball leaving that wall): the step ends with the phase, no impact
+    import math
+    from dataclasses import replace
+
+    b = 1.85
+    beta, r, v = math.atan(b), 1.55e-3, 1e-4
+    sc = with_values(
+        wedge_phases(),
+        {
+            "boundary.parameters.b": b, "boundary.parameters.c": 0.0,
+            "drive.amplitude": 0.0, "drive.frequency": 0.0, "air.drag": "none",
+            "contact.mu_static": 0.0, "contact.mu_kinetic": 0.0,
+            "initial.q1": 0.0, "initial.q2": r / math.cos(beta),
+            "initial.v1": -v * math.cos(beta), "initial.v2": v * math.sin(beta),
+        },
+    )  # fmt: skip
+    sim = Simulation(sc)
+    law = sim.impact
+    applied = []
+
+    class NoImpulse:
+        regimes = law.regimes
+
+        def apply(self, state, contact):
+            res = law.apply(state, contact)
+            applied.append(res)
+            return replace(res, u1=state.u1, u2=state.u2, u3=state.u3, Rt=0.0, Rn=0.0)
+
+    sim.impact = NoImpulse()
+    before = sim.ball
+    record = sim.step()
+    assert len(applied) == 1 and applied[0].Rn > 0.0  # the real law gives an impulse
+    assert record.mode == "slide" and record.end == "impact"  # the phase, no impact
+    assert sim.state.impacts == 0 and sum(sim.counts.values()) == 0
+    assert (sim.ball.u1, sim.ball.u2) != (before.u1, before.u2)  # it slid back
+    assert sim.ball.t == record.t_end

@@ -193,3 +193,97 @@ def test_drag_on_a_held_ball_shifts_the_release_as_the_force_balance_says():
     no_drag = math.asin(1 / gamma) / w
     assert abs(expected - no_drag) > 1e-4  # the drag term matters here
     assert record.t_end == pytest.approx(expected, abs=1e-11)
+
+
+def test_a_ball_sliding_out_of_the_vertex_comes_back_to_the_other_wall():
+    # frictionless still wedge, the ball at the vertex sliding up the left wall at v: it
+    # touches the right wall at the start while moving away from it, so it meets it when
+    # it comes back, 2 v / (g sin(beta)) later (the centre's deceleration along the wall),
+    # here within the phase's first step, from a gap to the right wall of -4e-19 m
+    beta = math.atan(B)
+    v = 1e-4
+    start = {
+        "q1": 0.0, "q2": R / math.cos(beta),
+        "v1": -v * math.cos(beta), "v2": v * math.sin(beta),
+    }  # fmt: skip
+    sim = Simulation(wedge(FRICTIONLESS, start))
+    assert sim.mode == "slide"
+    contacts = []
+    sim.on_contact = contacts.append
+    impact = sim.step()
+    assert [c.end for c in contacts] == ["impact"]
+    assert contacts[0].t_end == pytest.approx(2 * v / (G * math.sin(beta)), rel=0.0, abs=1e-13)
+    assert impact.t == contacts[0].t_end and impact.wall == 1 and impact.Rn > 0.0
+
+
+#: A vertically shaken wedge with a light ball at rest in its vertex, in which the ball
+#: lands on one wall at the vertex and meets the other there at once, again and again
+#: (with restitution and the landing speed of contact.elastic_below).
+SHAKEN_VERTEX = {
+    "contact.model": "phases",
+    "drive.direction": "vertical",
+    "drive.amplitude": 0.016488871225231298,
+    "drive.frequency": 9.247894177852217,
+    "drive.phase": 2.40958170922999,
+    "contact.restitution": 0.6754179399974171,
+    "contact.mu_static": 0.11706196447135508,
+    "contact.mu_kinetic": 0.08944329198868507,
+    "contact.elastic_below": 0.001,
+    "ball.radius": 0.002013811438399591,
+    "ball.mass": 1.789066936383012e-05,
+    "ball.inertia_factor": 0.12156603567375565,
+    "initial.t": 33.44942940838798,
+}
+
+
+def same_time_runs(t) -> int:
+    """The longest run of consecutive records at one time (0: every time differs)."""
+    longest = run = 0
+    for same in t[1:] == t[:-1]:
+        run = run + 1 if same else 0
+        longest = max(longest, run)
+    return longest
+
+
+def test_a_vertically_shaken_wedge_keeps_a_ball_in_its_vertex_without_cycles():
+    from billiard.scene.scene import load_scene
+
+    sc = with_values(load_scene("wedge-6.6hz"), SHAKEN_VERTEX)
+    start = Simulation(sc).initial
+    assert abs(start.q1) < 1e-15 and start.u1 == start.u2 == 0.0  # at rest in the vertex
+    result = simulate(sc, collisions=1_000_000, duration=10.0)
+    assert result.status is Status.TIME_LIMIT, result.message
+    assert len(result) > 50  # it bounces: the drive's peak acceleration is 5.7 g
+    t = result.columns["t"]
+    assert t[-1] - SHAKEN_VERTEX["initial.t"] > 9.0
+    assert same_time_runs(t) <= 3
+    assert result.mode_times["held"] > 0.0
+    assert not ((result.columns["Rt"] == 0.0) & (result.columns["Rn"] == 0.0)).any()
+
+
+def shaken_wedge_draw(seed: int) -> dict:
+    """A random draw of the soak (bench.soak.random_draw) made a vertically shaken wedge
+    under phases, with a landing speed (contact.elastic_below > 0)."""
+    import random
+
+    from bench.soak import random_draw
+
+    draw = random_draw(random.Random(seed))
+    draw.update(curve="wedge", direction="vertical", model="phases")
+    draw["amplitude"] = draw["amplitude"] or 0.01
+    draw["elastic_below"] = draw["elastic_below"] or 0.01
+    return draw
+
+
+@pytest.mark.parametrize("seed", [34, 129, 312, 353])
+def test_random_shaken_wedges_record_only_impacts_with_an_impulse(seed):
+    from bench.soak import scene_from_draw
+
+    sc = with_values(scene_from_draw(shaken_wedge_draw(seed)), {"run.duration": 4.0})
+    result = simulate(sc, collisions=100_000)
+    # run to its end, or thrown out of the open wedge (seed 353): no collapse
+    assert result.status.finished or result.status is Status.ESCAPED, result.message
+    assert len(result) > 0
+    columns = result.columns
+    assert not ((columns["Rt"] == 0.0) & (columns["Rn"] == 0.0)).any()
+    assert same_time_runs(columns["t"]) <= 10
