@@ -759,10 +759,13 @@ def run_job(job: Job) -> dict[str, Any]:
             report.update(audit_contact_rows(sim.boundary, sim.drive, read_side_csv(contacts)))
             report["events"] = len(result) + report["contact_rows"]
             report["static"] = int(sim.phase_audit.static)
-        if job.resume_at is not None and len(result) >= 1:
+        if job.resume_at is not None and len(result) >= 2:
             # interrupt within the impacts the run made (a phases scene may make far
-            # fewer than it asked for before its time limit)
-            at = 1 + (job.resume_at - 1) % len(result)
+            # fewer than it asked for before its time limit), before its last one: a
+            # signal after the last impact finds the files complete and acts as the
+            # process's own signal would (persist.run_streamed), and SIGTERM's default
+            # ends the worker, whose job the pool would then wait for forever
+            at = 1 + (job.resume_at - 1) % (len(result) - 1)
             report["resume_checked"] = 1
             try:
                 simulate(
