@@ -1,0 +1,86 @@
+"""Landing under contact phases (billiard/engine/contact_phases.py ``_land``): a chatter
+series is summed whatever ``contact.elastic_below`` is, the same on the kernels'
+flights as on the one-event step, and a slow impact is never relaunched (the impacts
+model's low-velocity rule adds energy; under phases the ball lands or reflects)."""
+
+from __future__ import annotations
+
+import math
+
+import pytest
+
+from billiard.engine.simulation import Simulation
+from billiard.runfile.record import ImpactRecord
+from billiard.scene.scene import scene_from_dict
+from tests.engine.test_flights import run
+
+G = 9.81
+R = 1.55e-3
+
+
+@pytest.fixture(autouse=True, scope="module")
+def billiard_home(tmp_path_factory):
+    """The flat curve "0.001" is derived on first use into a temporary BILLIARD_HOME."""
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setenv("BILLIARD_HOME", str(tmp_path_factory.mktemp("billiard_home")))
+        yield
+
+
+def floor(contact: dict, initial: dict, drive: dict | None = None):
+    return scene_from_dict(
+        {
+            "boundary": {"curve": "0.001", "escape_height": 10.0, "ceiling": 5.0},
+            "drive": drive or {"amplitude": 0.0, "frequency": 1.0},
+            "contact": {"model": "phases", "restitution": 0.5, **contact},
+            "air": {"drag": "none"},
+            "initial": initial,
+        }
+    )
+
+
+def test_a_slow_impact_is_elastic_and_lands_without_a_relaunch():
+    # 1e-3 m/s onto a still floor, below elastic_below = 0.01 m/s, gravity pressing: the
+    # impacts model would relaunch the ball at 0.01 m/s (energy x 100); phases reflect
+    # it elastically and land it
+    sim = Simulation(floor({}, {"q1": 0.0, "q2": 0.001 + R + 1e-9, "v2": -1e-3}))
+    record = sim.step()
+    assert isinstance(record, ImpactRecord) and record.regime == "elastic"
+    v_in = math.sqrt(1e-6 + 2 * G * 1e-9)
+    assert record.v2 == pytest.approx(v_in, rel=1e-9)
+    assert sim.counts.get("resting", 0) == 0
+    assert sim.mode == "roll"
+
+
+def test_with_elastic_below_zero_a_dropped_ball_lands_and_rests():
+    # a still floor, the rule off: the series is summed once its tail is below 1e-6 s
+    # (1e-6 of the 1 s period), then the ball rests; before, the run collapsed
+    e, h = 0.5, 0.01
+    sim = Simulation(floor({"elastic_below": 0.0}, {"q1": 0.0, "q2": 0.001 + R + h}))
+    t0, v0 = math.sqrt(2 * h / G), math.sqrt(2 * G * h)
+    impacts = []
+    while sim.mode == "flight":
+        impacts.append(sim.step())
+    assert 15 < len(impacts) < 40
+    # entered at the accumulation point t0 + 2 e v0 / (g (1 - e)), not at the impact
+    settle = sim.state.contact[5]
+    assert settle == sim.state.ball.t == sim.state.contact[4] > impacts[-1].t
+    # (the impacts' times carry the locator's error of the tiny flights: 6e-12 s here)
+    assert settle == pytest.approx(t0 + 2 * e * v0 / (G * (1 - e)), abs=1e-10)
+    assert sim.step(until=10.0) is None and sim.state.impacts == len(impacts)
+
+
+def test_summed_landings_are_the_same_on_the_kernels_and_on_the_classes():
+    gamma, f = 1.2, 20.0
+    w = 2 * math.pi * f
+    amplitude = gamma * G / w**2
+    scene = floor(
+        {"elastic_below": 0.0, "mu_static": 0.0, "mu_kinetic": 0.0},
+        {"q1": 0.0, "q2": 0.001 + R + 0.01},
+        {"amplitude": amplitude, "frequency": f, "direction": "vertical"},
+    )
+    on_kernels = run(scene, 300, kernels=True)
+    on_classes = run(scene, 300, kernels=False)
+    assert len(on_kernels[1]) > 5  # it lands, sticks and lifts off again and again
+    for a, b, what in zip(on_kernels, on_classes, ("rows", "contacts", "times", "state",
+                                                   "status"), strict=True):  # fmt: skip
+        assert a == b, what
