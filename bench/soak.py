@@ -680,13 +680,14 @@ class AuditedSimulation(Simulation):
             self.phase_audit = PhaseAudit.of(self)
             self.impact_audit.on_impact = self.phase_audit.impact
 
-    def _land(self, *args: Any, **kwargs: Any) -> None:
+    def _end_chatter(self, until: float) -> bool:
         # a landing after a summed chatter series moves the ball on to the series' end:
         # the phase audit checks that step as a transition
         before = self._ball
-        super()._land(*args, **kwargs)
-        if self._ball.t != before.t:
+        moved = super()._end_chatter(until)
+        if moved:
             self.phase_audit.chatter(before, self._ball)
+        return moved
 
     @property  # type: ignore[override]
     def on_contact(self) -> Callable[[Any], None] | None:

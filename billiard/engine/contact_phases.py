@@ -63,7 +63,8 @@ class ContactPhases:
         times = dict(self._phase_time)
         if self._mode != "flight" and self._contact:
             end = self.final_time if math.isfinite(self.final_time) else self._ball.t
-            times[self._mode] += end - self._contact[4]
+            # (none before a landing at the end of a chatter series, still ahead)
+            times[self._mode] += max(0.0, end - self._contact[4])
         total = (self.final_time if math.isfinite(self.final_time) else self._ball.t) - (
             self.initial.t
         )
@@ -88,8 +89,8 @@ class ContactPhases:
         * the chatter series it starts may be summed (:func:`billiard.models.chatter.summed`:
           it ends within 1e-6 of a drive period, and the bound on its end time is within
           ``CHATTER_TOL`` of a period): the ball enters contact at that time,
-          t + 2 v / (a (1 - e)), v = e |wn| the rebound speed and a = N / m; whatever
-          ``contact.elastic_below`` is;
+          t + 2 v / (a (1 - e)), v = e |wn| the rebound speed and a = N / m (the phase
+          starts there: ``_end_chatter``), whatever ``contact.elastic_below`` is;
         * or the rebound speed e |wn| is at most the landing speed
           (``contact.elastic_below``): the ball enters contact at this impact, the
           chattering it skips recorded as the phase's ``t_settle``, t + 2 v / (a (1 - e)).
@@ -120,7 +121,11 @@ class ContactPhases:
 
             tau = _chatter.summed(rebound, e, accel, _impact.chatter_period(omega))
             if tau is not None:
-                self._land_after_chatter(index, mode, s, sd, sgn, tau)
+                # the phase starts where the series ends (``_end_chatter`` moves the
+                # ball there when the run reaches that time)
+                total, error = compensated_add(self._clock, self._clock_error, tau)
+                self._mode = mode
+                self._contact = (float(index), s, sd, sgn, total + error, total + error)
                 return
         if not slow:
             return
@@ -128,17 +133,18 @@ class ContactPhases:
         self._mode = mode
         self._contact = (float(index), s, sd, sgn, t, settle)
 
-    def _land_after_chatter(
-        self, index: int, mode: str, s: float, sd: float, sgn: float, tau: float
-    ) -> None:
-        """Enter contact on wall ``index`` ``tau`` seconds after the impact the ball is at,
-        where its chatter series ends: at contact abscissa s with tangential speed sd and
-        its spin, all as at the impact (:mod:`billiard.models.chatter`), the boundary
-        moved on. Samples in between show that state."""
+    def _end_chatter(self, until: float) -> bool:
+        """A ball that landed at the end of a summed chatter series (its phase starts
+        later than the impact it is at): move it there, at contact abscissa s with
+        tangential speed sd and its spin, all as at the impact
+        (:mod:`billiard.models.chatter`), the boundary moved on; samples in between show
+        that state. False (the state unchanged, samples up to ``until`` reported) when
+        the series ends after ``until``."""
+        index, s, sd, _, t_start, _ = self._contact
         model = self.contact_model
-        wall = self.boundary.surfaces[index].wall
+        wall = self.boundary.surfaces[int(index)].wall
+        mode = self._mode
         ball = self._ball
-        total, error, t, theta = self._clock_after(ball.theta, tau)
         omega = self.drive.omega
         if self.on_sample is not None:
             sc = self.scene
@@ -150,13 +156,16 @@ class ContactPhases:
                                       sc.ball.inertia_factor, sc.run.gravity)  # fmt: skip
                 return q1, q2, u1, u2, ball.u3, energy, "flight"
 
-            self._emit_samples(ball.t, t, at)
+            self._emit_samples(ball.t, min(t_start, until), at)
+        if t_start > until:
+            return False
+        tau = t_start - ball.t
+        theta = (ball.theta + omega * tau) % (2.0 * math.pi)
         q1, q2, u1, u2, _ = model.lab_state(wall, theta, (s, sd, ball.u3), mode)
-        self._ball = BallState(t, theta, q1, q2, u1, u2, ball.u3, ball.q3 + ball.u3 * tau)
-        self._clock, self._clock_error = total, error
-        self.final_time = t
-        self._mode = mode
-        self._contact = (float(index), s, sd, sgn, t, t)
+        self._ball = BallState(t_start, theta, q1, q2, u1, u2, ball.u3, ball.q3 + ball.u3 * tau)
+        self._clock, self._clock_error = t_start, 0.0
+        self.final_time = t_start
+        return True
 
     def _leave_wall(self, wall: Any, s: float, theta: float) -> None:
         """A settling impact where the wall does not press the ball (N <= 0): it flies
@@ -292,6 +301,8 @@ class ContactPhases:
         """One contact phase, to its end (or to ``until``: None, state unchanged)."""
         if self._mode == HELD:
             return self._hold_step(until)
+        if self._ball.t < self._contact[4] and not self._end_chatter(until):
+            return None
         model = self.contact_model
         ball = self._ball
         index, s, sd, sgn, t_start, settle = self._contact

@@ -63,10 +63,27 @@ def test_with_elastic_below_zero_a_dropped_ball_lands_and_rests():
     assert 15 < len(impacts) < 40
     # entered at the accumulation point t0 + 2 e v0 / (g (1 - e)), not at the impact
     settle = sim.state.contact[5]
-    assert settle == sim.state.ball.t == sim.state.contact[4] > impacts[-1].t
+    assert settle == sim.state.contact[4] > sim.state.ball.t == impacts[-1].t
     # (the impacts' times carry the locator's error of the tiny flights: 6e-12 s here)
     assert settle == pytest.approx(t0 + 2 * e * v0 / (G * (1 - e)), abs=1e-10)
     assert sim.step(until=10.0) is None and sim.state.impacts == len(impacts)
+    assert sim.mode_times()["flight"] == pytest.approx(settle, abs=1e-15)
+
+
+def test_a_run_that_ends_inside_the_summed_series_stays_at_the_impact():
+    # the phase after a summed series starts at its end: a run ending before that keeps
+    # the state at the impact (a resumed or extended run moves it on)
+    sim = Simulation(floor({"elastic_below": 0.0}, {"q1": 0.0, "q2": 0.001 + R + 0.01}))
+    while sim.mode == "flight":
+        last = sim.step()
+    settle = sim.state.contact[4]
+    cut: list = []
+    sim.on_contact_cut = cut.append
+    assert sim.step(until=0.5 * (last.t + settle)) is None
+    assert sim.state.ball.t == last.t and cut == []
+    assert sim.mode_times()["roll"] == 0.0
+    assert sim.step(until=1.0) is None
+    assert cut[-1].t_start == settle and sim.state.ball.t == settle
 
 
 def test_summed_landings_are_the_same_on_the_kernels_and_on_the_classes():
