@@ -45,7 +45,13 @@ from __future__ import annotations
 import math
 from collections.abc import Callable
 
-__all__ = ["CHATTER_TOL", "bracket", "summed"]
+from billiard.kernels.interpreted import impact as _impact
+
+__all__ = ["CHATTER_TAIL", "CHATTER_TOL", "bracket", "summed"]
+
+#: The longest chatter summed, as a fraction of the drive period (the kernels' test
+#: of the free flight, ``impact.chatter_tail``, uses the same).
+CHATTER_TAIL = _impact.CHATTER_TAIL
 
 #: The largest error of the accumulation time accepted, as a fraction of the drive
 #: period (1 s without a drive frequency): 1e-8 of 0.05 s is 5e-10 s.
@@ -75,8 +81,9 @@ def bracket(v: float, e: float, a0: float, jerk: float, window: float) -> tuple[
 
 
 def summed(v: float, e: float, accel: Callable[[float], float], period: float) -> float | None:
-    """The time (s) the chatter series after an impact takes to end, T0, when its error
-    bound is at most ``CHATTER_TOL`` of ``period`` (s), else None. ``v``: the rebound's
+    """The time (s) the chatter series after an impact takes to end, T0, when it is at
+    most ``CHATTER_TAIL`` of ``period`` (s) and its error bound at most ``CHATTER_TOL``
+    of it, else None. ``v``: the rebound's
     normal speed (m/s); ``e`` < 1; ``accel(tau)``: the acceleration into the wall (m/s^2)
     tau seconds after the impact."""
     a0 = accel(0.0)
@@ -85,6 +92,8 @@ def summed(v: float, e: float, accel: Callable[[float], float], period: float) -
     t0 = 2.0 * v / (a0 * (1.0 - e))
     if t0 == 0.0:
         return 0.0
+    if not t0 <= CHATTER_TAIL * period:
+        return None  # followed impact by impact until its tail is this short
     window = 2.0 * t0
     a1, a2 = accel(t0), accel(window)
     jerk = 2.0 * max(abs(a1 - a0), abs(a2 - a1)) / t0

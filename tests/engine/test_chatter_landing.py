@@ -101,3 +101,24 @@ def test_summed_landings_are_the_same_on_the_kernels_and_on_the_classes():
     for a, b, what in zip(on_kernels, on_classes, ("rows", "contacts", "times", "state",
                                                    "status"), strict=True):  # fmt: skip
         assert a == b, what
+
+
+@pytest.mark.parametrize("at", [18, 19, 40])
+def test_a_run_interrupted_at_a_summed_landing_resumes_to_the_same_bytes(tmp_path, at):
+    # impact 18 is the last before the first summed landing: the checkpoint holds the
+    # ball at that impact with its phase starting later, at the series' end
+    import filecmp
+    import signal
+
+    from billiard.engine.interrupt import signal_after
+    from billiard.run.simulate import RunInterrupted, resume, simulate
+    from tests.validation.test_chatter import table_scene
+
+    scene = table_scene()
+    simulate(scene, collisions=60, out_dir=tmp_path / "a")
+    with pytest.raises(RunInterrupted):
+        simulate(scene, collisions=60, out_dir=tmp_path / "b",
+                 on_record=signal_after(at, signal.SIGTERM))  # fmt: skip
+    resume(tmp_path / "b")
+    for name in ("collisions.csv", "contacts.csv"):
+        assert filecmp.cmp(tmp_path / "a" / name, tmp_path / "b" / name, shallow=False)

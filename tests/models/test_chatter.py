@@ -7,7 +7,7 @@ import math
 
 import pytest
 
-from billiard.models.chatter import CHATTER_TOL, bracket, summed
+from billiard.models.chatter import CHATTER_TAIL, CHATTER_TOL, bracket, summed
 
 
 def series(v: float, e: float, a0: float, jerk: float) -> float:
@@ -61,14 +61,19 @@ def test_no_bound_where_the_acceleration_may_vanish_or_the_series_outlasts_the_w
 def test_summed_accepts_a_short_tail_and_refuses_a_vanishing_acceleration():
     period = 0.05
     # a linear acceleration: T0 comes back when the bound is within CHATTER_TOL
-    tau = summed(1e-6, 0.5, lambda s: 5.0 + 100.0 * s, period)
-    assert tau == 2 * 1e-6 / (5.0 * 0.5)
-    # the same tail, but a going to zero within the window: refused
-    assert summed(1e-6, 0.5, lambda s: 5.0 - 6.25e6 * s, period) is None
-    # a longer tail under the same jerk: its bound exceeds CHATTER_TOL of the period
-    v = 1e-3
+    tau = summed(1e-8, 0.5, lambda s: 5.0 + 100.0 * s, period)
+    assert tau == 2 * 1e-8 / (5.0 * 0.5)
+    # the same tail, but a going to zero within the window (2 T0 = 1.6e-8 s): refused
+    assert summed(1e-8, 0.5, lambda s: 5.0 - 5e8 * s, period) is None
+    # a longer tail under the same jerk, within CHATTER_TAIL of a long period: its bound
+    # exceeds CHATTER_TOL of the period
+    v, long = 1e-3, 1e3
     t0 = 2 * v / (5.0 * 0.5)
-    assert 4 * 100.0 * t0 * t0 / (5.0 * 0.5) > CHATTER_TOL * period
-    assert summed(v, 0.5, lambda s: 5.0 + 100.0 * s, period) is None
+    assert t0 <= CHATTER_TAIL * long
+    assert 4 * 100.0 * t0 * t0 / (5.0 * 0.5) > CHATTER_TOL * long
+    assert summed(v, 0.5, lambda s: 5.0 + 100.0 * s, long) is None
+    assert summed(v, 0.5, lambda s: 5.0, long) == t0  # constant: exact
+    # a series longer than CHATTER_TAIL of the period is followed impact by impact
+    assert t0 > CHATTER_TAIL * period and summed(v, 0.5, lambda s: 5.0, period) is None
     # not pressed: no landing
-    assert summed(1e-6, 0.5, lambda s: -1.0, period) is None
+    assert summed(1e-8, 0.5, lambda s: -1.0, period) is None
