@@ -29,9 +29,11 @@ energy created
     impacts after which the kinetic energy relative to the boundary (translation
     relative to the boundary's velocity at the impact, plus spin) exceeds the energy
     before by more than rounding (1e-12 of the energies involved). The low-velocity
-    rule's lift of a ball lying on the surface adds energy by design: it is allowed
-    exactly the designed amount, m (v_e^2 - w_n^2) / 2 (v_e = ``elastic_below``, w_n the
-    normal velocity it replaces), and counted separately.
+    rule's lift of a ball lying on the surface adds energy by design: under the impacts
+    model it is allowed exactly the designed amount, m (v_e^2 - w_n^2) / 2
+    (v_e = ``elastic_below``, w_n the normal velocity it replaces), and counted
+    separately; under contact phases no impact has an allowance (a lying ball lands or
+    reflects, the lift is never made).
 contact penetrations, contact detached
     contact phases at whose start or end the centre is off the wall's offset curve:
     clearance below -``GAP_LIMIT`` (in a wall or the lid) or above it (off the wall).
@@ -309,6 +311,9 @@ class ImpactAudit:
     #: called as ``on_impact(state before, result)`` after every impact (how
     #: :class:`PhaseAudit` learns the state each landing starts from)
     on_impact: Callable[[Any, ImpactResult], None] | None = None
+    #: whether a lift gets its designed allowance: the impacts model's rule; under
+    #: contact phases a lying ball lands or reflects, and no impact may add energy
+    lift_allowed: bool = True
 
     @property
     def regimes(self) -> tuple[str, ...]:
@@ -326,7 +331,8 @@ class ImpactAudit:
         allowance = 0.0
         if res.resting:
             self.lifts += 1
-            allowance = 0.5 * m * max(0.0, law.elastic_below**2 - res.wn * res.wn)
+            if self.lift_allowed:
+                allowance = 0.5 * m * max(0.0, law.elastic_below**2 - res.wn * res.wn)
         elif res.wn >= 0.0:
             self.separating += 1
         # rounding scale: every energy that went into the comparison
@@ -518,6 +524,37 @@ class PhaseAudit:
         """After an impact at ``state`` with outcome ``res``."""
         self.last = ("impact", state.t, state.q1, state.q2, res.u1, res.u2, res.u3)
 
+    def chatter(self, before: Any, after: Any) -> None:
+        """A landing at the end of a summed chatter series: from the state after the
+        impact (``before``, a BallState) to the contact's start (``after``), later by
+        the series' duration. The ball stays where it was relative to the boundary (a
+        move beyond ``GAP_LIMIT`` in the boundary's frame is a ``transition_jump``) and
+        its kinetic energy relative to the boundary must not grow (it keeps the
+        tangential part): ``transition_energy_created`` beyond rounding."""
+        m, inertia, drive = self.m, self.inertia, self.drive
+        self.transitions += 1
+        where = f"landing after a chatter series (t = {before.t!r} -> {after.t!r} s)"
+        ends = []
+        for b in (before, after):
+            theta = drive.angle(b.t)
+            px, py, _, _ = drive.to_boundary_frame(theta, b.q1, b.q2, 0.0, 0.0)
+            vb1, vb2 = drive.boundary_velocity(theta)
+            ke = 0.5 * m * ((b.u1 - vb1) ** 2 + (b.u2 - vb2) ** 2) + 0.5 * inertia * b.u3**2
+            speeds = 0.5 * m * (b.u1**2 + b.u2**2 + vb1 * vb1 + vb2 * vb2)
+            ends.append((px, py, ke, speeds))
+        (x0, y0, ke0, s0), (x1, y1, ke1, s1) = ends
+        scale = ke0 + s0 + s1 + 0.5 * inertia * (before.u3**2 + after.u3**2)
+        excess = (ke1 - ke0) / scale if scale > 0.0 else 0.0
+        self.worst_transition = max(self.worst_transition, excess)
+        if excess > ENERGY_ROUNDING:
+            self.transition_energy_created += 1
+            self._note(f"{where}: kinetic energy relative to the boundary {ke0!r} -> {ke1!r} J")
+        jump = math.hypot(x1 - x0, y1 - y0)
+        if jump > GAP_LIMIT:
+            self.transition_jumps += 1
+            self._note(f"{where}: the centre moves {jump:.3g} m relative to the boundary")
+        self.last = ("chatter", after.t, after.q1, after.q2, after.u1, after.u2, after.u3)
+
     def _note(self, text: str) -> None:
         if len(self.examples) < 5:
             self.examples.append(text)
@@ -639,8 +676,18 @@ class AuditedSimulation(Simulation):
         self.impact_audit = ImpactAudit(self.impact, history=history)
         self.impact = self.impact_audit
         if self.phases:
+            self.impact_audit.lift_allowed = False
             self.phase_audit = PhaseAudit.of(self)
             self.impact_audit.on_impact = self.phase_audit.impact
+
+    def _end_chatter(self, until: float) -> bool:
+        # a landing after a summed chatter series moves the ball on to the series' end:
+        # the phase audit checks that step as a transition
+        before = self._ball
+        moved = super()._end_chatter(until)
+        if moved:
+            self.phase_audit.chatter(before, self._ball)
+        return moved
 
     @property  # type: ignore[override]
     def on_contact(self) -> Callable[[Any], None] | None:

@@ -20,6 +20,7 @@ from billiard.kernels.rules import (
     ZERO_FLIGHT_LIMIT,
     compensated_add,
 )
+from billiard.models import chatter as _chatter
 from billiard.models.corner import is_impact
 from billiard.models.hold import HELD
 from billiard.models.impact import Contact
@@ -63,7 +64,8 @@ class ContactPhases:
         times = dict(self._phase_time)
         if self._mode != "flight" and self._contact:
             end = self.final_time if math.isfinite(self.final_time) else self._ball.t
-            times[self._mode] += end - self._contact[4]
+            # (none before a landing at the end of a chatter series, still ahead)
+            times[self._mode] += max(0.0, end - self._contact[4])
         total = (self.final_time if math.isfinite(self.final_time) else self._ball.t) - (
             self.initial.t
         )
@@ -79,15 +81,27 @@ class ContactPhases:
             res.regime == "elastic",
         )  # fmt: skip
 
-    def _land(self, index: int, s: float, theta: float, res: Any, t: float) -> None:
-        """After an impact: enter contact when the rebound speed e |wn| is below the
-        landing speed (``contact.elastic_below``) while the wall presses the ball (the
-        contact mode's N > 0). The ball enters contact at this impact; the chattering it
-        skips would have ended at the accumulation point t + 2 v / (a (1 - e)), v the
-        rebound speed and a = N / m, recorded as the phase's ``t_settle``."""
+    def _land(
+        self, index: int, s: float, theta: float, res: Any, t: float, tail: bool | None = None
+    ) -> None:
+        """After an impact at t on surface ``index``: enter contact while the wall presses
+        the ball (the contact mode's N > 0) when either
+
+        * the chatter series it starts may be summed (:func:`billiard.models.chatter.summed`:
+          it ends within 1e-6 of a drive period, and the bound on its end time is within
+          ``CHATTER_TOL`` of a period): the ball enters contact at that time,
+          t + 2 v / (a (1 - e)), v = e |wn| the rebound speed and a = N / m (the phase
+          starts there: ``_end_chatter``), whatever ``contact.elastic_below`` is;
+        * or the rebound speed e |wn| is at most the landing speed
+          (``contact.elastic_below``): the ball enters contact at this impact, the
+          chattering it skips recorded as the phase's ``t_settle``, t + 2 v / (a (1 - e)).
+
+        ``tail``: the free flight's test of the first (``impact.chatter_tail``, which the
+        kernels make), None after a contact phase's impact (not made)."""
         surface = self.boundary.surfaces[index]
         model = self.contact_model
-        if surface.kind != "wall" or not self._settles(res):
+        slow = self._settles(res)
+        if surface.kind != "wall" or model.e >= 1.0 or not (slow or tail is not False):
             return
         e = model.e
         rebound = e * abs(res.wn)
@@ -96,11 +110,63 @@ class ContactPhases:
         mode, sgn = model.mode_for(wall, theta, s, sd, res.u3)
         n_force = model.forces(wall, mode, sgn, theta, (s, sd, res.u3))[2]
         if not n_force > 0.0:
-            self._leave_wall(wall, s, theta)
+            if slow:
+                self._leave_wall(wall, s, theta)
+            return
+        if tail is not False:
+            omega, u3 = self.drive.omega, res.u3
+
+            def accel(tau: float) -> float:
+                y = (s + sd * tau, sd, u3)
+                return model.forces(wall, mode, sgn, theta + omega * tau, y)[2] / model.m
+
+            tau = _chatter.summed(rebound, e, accel, _impact.chatter_period(omega))
+            if tau is not None:
+                # the phase starts where the series ends (``_end_chatter`` moves the
+                # ball there when the run reaches that time)
+                total, error = compensated_add(self._clock, self._clock_error, tau)
+                self._mode = mode
+                self._contact = (float(index), s, sd, sgn, total + error, total + error)
+                return
+        if not slow:
             return
         settle = t + 2.0 * rebound / (n_force / model.m * (1.0 - e))
         self._mode = mode
         self._contact = (float(index), s, sd, sgn, t, settle)
+
+    def _end_chatter(self, until: float) -> bool:
+        """A ball that landed at the end of a summed chatter series (its phase starts
+        later than the impact it is at): move it there, at contact abscissa s with
+        tangential speed sd and its spin, all as at the impact
+        (:mod:`billiard.models.chatter`), the boundary moved on; samples in between show
+        that state. False (the state unchanged, samples up to ``until`` reported) when
+        the series ends after ``until``."""
+        index, s, sd, _, t_start, _ = self._contact
+        model = self.contact_model
+        wall = self.boundary.surfaces[int(index)].wall
+        mode = self._mode
+        ball = self._ball
+        omega = self.drive.omega
+        if self.on_sample is not None:
+            sc = self.scene
+
+            def at(ts: float) -> tuple:
+                angle = ball.theta + omega * (ts - ball.t)
+                q1, q2, u1, u2, _ = model.lab_state(wall, angle, (s, sd, ball.u3), mode)
+                energy = _ball.energy(q2, u1, u2, ball.u3, sc.ball.mass, sc.ball.radius,
+                                      sc.ball.inertia_factor, sc.run.gravity)  # fmt: skip
+                return q1, q2, u1, u2, ball.u3, energy, "flight"
+
+            self._emit_samples(ball.t, min(t_start, until), at)
+        if t_start > until:
+            return False
+        tau = t_start - ball.t
+        theta = (ball.theta + omega * tau) % (2.0 * math.pi)
+        q1, q2, u1, u2, _ = model.lab_state(wall, theta, (s, sd, ball.u3), mode)
+        self._ball = BallState(t_start, theta, q1, q2, u1, u2, ball.u3, ball.q3 + ball.u3 * tau)
+        self._clock, self._clock_error = t_start, 0.0
+        self.final_time = t_start
+        return True
 
     def _leave_wall(self, wall: Any, s: float, theta: float) -> None:
         """A settling impact where the wall does not press the ball (N <= 0): it flies
@@ -236,6 +302,8 @@ class ContactPhases:
         """One contact phase, to its end (or to ``until``: None, state unchanged)."""
         if self._mode == HELD:
             return self._hold_step(until)
+        if self._ball.t < self._contact[4] and not self._end_chatter(until):
+            return None
         model = self.contact_model
         ball = self._ball
         index, s, sd, sgn, t_start, settle = self._contact
@@ -347,14 +415,9 @@ class ContactPhases:
         px, py, vx, vy = self.drive.to_boundary_frame(theta, ball.q1, ball.q2, ball.u1, ball.u2)
         s_o, z, _ = surface.contact(px, self.warm[j])
         vb1, vb2 = self.drive.boundary_velocity(theta)
-        pressing = True
-        if surface.kind == "lid":
-            # pressed into the lid when the ball's free acceleration relative to the
-            # boundary points up into it
-            a1, a2 = self.flight.acceleration(ball.u1, ball.u2)
-            ab = self.drive.acceleration(theta)
-            ax, ay = (a1 - ab, a2) if self.drive.horizontal else (a1, a2 - ab)
-            pressing = surface.gap_accel(px, py, vx, vy, ax, ay, self.warm[j]) < 0.0
+        # a ball that reaches a second wall or the lid lands, is held or reflects: under
+        # contact phases the low-velocity rule never relaunches it (that adds energy)
+        pressing = False
         res = self.impact.apply(ball, Contact(z, vb1, vb2, pressing))
         if not is_impact(res):
             if not self._hold_after(index, j, theta, res, t):

@@ -24,6 +24,7 @@ from billiard.engine.contact_phases import (
 from billiard.engine.state import BallState
 from billiard.errors import SimulationError
 from billiard.generated import ball as _ball
+from billiard.kernels.interpreted import impact as _impact
 from billiard.models.event_locator import Event
 from billiard.models.impact import Contact
 from billiard.runfile.record import COLUMNS, ContactRecord, ImpactRecord
@@ -45,11 +46,16 @@ class EventStep:
     def _pressing(self, ev: Event) -> bool:
         """Does the ball's acceleration relative to the boundary push it into the surface
         it touches (d2G/dt2 < 0)?"""
+        return self._gap_acceleration(ev) < 0.0
+
+    def _gap_acceleration(self, ev: Event) -> float:
+        """d2G/dt2 (m/s^2) of the surface the ball touches, in free flight (negative:
+        its acceleration relative to the boundary pushes it into the surface)."""
         px, py, vx, vy = self.drive.to_boundary_frame(ev.theta, ev.q1, ev.q2, ev.u1, ev.u2)
         a1, a2 = self.flight.acceleration(ev.u1, ev.u2)
         ab = self.drive.acceleration(ev.theta)
         ax, ay = (a1 - ab, a2) if self.drive.horizontal else (a1, a2 - ab)
-        return ev.surface.gap_accel(px, py, vx, vy, ax, ay, self.warm[ev.index]) < 0.0
+        return ev.surface.gap_accel(px, py, vx, vy, ax, ay, self.warm[ev.index])
 
     def _step(self, until: float) -> ImpactRecord | ContactRecord | None:
         if self._mode != "flight":
@@ -78,8 +84,12 @@ class EventStep:
         q3 = state.q3 + state.u3 * tau
         before = BallState(t, ev.theta, ev.q1, ev.q2, ev.u1, ev.u2, state.u3, q3)
         vb1, vb2 = self.drive.boundary_velocity(ev.theta)
+        accel = -self._gap_acceleration(ev)
+        # under contact phases a lying ball lands or reflects: the low-velocity rule's
+        # relaunch (which adds energy) is the impacts model's alone
+        pressing = accel > 0.0 and not self.phases
         try:
-            res = self.impact.apply(before, Contact(ev.z, vb1, vb2, self._pressing(ev)))
+            res = self.impact.apply(before, Contact(ev.z, vb1, vb2, pressing))
         except SimulationError as exc:
             raise SimulationError(f"{exc} at impact {n + 1} (t = {t:.9g} s)", exc.status) from None
         u4, un = _ball.frame_velocity(res.u1, res.u2, ev.z)
@@ -131,7 +141,11 @@ class EventStep:
         if len(recent) > COLLAPSE_COUNT or self._zero_flights >= ZERO_FLIGHT_LIMIT:
             self._fault = self._collapse(n + 1, t)
         if self.phases:
-            self._land(ev.index, ev.s, ev.theta, res, t)
+            e = self.contact_model.e
+            tail = ev.surface.kind != "lid" and _impact.chatter_tail(
+                e, res.wn, accel, self.drive.omega
+            )
+            self._land(ev.index, ev.s, ev.theta, res, t, tail)
         return record
 
     def _collapse(self, n: int, t: float) -> SimulationError | None:

@@ -543,5 +543,8 @@ class Simulation(ContactPhases, EventStep):
                 ball.u1, ball.u2, ball.u3, L.REGIMES[int(ctx[L.EN_LAST_REGIME])],
                 float(ctx[L.EN_LAST_WN]),
             )  # fmt: skip
-            self._land(int(ctx[L.EN_LAST_J]), float(ctx[L.EN_LAST_S]), ball.theta, settled, ball.t)
+            tail = int(ctx[L.EN_SETTLES]) & 2 != 0  # loop.SETTLES_TAIL: may be summed
+            self._land(
+                int(ctx[L.EN_LAST_J]), float(ctx[L.EN_LAST_S]), ball.theta, settled, ball.t, tail
+            )
         return None if status is None else (status, reason)

@@ -91,3 +91,31 @@ def rebound_settles(e, below, wn, elastic):
     if e >= 1.0:
         return False
     return e * abs(wn) <= below or elastic
+
+
+#: The chatter's tail is summed (:func:`chatter_tail`) once the time it has left is at
+#: most this fraction of the drive period: the series is followed impact by impact down to
+#: there. Far below any time resolved (1e-6 of a period), far above the time the impacts
+#: pile up in (``rules.COLLAPSE_SPAN`` holds only a few of its impacts for e < 0.9).
+CHATTER_TAIL = 1e-6
+
+
+@inline
+def chatter_period(omega):
+    """The time scale (s) of the chatter's tail: the drive period 2 pi / omega, or 1 s on a
+    boundary with no drive frequency (omega = 0, rad/s)."""
+    if omega > 0.0:
+        return 2.0 * math.pi / omega
+    return 1.0
+
+
+@inline
+def chatter_tail(e, wn, accel, omega):
+    """May the chattering an impact starts be summed: an inelastic contact (e < 1) whose
+    rebound speed v = e |wn| (m/s) the wall, pressing the ball with acceleration ``accel``
+    (m/s^2, > 0), brings to rest within CHATTER_TAIL of the drive period (omega, rad/s):
+    2 v / (accel (1 - e)), the sum of the remaining flights at a constant ``accel``? The
+    engine then decides on the exact bound (:mod:`billiard.models.chatter`)."""
+    if e >= 1.0 or not accel > 0.0:
+        return False
+    return 2.0 * e * abs(wn) <= CHATTER_TAIL * chatter_period(omega) * accel * (1.0 - e)

@@ -11,7 +11,7 @@ import math
 from . import fixed_step, flight
 from .ball import contact_velocity, energy, frame_velocity
 from .decorators import inline, jit
-from .impact import kane_levinson, rebound_settles
+from .impact import chatter_tail, kane_levinson, rebound_settles
 from .layout import (
     AMP,
     COLLAPSE,
@@ -76,11 +76,23 @@ compensated_add = inline(_compensated_add)
 
 #: slots of the collapse window's ring
 RING = COLLAPSE_COUNT + 1
+#: EN_SETTLES after an impact, the sum of the landing criteria it meets: the rebound is
+#: below the landing speed (or the low-velocity rule applied) ...
+SETTLES_SLOW = 1.0
+#: ... and the chatter's tail may be summed (``impact.chatter_tail``)
+SETTLES_TAIL = 2.0
 
 
 @inline
 def pressing(ctx, p, walls, j, theta, q1, q2, u1, u2):
     """Does the ball's acceleration relative to the boundary push it into surface j?"""
+    return gap_acceleration(ctx, p, walls, j, theta, q1, q2, u1, u2) < 0.0
+
+
+@inline
+def gap_acceleration(ctx, p, walls, j, theta, q1, q2, u1, u2):
+    """d2G/dt2 (m/s^2) of surface j for the ball in free flight: negative when its
+    acceleration relative to the boundary pushes it into the surface."""
     a = ctx[AMP]
     d = a * math.sin(theta)
     v = a * ctx[OMEGA] * math.cos(theta)
@@ -95,7 +107,7 @@ def pressing(ctx, p, walls, j, theta, q1, q2, u1, u2):
         ax, ay = a1 - ab, a2
     else:
         ax, ay = a1, a2 - ab
-    return gap_accel(ctx, p, walls, j, px, py, vx, vy, ax, ay) < 0.0
+    return gap_accel(ctx, p, walls, j, px, py, vx, vy, ax, ay)
 
 
 @inline
@@ -147,7 +159,10 @@ def impact(ctx, p, walls, out, row, tau, j, q1, q2, u1, u2, theta, s, z):
         vb1, vb2 = v, 0.0
     else:
         vb1, vb2 = 0.0, v
-    press = pressing(ctx, p, walls, j, theta, q1, q2, u1, u2)
+    accel = -gap_acceleration(ctx, p, walls, j, theta, q1, q2, u1, u2)
+    # under contact phases a lying ball lands or reflects: the low-velocity rule's
+    # relaunch (which adds energy) is the impacts model's alone
+    press = accel > 0.0 and ctx[EN_LAND_ON] == 0.0
     n1, n2, n3, rt, rn, regime, resting = kane_levinson(ctx, u1, u2, u3, z, vb1, vb2, press)
     u4, un = frame_velocity(n1, n2, z)
     m, r, k = ctx[IM_M], ctx[IM_R], ctx[IM_K]
@@ -209,17 +224,19 @@ def impact(ctx, p, walls, out, row, tau, j, q1, q2, u1, u2, theta, s, z):
     if count > COLLAPSE_COUNT or ctx[EN_ZERO] >= ZERO_FLIGHT_LIMIT:
         ctx[EN_FAULT] = 1.0
     if ctx[EN_LAND_ON] != 0.0:
-        settles(ctx, j, kind, s, u1, u2, u3, z, vb1, vb2, regime)
+        settles(ctx, j, kind, s, u1, u2, u3, z, vb1, vb2, regime, accel)
     return True
 
 
 @inline
-def settles(ctx, j, kind, s, u1, u2, u3, z, vb1, vb2, regime):
+def settles(ctx, j, kind, s, u1, u2, u3, z, vb1, vb2, regime, accel):
     """After an impact on surface j at s with speeds (u1, u2, u3) before it: does the
     chattering it starts settle (``ContactPhases._settles``: an inelastic contact with a
     wall whose rebound speed e |wn| is at most the landing speed, or the low-velocity
-    rule applied; e and the landing speed are the impact law's IM_E and IM_EB)? Sets
-    EN_SETTLES and the impact's EN_LAST_J, EN_LAST_S, EN_LAST_WN, EN_LAST_REGIME."""
+    rule applied; e and the landing speed are the impact law's IM_E and IM_EB), or may
+    its tail be summed (``chatter_tail``, ``accel`` the free flight's acceleration into
+    the wall, m/s^2)? Sets EN_SETTLES (SETTLES_SLOW plus SETTLES_TAIL, the criteria met)
+    and the impact's EN_LAST_J, EN_LAST_S, EN_LAST_WN, EN_LAST_REGIME."""
     wt, wn = contact_velocity(u1, u2, u3, z, vb1, vb2, ctx[IM_R])
     e = ctx[IM_E]
     ctx[EN_LAST_J] = j
@@ -227,8 +244,13 @@ def settles(ctx, j, kind, s, u1, u2, u3, z, vb1, vb2, regime):
     ctx[EN_LAST_WN] = wn
     ctx[EN_LAST_REGIME] = regime
     ctx[EN_SETTLES] = 0.0
-    if kind != LID and rebound_settles(e, ctx[IM_EB], wn, regime == ELASTIC):
-        ctx[EN_SETTLES] = 1.0
+    if kind != LID:
+        flags = 0.0
+        if rebound_settles(e, ctx[IM_EB], wn, regime == ELASTIC):
+            flags += SETTLES_SLOW
+        if chatter_tail(e, wn, accel, ctx[OMEGA]):
+            flags += SETTLES_TAIL
+        ctx[EN_SETTLES] = flags
 
 
 @jit

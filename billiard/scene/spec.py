@@ -273,7 +273,9 @@ class ContactSpec:
         elastic_below: relative normal speed (m/s) below which impacts are elastic (e = 1),
             which prevents inelastic collapse. With ``model = "phases"`` it is also the
             landing speed: an impact on a wall that presses the ball, whose rebound
-            speed e |wn| would be below it, starts a rolling or sliding phase instead.
+            speed e |wn| would be below it, starts a rolling or sliding phase instead
+            (the ball also lands where its chatter series is summed, whatever this is;
+            under phases a slow impact is elastic, never a relaunch).
         model: ``"impacts"`` (impacts only, with the paper's low-velocity rule) or
             ``"phases"`` (impacts plus rolling and sliding phases on a wall, see
             :mod:`billiard.models.contact`).
