@@ -465,6 +465,9 @@ class PhaseAudit:
     Attributes:
         phases: phases seen; ``ends`` counts them by "mode/end reason".
         transitions: transitions into a phase checked.
+        chatter_landings: landings at the end of a summed chatter series checked (the
+            ball's step to the series' end: no move relative to the boundary beyond
+            ``GAP_LIMIT``, no kinetic-energy gain; counted in the two counters above).
         transition_energy_created, transition_jumps: see above.
         snaps: rolling starts whose spin snap was allowed; ``worst_snap`` the largest
             energy it added, relative to the energies involved.
@@ -488,6 +491,7 @@ class PhaseAudit:
     phases: int = 0
     ends: Counter = field(default_factory=Counter)
     transitions: int = 0
+    chatter_landings: int = 0
     transition_energy_created: int = 0
     transition_jumps: int = 0
     snaps: int = 0
@@ -532,7 +536,9 @@ class PhaseAudit:
         its kinetic energy relative to the boundary must not grow (it keeps the
         tangential part): ``transition_energy_created`` beyond rounding."""
         m, inertia, drive = self.m, self.inertia, self.drive
-        self.transitions += 1
+        # counted apart from ``transitions`` (one per finished phase, linked to the event
+        # before it: this landing is the event before the phase it starts)
+        self.chatter_landings += 1
         where = f"landing after a chatter series (t = {before.t!r} -> {after.t!r} s)"
         ends = []
         for b in (before, after):
@@ -645,6 +651,7 @@ class PhaseAudit:
             "contact_phases": self.phases,
             "phase_ends": dict(self.ends),
             "transitions": self.transitions,
+            "chatter_landings": self.chatter_landings,
             "transition_energy_created": self.transition_energy_created,
             "transition_jumps": self.transition_jumps,
             "unlinked_phases": self.unlinked,
@@ -959,6 +966,7 @@ def _aggregate(reports: list[dict[str, Any]]) -> dict[str, Any]:
         "unlinked_phases": total("unlinked_phases"),
         "phase_energy_created": total("phase_energy_created"),
         "transitions": total("transitions"),
+        "chatter_landings": total("chatter_landings"),
         "snaps": total("snaps"),
         "worst_snap": extreme("worst_snap", max, -math.inf),
         "static_phases": total("static_phases"),
@@ -1051,7 +1059,8 @@ def format_summary(s: dict[str, Any]) -> str:
         f"  clearance at contact phases' ends: {s['contact_lowest_clearance']:.3g} .. "
         f"{s['contact_highest_clearance']:.3g} m",
         f"  worst energy excess at impacts (relative): {s['worst_energy_excess']:.3g}",
-        f"  transitions into a phase audited: {s['transitions']:,}, worst relative "
+        f"  transitions into a phase audited: {s['transitions']:,} (and "
+        f"{s.get('chatter_landings', 0):,} landings after a summed chatter series), worst relative "
         f"kinetic-energy excess {s['worst_transition_excess']:.3g} ({s['snaps']:,} rolling "
         f"starts with the spin snapped within mode_for's tolerance, largest energy change "
         f"{s['worst_snap']:.3g})",
