@@ -9,7 +9,8 @@ import math
 from bench import baseline as baseline_mod
 from bench import contact as contact_mod
 from bench import report, runio
-from bench.report import figure, num, table
+from bench.markdown import table
+from bench.report import figure, num
 
 #: The appendix with the full tables, beside performance.md.
 TABLES = "performance-tables.md"

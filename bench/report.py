@@ -6,7 +6,8 @@ import math
 
 from bench import contact as contact_mod
 from bench import ladder as ladder_mod
-from bench import report_throughput
+from bench import report_throughput, runio
+from bench.markdown import table
 from bench.workprecision import cost_at
 
 FIG = "figures/performance"
@@ -25,12 +26,6 @@ def num(x, digits: int = 2) -> str:
     if math.isinf(x):
         return "inf"
     return f"{x:.{digits}g}" if 1e-3 <= abs(x) < 1e5 else f"{x:.{digits - 1}e}"
-
-
-def table(header: list[str], rows: list[list]) -> str:
-    lines = ["| " + " | ".join(header) + " |", "|" + " --- |" * len(header)]
-    lines += ["| " + " | ".join(str(c) for c in row) + " |" for row in rows]
-    return "\n".join(lines)
 
 
 def figure(name: str, alt: str, command: str) -> str:
@@ -83,8 +78,6 @@ def target_rows(results: dict) -> list[list[str]]:
     if "contact" in s:
         rows += contact_targets(s["contact"])
     if "io" in s:
-        from bench import runio
-
         rows += runio.target_rows(s["io"])
     if "workprecision" in s:
         ratios = speed_ratios(s["workprecision"])
@@ -599,8 +592,6 @@ def render_tables(results: dict, command: str) -> str:
     if "contact" in s:
         out.append(text.CONTACT + "\n" + section_contact(s["contact"], command))
     if "io" in s:
-        from bench import runio
-
         out.append(runio.tables_section(s["io"], command))
     return "\n".join(out).rstrip() + "\n"
 

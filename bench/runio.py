@@ -18,7 +18,7 @@ import sys
 import tempfile
 from pathlib import Path
 
-from bench.report import table
+from bench.markdown import table
 
 SCENE = "wedge-6.6hz"
 #: impacts of the run measured (full, quick)

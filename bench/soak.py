@@ -97,8 +97,8 @@ from billiard.run.simulate import (
     run_streamed,
     simulate,
 )
-from billiard.runfile.record import read_collisions
 from billiard.runfile.sidecsv import CONTACTS_NAME, read_side_csv
+from billiard.runfile.tables import read_collisions
 from billiard.scene.scene import PAPER_SCENES, Scene, fowles_coefficients, load_scene, with_values
 from billiard.status import Status
 

@@ -128,7 +128,7 @@ __version__ = "0.1.0"
 
 _EXPORTS = {
     "load_curve": "billiard.geometry.curves",
-    "read_collisions": "billiard.runfile.record",
+    "read_collisions": "billiard.runfile.tables",
     "open_run": "billiard.run.load",
     "read_contacts": "billiard.runfile.tables",
     "read_trajectory": "billiard.runfile.tables",

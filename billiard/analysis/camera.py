@@ -3,7 +3,7 @@
 The experiment (Feldt and Olafsen, filmed at a finite frame rate) did not see impacts in
 rapid succession, while the model counts every one of them. :func:`camera_filter` keeps
 the impacts that a camera with a given frame interval could have told apart. It only
-filters: a run's file is read by :func:`billiard.runfile.record.read_collisions`.
+filters: a run's file is read by :func:`billiard.runfile.tables.read_collisions`.
 """
 
 from __future__ import annotations

@@ -21,7 +21,8 @@ from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
 
 from billiard.analysis.camera import camera_filter
-from billiard.runfile.record import LID_WALL, RunDataError, read_collisions
+from billiard.runfile.record import LID_WALL, RunDataError
+from billiard.runfile.tables import read_collisions
 
 __all__ = ["RunDataError", "camera_filter", "read_collisions"]
 

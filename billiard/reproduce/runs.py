@@ -17,7 +17,8 @@ from billiard.analysis.phase import (
     phase_frame,
 )
 from billiard.run.simulate import simulate
-from billiard.runfile.record import LID_WALL, read_collisions
+from billiard.runfile.record import LID_WALL
+from billiard.runfile.tables import read_collisions
 from billiard.scene.scene import load_scene, scene_to_toml, with_values
 
 FIG2_SCENES = ("wedge-6.6hz", "hyperbola-5.8hz", "hyperbola-4.5hz")

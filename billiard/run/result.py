@@ -14,8 +14,9 @@ import numpy as np
 
 from billiard.run.frames import Table, TableError, check_table, to_pandas, to_xarray
 from billiard.runfile.npystream import NpyRecorder
-from billiard.runfile.record import MemoryRecorder, read_collisions
+from billiard.runfile.record import MemoryRecorder
 from billiard.runfile.stream import CsvRecorder, Truncation
+from billiard.runfile.tables import read_collisions
 from billiard.scene.display import html_table, scene_rows
 from billiard.scene.scene import scene_to_toml
 from billiard.status import Status
@@ -25,7 +26,7 @@ __all__ = ["Result", "RunFile"]
 
 class RunFile:
     """A finished run's impact table on disk (``collisions.csv`` or ``collisions.npy``, or
-    any file :func:`~billiard.runfile.record.read_collisions` reads), read-only, with the
+    any file :func:`~billiard.runfile.tables.read_collisions` reads), read-only, with the
     recorder interface of a Result. Nothing is read before the columns are asked for.
 
     Args:

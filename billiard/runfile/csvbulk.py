@@ -42,7 +42,7 @@ def read_bulk(
     path: str | os.PathLike[str], columns: Sequence[str], required: Sequence[str]
 ) -> dict[str, np.ndarray] | None:
     """The columns of the ``collisions.csv`` file ``path`` (dtypes as
-    :func:`billiard.runfile.record.read_collisions`), or None when the file is not a plain
+    :func:`billiard.runfile.tables.read_collisions`), or None when the file is not a plain
     one (see the module's note) and has to be read line by line.
 
     Args:

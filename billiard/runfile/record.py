@@ -24,7 +24,8 @@ q3         rotation angle of the ball (rad), the integral of the spin
 Floats are written with :func:`repr`, so a CSV file reads back bit for bit. ``wall`` is an
 integer in the file too; files written before it was (the lid as the word ``lid``) still
 read, the lid as ``-1``. A run may instead be stored as ``collisions.npy``, typed binary
-rows (:mod:`billiard.runfile.npyfile`); :func:`read_collisions` reads either.
+rows (:mod:`billiard.runfile.npyfile`); :func:`billiard.runfile.tables.read_collisions`
+reads either.
 
 A streamed file (:mod:`billiard.runfile.stream`) only ever grows by whole rows; an unterminated
 last line, the remains of a write cut short by a kill, is skipped by the reader here.
@@ -57,7 +58,7 @@ __all__ = [
     "LID_WALL",
     "RunDataError",
     "MemoryRecorder",
-    "read_collisions",
+    "read_collisions_csv",
     "write_collisions",
 ]
 
@@ -221,44 +222,32 @@ def _fail(path: str | os.PathLike[str], problem: str) -> RunDataError:
     return RunDataError(f"{path}: {' '.join(problem.split())}")
 
 
-def read_collisions(path: str | os.PathLike[str]) -> dict[str, np.ndarray]:
-    """Read a run's impacts, ``collisions.csv`` or ``collisions.npy``, into numpy arrays,
-    one per column; the file's contents tell which it is (a ``.npy`` file starts with
-    NumPy's magic bytes).
+def read_collisions_csv(path: str | os.PathLike[str]) -> dict[str, np.ndarray]:
+    """Read a run's impacts from ``collisions.csv`` into numpy arrays, one per column
+    (:func:`billiard.runfile.tables.read_collisions` reads the binary file too, and is
+    the reader to call).
 
-    CSV: the first non-blank line that does not start with ``#`` is the header; blank
-    lines and ``#`` comment lines are skipped, and so is an unterminated last row (a
-    write cut short when the run was killed; resuming the run completes it). A file as
-    billiard writes it is parsed in bulk (:mod:`billiard.runfile.csvbulk`), any other one
-    line by line; both give the same values, bit for bit.
-
-    Binary (:mod:`billiard.runfile.npyfile`): the rows its header counts; the numeric
-    columns are read-only views of the file mapped into memory (nothing is read before
-    it is used), ``regime`` is decoded from its codes.
+    The first non-blank line that does not start with ``#`` is the header; blank lines
+    and ``#`` comment lines are skipped, and so is an unterminated last row (a write cut
+    short when the run was killed; resuming the run completes it). A file as billiard
+    writes it is parsed in bulk (:mod:`billiard.runfile.csvbulk`), any other one line by
+    line; both give the same values, bit for bit.
 
     Returns:
         A dict column name -> 1-D array with one entry per impact, in file order, with
         the same dtypes as ``Result.columns``: ``n`` and ``wall`` int64 (``wall`` -1 for
         the lid, :data:`LID_WALL`; the word ``lid`` of older CSV files reads as -1),
         ``regime`` strings, every other column of :data:`COLUMNS` float64 in SI units (s,
-        m, m/s, rad/s, J, N s). Extra columns of a CSV file are kept (float64 when every
-        value is a number, else strings). A file with a header and no rows gives arrays of
-        length 0.
+        m, m/s, rad/s, J, N s). Extra columns are kept (float64 when every value is a
+        number, else strings). A file with a header and no rows gives arrays of length 0.
 
     Raises:
         RunDataError: the file is missing or unreadable, has no header, lacks one of
             :data:`REQUIRED_COLUMNS`, has a row with the wrong number of fields, a value
-            that is not of its column's type, or impact times that decrease (CSV); or its
-            binary header is not that of a run file or promises more rows than it holds.
+            that is not of its column's type, or impact times that decrease.
     """
     try:
         check_regular(path)  # /dev/zero or a pipe would be read without end
-        with open(path, "rb") as raw:
-            start = raw.read(len(NPY_MAGIC))
-        if start == NPY_MAGIC:
-            from billiard.runfile.npyfile import COLLISIONS, read_table
-
-            return read_table(path, COLLISIONS)
         from billiard.runfile.csvbulk import read_bulk
 
         columns = read_bulk(path, COLUMNS, REQUIRED_COLUMNS)

@@ -190,7 +190,7 @@ def regime_labels(codes: np.ndarray) -> np.ndarray:
 
 def column_arrays(names: Sequence[str], blocks: Iterable[np.ndarray]) -> dict[str, np.ndarray]:
     """Column name -> array over the rows of ``blocks``, with the dtypes of
-    :func:`billiard.runfile.record.read_collisions` (one column built at a time)."""
+    :func:`billiard.runfile.tables.read_collisions` (one column built at a time)."""
     blocks = list(blocks)
     out: dict[str, np.ndarray] = {}
     for index, name in enumerate(names):

@@ -50,7 +50,7 @@ from billiard.runfile.record import (
     LINE_END,
     _format,
     _header_line,
-    read_collisions,
+    read_collisions_csv,
     record_of,
 )
 from billiard.runfile.rows import format_rows_bytes
@@ -478,7 +478,7 @@ class CsvRecorder:
         self._settle()
         if self._fd is not None and self.failed is None:
             self.flush()
-        return read_collisions(self.path)
+        return read_collisions_csv(self.path)
 
     def write_csv(self, path: str | os.PathLike[str]) -> None:
         self._settle()

@@ -1,8 +1,8 @@
-"""The side tables of a run, CSV or binary, read by one function each:
-:func:`read_contacts` (``contacts.csv`` / ``contacts.npy``, one row per contact phase of a
-run with ``contact.model = "phases"``) and :func:`read_trajectory` (``trajectory.csv`` /
-``trajectory.npy``, the samples of ``billiard run --sample DT``). The impacts are
-:func:`billiard.runfile.record.read_collisions`.
+"""The tables of a run, CSV or binary (the file's contents tell which), read by one
+function each: :func:`read_collisions` (``collisions.csv`` / ``collisions.npy``, one row
+per impact), :func:`read_contacts` (``contacts.csv`` / ``contacts.npy``, one row per
+contact phase of a run with ``contact.model = "phases"``) and :func:`read_trajectory`
+(``trajectory.csv`` / ``trajectory.npy``, the samples of ``billiard run --sample DT``).
 """
 
 from __future__ import annotations
@@ -11,12 +11,43 @@ import os
 
 import numpy as np
 
-from billiard.runfile.npyfile import CONTACTS, TRAJECTORY, Table, read_table
-from billiard.runfile.record import NPY_MAGIC, RunDataError
+from billiard.runfile.npyfile import COLLISIONS, CONTACTS, TRAJECTORY, Table, read_table
+from billiard.runfile.record import NPY_MAGIC, RunDataError, read_collisions_csv
 from billiard.runfile.sidecsv import read_side_csv
 from billiard.scene.userfile import FileRefused, check_regular
 
-__all__ = ["read_contacts", "read_trajectory"]
+__all__ = ["read_collisions", "read_contacts", "read_trajectory"]
+
+
+def read_collisions(path: str | os.PathLike[str]) -> dict[str, np.ndarray]:
+    """Read a run's impacts, ``collisions.csv`` or ``collisions.npy``, into numpy arrays,
+    one per column; the file's contents tell which it is (a ``.npy`` file starts with
+    NumPy's magic bytes).
+
+    CSV: as :func:`billiard.runfile.record.read_collisions_csv` (bulk parsing, bit-exact
+    values, an unterminated last row skipped). Binary (:mod:`billiard.runfile.npyfile`):
+    the rows its header counts; the numeric columns are read-only views of the file
+    mapped into memory (nothing is read before it is used), ``regime`` is decoded from
+    its codes.
+
+    Returns:
+        A dict column name -> 1-D array with one entry per impact, in file order, with
+        the same dtypes as ``Result.columns`` whatever the format: ``n`` and ``wall``
+        int64 (``wall`` -1 for the lid), ``regime`` strings, every other column float64 in
+        SI units (s, m, m/s, rad/s, J, N s).
+
+    Raises:
+        RunDataError: the file is missing or unreadable, or not a run's impact table (see
+            :func:`~billiard.runfile.record.read_collisions_csv`); or its binary header is
+            not that of a run file or promises more rows than it holds.
+    """
+    try:
+        check_regular(path)  # /dev/zero or a pipe would be read without end
+        with open(path, "rb") as handle:
+            binary = handle.read(len(NPY_MAGIC)) == NPY_MAGIC
+    except (FileRefused, OSError):
+        binary = False  # the CSV reader says what is wrong with the file, in its words
+    return read_table(path, COLLISIONS) if binary else read_collisions_csv(path)
 
 
 def read_contacts(path: str | os.PathLike[str]) -> dict[str, np.ndarray]:

@@ -9,7 +9,7 @@ import importlib
 import pytest
 
 from billiard.cli import main
-from billiard.runfile.record import read_collisions
+from billiard.runfile.tables import read_collisions
 
 store = importlib.import_module("billiard.run.store")
 

@@ -11,7 +11,7 @@ from pathlib import Path
 
 import pytest
 
-from billiard.runfile.record import read_collisions
+from billiard.runfile.tables import read_collisions
 
 IMPACTS = 300
 

@@ -9,7 +9,8 @@ import pytest
 
 from billiard.errors import GeometryError
 from billiard.run.simulate import simulate
-from billiard.runfile.record import COLUMNS, LID_WALL, read_collisions
+from billiard.runfile.record import COLUMNS, LID_WALL
+from billiard.runfile.tables import read_collisions
 from billiard.scene.scene import load_scene, replace, with_values
 from billiard.scene.spec import InitialSpec
 

@@ -9,7 +9,8 @@ import numpy as np
 import pytest
 
 from billiard.analysis.camera import camera_filter
-from billiard.runfile.record import read_collisions, write_collisions
+from billiard.runfile.record import write_collisions
+from billiard.runfile.tables import read_collisions
 from tests.plot_support import COLUMN_NAMES, bouncing_ball
 
 

@@ -27,7 +27,8 @@ from billiard.plot.contacts import phase_path
 from billiard.plot.flights import flight_positions
 from billiard.plot.outline import drive_offset
 from billiard.plot.phase import phase_coordinates
-from billiard.runfile.record import RunDataError, read_collisions
+from billiard.runfile.record import RunDataError
+from billiard.runfile.tables import read_collisions
 from billiard.scene.scene import load_scene
 from tests import browser
 from tests.plot_support import A_CURVE, C_CURVE, bouncing_ball, make_run, scene_toml

@@ -20,8 +20,8 @@ from billiard.reproduce.runs import (
     compare_models,
 )
 from billiard.reproduce.text import _maps_text, models_section
-from billiard.runfile.record import read_collisions
 from billiard.runfile.sidecsv import read_side_csv
+from billiard.runfile.tables import read_collisions
 
 IMPACTS = 300
 

@@ -20,7 +20,7 @@ import pytest
 from billiard.cli import main
 from billiard.run.simulate import CHECKPOINT_NAME, CSV_NAME, resume, simulate
 from billiard.runfile.checkpoint import read_checkpoint
-from billiard.runfile.record import read_collisions
+from billiard.runfile.tables import read_collisions
 from billiard.scene.scene import load_scene
 
 engine = importlib.import_module("billiard.engine.simulation")

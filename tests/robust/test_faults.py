@@ -20,7 +20,7 @@ from pathlib import Path
 
 from billiard.run.simulate import CHECKPOINT_NAME, COLLAPSE_COUNT, CSV_NAME, resume, simulate
 from billiard.runfile.checkpoint import read_checkpoint
-from billiard.runfile.record import read_collisions
+from billiard.runfile.tables import read_collisions
 from billiard.scene.checks import LIMITS, Limit
 from billiard.scene.scene import load_scene, with_values
 from billiard.status import Status

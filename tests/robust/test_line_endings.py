@@ -8,8 +8,9 @@ import numpy as np
 from billiard.engine.interrupt import signal_after
 from billiard.run.simulate import CHECKPOINT_NAME, CSV_NAME, RunInterrupted, resume, simulate
 from billiard.runfile.checkpoint import read_checkpoint, write_checkpoint
-from billiard.runfile.record import read_collisions, write_collisions
+from billiard.runfile.record import write_collisions
 from billiard.runfile.stream import CsvRecorder
+from billiard.runfile.tables import read_collisions
 from billiard.scene.scene import load_scene
 
 

@@ -31,7 +31,7 @@ from billiard.run.simulate import (
     simulate,
 )
 from billiard.runfile.checkpoint import CheckpointError, read_checkpoint
-from billiard.runfile.record import read_collisions
+from billiard.runfile.tables import read_collisions
 from billiard.scene.scene import load_scene, replace, with_values
 from billiard.scene.spec import InitialSpec
 

@@ -18,7 +18,7 @@ from billiard.runfile.record import (
     LID_WALL,
     REQUIRED_COLUMNS,
     RunDataError,
-    read_collisions,
+    read_collisions_csv,
     write_collisions,
 )
 from billiard.scene.scene import load_scene
@@ -59,7 +59,7 @@ def test_a_run_s_file_reads_in_bulk_as_line_by_line(wedge_csv, monkeypatch):
     fast = bulk(wedge_csv)
     assert fast is not None
     assert_same(fast, careful(wedge_csv))
-    assert_same(read_collisions(wedge_csv), fast)
+    assert_same(read_collisions_csv(wedge_csv), fast)
     assert fast["wall"].dtype == np.int64 and LID_WALL in fast["wall"]
     assert b",-1," in wedge_csv.read_bytes() and b"lid" not in wedge_csv.read_bytes()
 
@@ -105,7 +105,7 @@ def test_old_files_with_the_word_lid_still_read(wedge_csv, tmp_path, line_end):
     fast = bulk(path)
     assert fast is not None
     assert_same(fast, careful(path))
-    assert_same(read_collisions(path), read_collisions(wedge_csv))
+    assert_same(read_collisions_csv(path), read_collisions_csv(wedge_csv))
 
 
 # edits that take a file off the bulk path: each must still read as the careful
@@ -140,10 +140,10 @@ def test_other_files_are_left_to_the_careful_reader(wedge_csv, tmp_path, edit):
         expected = careful(path)
     except RunDataError as exc:
         with pytest.raises(RunDataError) as caught:
-            read_collisions(path)
+            read_collisions_csv(path)
         assert str(caught.value) == str(exc)
         return
-    assert_same(read_collisions(path), expected)
+    assert_same(read_collisions_csv(path), expected)
 
 
 def test_decreasing_times_are_refused_with_the_line(wedge_csv, tmp_path):
@@ -153,7 +153,7 @@ def test_decreasing_times_are_refused_with_the_line(wedge_csv, tmp_path):
     path.write_text("\n".join(lines))
     assert bulk(path) is not None
     with pytest.raises(RunDataError) as fast:
-        read_collisions(path)
+        read_collisions_csv(path)
     with pytest.raises(RunDataError) as slow:
         careful(path)
     assert str(fast.value) == str(slow.value)

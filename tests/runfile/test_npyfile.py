@@ -15,7 +15,8 @@ import billiard
 from billiard.run.simulate import simulate
 from billiard.runfile import npyfile
 from billiard.runfile.npyfile import COLLISIONS, CONTACTS, TABLES, TRAJECTORY
-from billiard.runfile.record import COLUMNS, LID_WALL, RunDataError, read_collisions
+from billiard.runfile.record import COLUMNS, LID_WALL, RunDataError
+from billiard.runfile.tables import read_collisions
 from billiard.scene.scene import load_scene, with_values
 
 # (scene, changes, impacts, sampling interval s): the wedge hits the lid from impact 113

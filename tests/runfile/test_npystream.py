@@ -23,7 +23,8 @@ from billiard.runfile import npyfile
 from billiard.runfile.checkpoint import CheckpointError, read_checkpoint
 from billiard.runfile.npyfile import COLLISIONS
 from billiard.runfile.npystream import NpyMark, NpyRecorder
-from billiard.runfile.record import MemoryRecorder, read_collisions
+from billiard.runfile.record import MemoryRecorder
+from billiard.runfile.tables import read_collisions
 from billiard.scene.scene import load_scene, with_values
 
 engine = importlib.import_module("billiard.engine.simulation")
