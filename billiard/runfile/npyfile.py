@@ -42,9 +42,12 @@ from billiard.kernels.layout import NCOL
 from billiard.runfile.record import (
     COLUMNS,
     CONTACT_COLUMNS,
+    LINE_END,
     NPY_MAGIC,
     TRAJECTORY_COLUMNS,
     RunDataError,
+    format_field,
+    header_line,
 )
 from billiard.runfile.rows import format_rows_bytes, regime_labels
 from billiard.scene.userfile import FileRefused, check_regular
@@ -336,14 +339,12 @@ def export_csv(source: str | os.PathLike[str], target: str | os.PathLike[str], t
         RunDataError: as :func:`open_rows`.
         OSError: ``target`` cannot be written.
     """
-    from billiard.runfile.record import LINE_END, _format, _header_line
-
     rows = open_rows(source, table)
     target = Path(target)
     temp = target.with_name(f".{target.name}.{os.getpid()}.tmp")
     try:
         with open(temp, "wb") as handle:
-            handle.write(_header_line(table.columns).encode("utf-8"))
+            handle.write(header_line(table.columns).encode("utf-8"))
             for start in range(0, len(rows), EXPORT_ROWS):
                 part = rows[start : start + EXPORT_ROWS]
                 if table is COLLISIONS:
@@ -352,7 +353,7 @@ def export_csv(source: str | os.PathLike[str], target: str | os.PathLike[str], t
                 lines = []
                 for row in part.tolist():
                     cells = [v.decode("ascii") if isinstance(v, bytes) else v for v in row]
-                    lines.append(",".join(_format(v) for v in cells) + "\n")
+                    lines.append(",".join(format_field(v) for v in cells) + "\n")
                 handle.write("".join(lines).encode("utf-8"))
             handle.flush()
             os.fsync(handle.fileno())

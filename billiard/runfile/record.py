@@ -59,6 +59,8 @@ __all__ = [
     "RunDataError",
     "MemoryRecorder",
     "read_collisions_csv",
+    "format_field",
+    "header_line",
     "write_collisions",
 ]
 
@@ -150,7 +152,9 @@ def _as_arrays(columns: dict[str, list[Any]], impacts: bool = True) -> dict[str,
     return out
 
 
-def _format(value: Any) -> str:
+def format_field(value: Any) -> str:
+    """A CSV field's text: floats by :func:`repr` (read back bit for bit), integers and
+    text as they are."""
     if isinstance(value, (float, np.floating)):
         return repr(float(value))
     if isinstance(value, np.integer):
@@ -207,12 +211,13 @@ class MemoryRecorder:
             write_collisions(path, dict(zip(self.names, self._data, strict=True)))
             return
         with open(path, "w", newline="", encoding="utf-8") as handle:
-            handle.write(_header_line(self.names))
+            handle.write(header_line(self.names))
             for block in self._blocks:
                 handle.write(format_rows(block, LINE_END))
 
 
-def _header_line(columns: Sequence[str], line_end: str = LINE_END) -> str:
+def header_line(columns: Sequence[str], line_end: str = LINE_END) -> str:
+    """The CSV header line of ``columns``, ended by ``line_end``."""
     buffer = io.StringIO()
     csv.writer(buffer, lineterminator=line_end).writerow(columns)
     return buffer.getvalue()
@@ -409,7 +414,7 @@ def write_collisions(path: str | os.PathLike[str], columns: Mapping[str, Sequenc
         writer = csv.writer(handle, lineterminator=LINE_END)
         writer.writerow(names)
         for row in zip(*(columns[name] for name in names), strict=True):
-            writer.writerow([_format(v) for v in row])
+            writer.writerow([format_field(v) for v in row])
     return path
 
 

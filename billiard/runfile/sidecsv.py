@@ -17,7 +17,7 @@ import numpy as np
 
 from billiard.runfile.checkpoint import CheckpointError, open_checked
 from billiard.runfile.csvfile import prefix_crc32
-from billiard.runfile.record import _format
+from billiard.runfile.record import format_field
 from billiard.scene.userfile import read_limited
 
 __all__ = ["CONTACTS_NAME", "TRAJECTORY_NAME", "SideCsv", "check_side", "read_side_csv"]
@@ -74,7 +74,7 @@ class SideCsv:
             self._file.seek(size)
 
     def append(self, row: Sequence[Any]) -> None:
-        line = ",".join(_format(v) for v in row) + "\n"
+        line = ",".join(format_field(v) for v in row) + "\n"
         self._pending.append(line)
         self._pending_chars += len(line)
         if self._pending_chars >= SPILL_CHARS:

@@ -48,8 +48,8 @@ from billiard.runfile.record import (
     _LINE_ENDS,
     COLUMNS,
     LINE_END,
-    _format,
-    _header_line,
+    format_field,
+    header_line,
     read_collisions_csv,
     record_of,
 )
@@ -130,7 +130,7 @@ class CsvRecorder:
         if _open is None:
             self._fd: int | None = _open_locked(self.path)
             os.ftruncate(self._fd, 0)
-            header = _header_line(self.names, line_end)
+            header = header_line(self.names, line_end)
             data = header.encode("utf-8")
             try:
                 _write_all(self._fd, data)
@@ -154,13 +154,13 @@ class CsvRecorder:
         try:
             with open(path, "rb") as handle:
                 # no further than the longest header: the file may be anything
-                start = handle.readline(len(_header_line(columns, "\r\n")))
+                start = handle.readline(len(header_line(columns, "\r\n")))
         except FileNotFoundError:
             raise CheckpointError(f"{path} is missing") from None
         except OSError as exc:
             raise CheckpointError(f"{path} cannot be read: {exc.strerror or exc}") from None
         for line_end in _LINE_ENDS:
-            header = _header_line(columns, line_end)
+            header = header_line(columns, line_end)
             if start == header.encode():
                 return CsvMark(0, len(start), header, zlib.crc32(start))
         raise CheckpointError(f"{path} does not start with the header of a run file")
@@ -198,7 +198,7 @@ class CsvRecorder:
             )
         line = mark.last_line.encode()
         line_end = "\r\n" if mark.last_line.endswith("\r\n") else "\n"
-        header = _header_line(columns, line_end).encode()
+        header = header_line(columns, line_end).encode()
         fd = _open_locked(path)
         check: BinaryIO | None = None
         try:
@@ -262,7 +262,7 @@ class CsvRecorder:
 
     def append(self, row: Sequence[Any]) -> None:
         self._settle()
-        self._writer.writerow([_format(v) for v in row])
+        self._writer.writerow([format_field(v) for v in row])
         self._pending += self._row_text.getvalue().encode("utf-8")
         self._row_text.seek(0)
         self._row_text.truncate()
