@@ -1,0 +1,215 @@
+"""Ensembles of trajectories on the compiled kernels: one parameter set of a scene, many
+starts, advanced together by :func:`billiard.kernels.ensemble.run_batch` on all cores.
+
+:func:`prepare` builds, once per parameter set (every scene key but the ball's start
+``initial.*``), what the engine's set-up builds for a run: the state vector's constants
+(one :class:`~billiard.engine.simulation.Simulation` of the scene with the ball at rest
+on the bottom, which also gives the resting height), the curve's parameters and wall
+functions. :func:`start` then puts each start into a state vector as a run's set-up does
+(ball state, fresh event count, the warm starts the start check moves) and reports the
+starts that overlap a wall, the lid or the escape height; :func:`advance` runs them.
+A trajectory's state vector after :func:`start` is the one ``billiard run`` builds for
+that start, slot for slot, and its impacts are the run's, bit for bit.
+
+Plain Python around the kernels; nothing here runs per impact.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from billiard import jit as _jit
+from billiard.engine.ctx import state_vector
+from billiard.kernels import layout as L
+
+__all__ = [
+    "BALL_KEYS",
+    "EnsembleSetup",
+    "advance",
+    "prepare",
+    "start",
+    "supports",
+]
+
+#: the scene keys of a start: what may differ between the trajectories of one set-up
+BALL_KEYS = (
+    "initial.q1",
+    "initial.q2",
+    "initial.v1",
+    "initial.v2",
+    "initial.omega",
+    "initial.t",
+)
+#: a start this far (m) inside a wall, the lid or above the escape height is refused,
+#: as the engine's set-up refuses it (Boundary.check_initial_position)
+_OVERLAP = 1e-12
+
+
+def supports(scene: Any) -> str | None:
+    """None when trajectories of ``scene`` run on the ensemble kernel, else why not."""
+    if getattr(scene.contact, "model", "impacts") != "impacts":
+        return "contact.model = 'phases' (the ensemble kernel has the impacts model)"
+    if scene.run.method != "event":
+        return f"run.method = {scene.run.method!r} (the ensemble kernel has method 'event')"
+    if not _jit.ENABLED:
+        return "numba is not enabled (the ensemble kernel runs compiled only)"
+    return None
+
+
+@dataclass
+class EnsembleSetup:
+    """What the trajectories of one parameter set share.
+
+    Attributes:
+        scene: the scene (its ``initial.*`` keys are the template's, not used).
+        template: the state vector of a run's set-up, warm starts fresh (SIZE floats).
+        params: the curve's parameters.
+        walls: the curve's wall functions as the kernels take them.
+        offsets: surfaces checked at the start (the offset walls, which come first).
+        rest_height: centre height (m) of the ball at rest on the bottom.
+    """
+
+    scene: Any
+    template: np.ndarray
+    params: np.ndarray
+    walls: Any
+    offsets: int
+    rest_height: float
+    drive: Any
+    lid_level: float
+    escape_level: float
+
+
+def prepare(scene: Any) -> EnsembleSetup:
+    """The set-up of ``scene``'s parameter set (a Simulation of it, ball at rest).
+
+    Raises:
+        ValueError: the scene cannot be simulated (SceneError, GeometryError), or the
+            ensemble kernel does not take it (see :func:`supports`).
+    """
+    from billiard.engine.kernel_engine import supports as kernel_supports
+    from billiard.engine.simulation import Simulation
+    from billiard.geometry.wall_functions import wall_functions
+    from billiard.scene.scene import with_values
+
+    why = supports(scene)
+    if why is not None:
+        raise ValueError(f"the ensemble kernel does not take this scene: {why}")
+    at_rest = with_values(
+        scene,
+        {"initial.q1": None, "initial.q2": None, "initial.v1": 0.0, "initial.v2": 0.0}
+        | {"initial.omega": 0.0, "run.duration": None},
+    )
+    sim = Simulation(at_rest)
+    why = kernel_supports(sim)
+    if why is not None:
+        raise ValueError(f"the ensemble kernel does not take this scene: {why}")
+    template = np.array(state_vector(sim), dtype=np.float64)
+    # the warm starts as a run's set-up has them before its start check moves them
+    for j, (s, slope) in enumerate(sim.boundary.initial_warm()):
+        base = L.SURF + j * L.SURF_STRIDE
+        template[base + L.S_WS] = s
+        template[base + L.S_WSLOPE] = slope
+    boundary = sim.boundary
+    return EnsembleSetup(
+        scene=scene,
+        template=template,
+        params=np.array(boundary.walls[0].p, dtype=np.float64),
+        walls=wall_functions(sim),
+        offsets=len(boundary.offsets),
+        rest_height=float(sim.initial.q2),
+        drive=sim.drive,
+        lid_level=math.inf if boundary.lid is None else float(boundary.lid.level),
+        escape_level=math.inf if boundary.escape is None else float(boundary.escape.level),
+    )
+
+
+def start(
+    setup: EnsembleSetup,
+    q1: Any,
+    q2: Any,
+    v1: Any = 0.0,
+    v2: Any = 0.0,
+    omega: Any = 0.0,
+    t: float = 0.0,
+    duration: float | None = None,
+) -> tuple[np.ndarray, np.ndarray]:
+    """State vectors of the starts (arrays broadcast together; m, m/s, rad/s) at time t
+    (s), each run ending at t + ``duration`` (s; None: no end in time).
+
+    Returns:
+        (ctxs, ok): the state vectors (n x SIZE) and, per start, whether a run's set-up
+        accepts it (False: the ball overlaps a wall or the lid, or starts above the
+        escape height; its row is not to be run).
+    """
+    from billiard.kernels.ensemble import start_batch
+
+    q1, q2, v1, v2, omega = np.broadcast_arrays(
+        *(np.asarray(x, dtype=np.float64) for x in (q1, q2, v1, v2, omega))
+    )
+    n = q1.size
+    drive = setup.drive
+    theta = drive.angle(t)
+    # the boundary-frame centre as Drive.to_boundary_frame computes it
+    d = drive.amplitude * math.sin(theta)
+    px, py = (q1 - d, q2) if drive.horizontal else (q1, q2 - d)
+    balls = np.empty((n, 7))
+    balls[:, 0] = t
+    balls[:, 1] = theta
+    for column, values in enumerate((q1, q2, v1, v2, omega), start=2):
+        balls[:, column] = values.ravel()
+    ctxs = np.empty((n, setup.template.size))
+    gaps = np.empty(n)
+    params = np.ascontiguousarray(np.broadcast_to(setup.params, (n, setup.params.size)))
+    px = np.ascontiguousarray(px, dtype=np.float64).ravel()
+    py = np.ascontiguousarray(py, dtype=np.float64).ravel()
+    start_batch(ctxs, params, setup.walls, setup.template, balls, px, py, setup.offsets, gaps)
+    ctxs[:, L.EN_UNTIL] = math.inf if duration is None else t + duration
+    ok = (py <= setup.lid_level + _OVERLAP) & (py < setup.escape_level) & (gaps >= -_OVERLAP)
+    return ctxs, ok
+
+
+def constants(scene: Any, tolerance: float, max_period: int, window: int) -> np.ndarray:
+    """The period test's per-trajectory constants (``billiard.kernels.ensemble`` C_*)."""
+    from billiard.kernels import ensemble as E
+
+    consts = np.empty(E.NCONST)
+    consts[E.C_FREQUENCY] = scene.drive.frequency
+    consts[E.C_PHASE] = scene.drive.phase
+    consts[E.C_RADIUS] = scene.ball.radius
+    consts[E.C_GRAVITY] = scene.run.gravity
+    consts[E.C_TOLERANCE] = tolerance
+    consts[E.C_MAX_PERIOD] = max_period
+    consts[E.C_WINDOW] = window
+    return consts
+
+
+def advance(
+    ctxs: np.ndarray,
+    params: np.ndarray,
+    walls: Any,
+    consts: np.ndarray,
+    *,
+    transient: int,
+    impacts: int,
+    width: int,
+) -> tuple[np.ndarray, np.ndarray]:
+    """Run every trajectory (rows of ``ctxs``, advanced in place) to ``transient +
+    impacts`` impacts, measuring the last ``impacts``; ``width`` impacts are kept in
+    each trajectory's ring. Returns (stats, rings) (``billiard.kernels.ensemble``)."""
+    from billiard.kernels import ensemble as E
+
+    n = ctxs.shape[0]
+    params = np.ascontiguousarray(np.broadcast_to(params, (n, params.shape[-1])))
+    consts = np.ascontiguousarray(np.broadcast_to(consts, (n, E.NCONST)))
+    rows = np.empty((n, L.NCOL))
+    rings = np.full((n, width, E.RCOL), np.nan)
+    stats = np.zeros((n, E.NSTAT))
+    total = transient + impacts
+    with _jit.compiling(E.run_batch):
+        E.run_batch(ctxs, params, walls, rows, rings, stats, consts, transient, total, 0, n)
+    return stats, rings
