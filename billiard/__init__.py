@@ -135,6 +135,7 @@ _EXPORTS = {
     "camera_filter": "billiard.analysis.camera",
     "plot_run": "billiard.plot",
     "view": "billiard.plot.interactive",
+    "run_ensemble": "billiard.sweep.ensemble",
 }
 
 __all__ = [
@@ -153,6 +154,7 @@ __all__ = [
     "read_collisions",
     "read_contacts",
     "read_trajectory",
+    "run_ensemble",
     "scene_from_dict",
     "scene_to_toml",
     "simulate",

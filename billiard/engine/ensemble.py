@@ -17,6 +17,9 @@ Plain Python around the kernels; nothing here runs per impact.
 from __future__ import annotations
 
 import math
+import os
+from collections.abc import Callable
+from concurrent.futures import FIRST_COMPLETED, ThreadPoolExecutor, wait
 from dataclasses import dataclass
 from typing import Any
 
@@ -188,6 +191,21 @@ def constants(scene: Any, tolerance: float, max_period: int, window: int) -> np.
     return consts
 
 
+#: impacts per trajectory of one round of :func:`advance` (a round's calls return to
+#: Python, where Ctrl-C and the progress report are seen)
+ROUND_IMPACTS = 2000
+#: trajectories per call of the kernel in a round, at most
+SLICE = 256
+
+
+def threads_default() -> int:
+    """The cores this process may run on."""
+    try:
+        return len(os.sched_getaffinity(0))
+    except (AttributeError, OSError):
+        return os.cpu_count() or 1
+
+
 def advance(
     ctxs: np.ndarray,
     params: np.ndarray,
@@ -197,10 +215,19 @@ def advance(
     transient: int,
     impacts: int,
     width: int,
+    threads: int | None = None,
+    progress: Callable[[int], None] | None = None,
 ) -> tuple[np.ndarray, np.ndarray]:
     """Run every trajectory (rows of ``ctxs``, advanced in place) to ``transient +
     impacts`` impacts, measuring the last ``impacts``; ``width`` impacts are kept in
-    each trajectory's ring. Returns (stats, rings) (``billiard.kernels.ensemble``)."""
+    each trajectory's ring. Returns (stats, rings) (``billiard.kernels.ensemble``).
+
+    The trajectories run in rounds of :data:`ROUND_IMPACTS` impacts, each round in
+    slices of at most :data:`SLICE` trajectories spread over ``threads`` threads
+    (default: every core this process may use; the kernel runs without the GIL).
+    Between two slices the calling thread sees Ctrl-C (KeyboardInterrupt: the slices
+    running finish first, nothing is returned) and ``progress(impacts so far)`` is
+    called. The result does not depend on the rounds, slices or threads."""
     from billiard.kernels import ensemble as E
 
     n = ctxs.shape[0]
@@ -209,7 +236,40 @@ def advance(
     rows = np.empty((n, L.NCOL))
     rings = np.full((n, width, E.RCOL), np.nan)
     stats = np.zeros((n, E.NSTAT))
+    stats[:, E.ST_STATUS] = E.RUN_PENDING
     total = transient + impacts
+    threads = max(1, min(threads or threads_default(), n))
+    size = max(1, min(SLICE, -(-n // (4 * threads))))
+    slices = [(lo, min(n, lo + size)) for lo in range(0, n, size)]
+
+    def call(target: int, lo: int, hi: int) -> None:
+        E.run_batch(
+            ctxs, params, walls, rows, rings, stats, consts, transient, total, target, lo, hi
+        )
+
+    if n == 0:
+        return stats, rings
     with _jit.compiling(E.run_batch):
-        E.run_batch(ctxs, params, walls, rows, rings, stats, consts, transient, total, 0, n)
+        call(min(total, 1), 0, 1)  # compiled (or loaded) once, before the threads start
+    target = 0
+    pool = ThreadPoolExecutor(max_workers=threads) if threads > 1 else None
+    try:
+        while target < total:
+            target = min(total, target + ROUND_IMPACTS)
+            if pool is None:
+                for lo, hi in slices:
+                    call(target, lo, hi)
+                    if progress is not None:
+                        progress(int(stats[:, E.ST_TOTAL].sum()))
+                continue
+            pending = {pool.submit(call, target, lo, hi) for lo, hi in slices}
+            while pending:
+                done, pending = wait(pending, timeout=0.2, return_when=FIRST_COMPLETED)
+                for future in done:
+                    future.result()
+                if progress is not None:
+                    progress(int(stats[:, E.ST_TOTAL].sum()))
+    finally:
+        if pool is not None:
+            pool.shutdown(wait=True, cancel_futures=True)
     return stats, rings

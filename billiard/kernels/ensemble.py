@@ -205,50 +205,55 @@ def find_period(ring, stats, consts):
 
 
 @inline
-def measure(ctx, p, walls, row, ring, stats, consts, transient, total):
-    """Advance one trajectory to ``total`` impacts (or its EN_UNTIL), measuring those
-    after ``transient``; ``row`` is scratch for one impact's row (NCOL floats). A kernel
-    stop raises out of here with ST_STATUS left at RUN_PENDING."""
-    for i in range(NSTAT):
-        stats[i] = 0.0
-    stats[ST_STATUS] = RUN_PENDING
-    status = RUN_COMPLETE
-    while ctx[EN_IMPACTS] < total:
+def measure(ctx, p, walls, row, ring, stats, consts, transient, total, target):
+    """Advance one trajectory towards ``total`` impacts (or its EN_UNTIL), measuring
+    those after ``transient``, and pause at impact ``target`` (< ``total``) with
+    ST_STATUS still RUN_PENDING: a later call goes on from there, so a long run is made
+    in rounds. ``row`` is scratch for one impact's row (NCOL floats); ``stats`` starts
+    as zeros with ST_STATUS = RUN_PENDING, and a trajectory that has ended is left as it
+    is. A kernel stop raises out of here with ST_STATUS left at RUN_PENDING."""
+    if stats[ST_STATUS] != RUN_PENDING:
+        return
+    stop = min(total, target)
+    while ctx[EN_IMPACTS] < stop:
         if not step(ctx, p, walls, row, 0):
-            status = RUN_TIME_LIMIT
-            break
+            find_period(ring, stats, consts)
+            stats[ST_STATUS] = RUN_TIME_LIMIT
+            return
         stats[ST_TOTAL] = ctx[EN_IMPACTS]
         if ctx[EN_IMPACTS] > transient:
             record(row, ring, stats)
         if ctx[EN_FAULT] != 0.0:
             # an inelastic collapse: the engine stops the run after this impact
-            status = RUN_FAILED
-            break
-    if status != RUN_FAILED:
+            stats[ST_STATUS] = RUN_FAILED
+            return
+    if ctx[EN_IMPACTS] >= total:
         find_period(ring, stats, consts)
-    stats[ST_STATUS] = status
+        stats[ST_STATUS] = RUN_COMPLETE
 
 
 @jit
-def measure_guarded(ctx, p, walls, row, ring, stats, consts, transient, total):
+def measure_guarded(ctx, p, walls, row, ring, stats, consts, transient, total, target):
     """:func:`measure`, a kernel stop or arithmetic fault caught: ST_STATUS RUN_FAILED,
     ST_CODE the stop's code (0 for an arithmetic fault)."""
     try:
-        measure(ctx, p, walls, row, ring, stats, consts, transient, total)
+        measure(ctx, p, walls, row, ring, stats, consts, transient, total, target)
     except Exception:  # noqa: BLE001 - numba catches any exception or none
         stats[ST_STATUS] = RUN_FAILED
         stats[ST_CODE] = ctx[EN_STOP]
 
 
 @jit
-def run_batch(ctxs, params, walls, rows, rings, stats, consts, transient, total, lo, hi):
-    """:func:`measure` for trajectories lo <= i < hi (``ctxs[i]``, ``params[i]``, scratch
-    ``rows[i]``, ``rings[i]``, ``stats[i]``, ``consts[i]``). Compiled without the GIL:
-    threads calling it on disjoint ranges run on all cores."""
+def run_batch(ctxs, params, walls, rows, rings, stats, consts, transient, total, target, lo, hi):
+    """:func:`measure` up to impact ``target`` for trajectories lo <= i < hi
+    (``ctxs[i]``, ``params[i]``, scratch ``rows[i]``, ``rings[i]``, ``stats[i]``,
+    ``consts[i]``). Compiled without the GIL: threads calling it on disjoint ranges run
+    on all cores."""
     for i in range(lo, hi):
         measure_guarded(
-            ctxs[i], params[i], walls, rows[i], rings[i], stats[i], consts[i], transient, total
-        )
+            ctxs[i], params[i], walls, rows[i], rings[i], stats[i], consts[i], transient, total,
+            target,
+        )  # fmt: skip
 
 
 @jit

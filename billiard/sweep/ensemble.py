@@ -1,0 +1,284 @@
+"""Many starts of one scene at once, measured as a sweep measures a point: the Python
+face of the ensemble kernel (:mod:`billiard.kernels.ensemble`).
+
+>>> import numpy as np, billiard
+>>> q1, q2 = np.meshgrid(np.linspace(-0.04, 0.04, 50), np.linspace(0.02, 0.12, 50))
+>>> result = billiard.run_ensemble("wedge-6.6hz", q1=q1, q2=q2, impacts=200)
+>>> result.attractor.shape, result.to_pandas().columns[:4].tolist()
+
+Every start runs the trajectory ``billiard run`` makes from it (bit for bit on the CPU):
+``transient`` impacts, then ``impacts`` measured ones, as ``billiard sweep`` measures a
+point (:mod:`billiard.sweep.measure`: heights, times of flight, the period of the
+post-impact state with the drive phase, the attractor class). A start that overlaps a
+wall or the lid is ``invalid``; a run that stops early is ``failed``.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from billiard.sweep.attractor import CLASSES
+
+__all__ = ["EnsembleResult", "classes_of", "run_ensemble"]
+
+#: what the measured columns hold, with their units (``EnsembleResult.columns``)
+COLUMN_UNITS = {
+    "q1_start": "m",
+    "q2_start": "m",
+    "attractor": "",
+    "period": "1",
+    "drive_periods": "1",
+    "impacts": "1",
+    "total_impacts": "1",
+    "height_mean": "m",
+    "height_std": "m",
+    "height_max": "m",
+    "tof_mean": "s",
+    "tof_std": "s",
+    "elastic_share": "1",
+    "lid_share": "1",
+    "run_status": "",
+}
+
+
+def classes_of(
+    stats: np.ndarray, valid: np.ndarray, rest_height: Any, rest_band: float
+) -> np.ndarray:
+    """The attractor class codes (indices into ``CLASSES``) of measured trajectories,
+    by :func:`billiard.sweep.attractor.classify`'s rules (no Lyapunov exponent: a
+    trajectory without a period is ``aperiodic``)."""
+    from billiard.kernels import ensemble as E
+
+    n = stats.shape[0]
+    measured = stats[:, E.ST_MEASURED]
+    failed = (stats[:, E.ST_STATUS] == E.RUN_FAILED) | (stats[:, E.ST_STATUS] == E.RUN_PENDING)
+    failed |= measured == 0
+    with np.errstate(invalid="ignore", divide="ignore"):
+        elastic = stats[:, E.ST_ELASTIC] / measured
+    rise = stats[:, E.ST_H_MAX] - rest_height
+    codes = np.full(n, CLASSES.index("aperiodic"), dtype=np.int8)
+    codes[stats[:, E.ST_PERIOD] > 0] = CLASSES.index("periodic")
+    codes[(rise <= rest_band) & (elastic >= 0.5)] = CLASSES.index("resting")
+    codes[failed] = CLASSES.index("failed")
+    codes[~valid] = CLASSES.index("invalid")
+    return codes
+
+
+@dataclass
+class EnsembleResult:
+    """The measurements of an ensemble, one entry per start (arrays shaped as the starts).
+
+    Attributes:
+        scene: the scene run.
+        columns: name -> array (units in ``COLUMN_UNITS``; ``attractor`` as class names).
+        last_height, last_tof: the last K impact heights (m) and times of flight (s) of
+            each start, NaN-padded at the front (shape: starts + (K,)).
+        final: the ball's state after its last impact, name -> array (``t``, ``q1``,
+            ``q2``, ``v1``, ``v2``, ``omega``; s, m, m/s, rad/s).
+        seconds: wall-clock time of the run (s).
+    """
+
+    scene: Any
+    shape: tuple[int, ...]
+    columns: dict[str, np.ndarray]
+    last_height: np.ndarray
+    last_tof: np.ndarray
+    final: dict[str, np.ndarray]
+    seconds: float = 0.0
+    device: str = "cpu"
+    ctxs: Any = field(default=None, repr=False)
+
+    @property
+    def attractor(self) -> np.ndarray:
+        """The attractor class of each start (strings, ``CLASSES``)."""
+        return self.columns["attractor"]
+
+    def __repr__(self) -> str:
+        names, counts = np.unique(self.attractor, return_counts=True)
+        classes = ", ".join(f"{c} {k}" for c, k in zip(names, counts, strict=True))
+        shape = " x ".join(str(n) for n in self.shape)
+        return f"<EnsembleResult {self.scene.name!r}: {shape} starts on {self.device}: {classes}>"
+
+    def to_pandas(self) -> Any:
+        """One row per start, the measured columns (``pip install pandas``)."""
+        import pandas as pd
+
+        return pd.DataFrame({k: np.ravel(v) for k, v in self.columns.items()})
+
+    def to_xarray(self) -> Any:
+        """An ``xarray.Dataset`` over the starts' dimensions (``start_0``, ...)."""
+        import xarray as xr
+
+        dims = tuple(f"start_{i}" for i in range(len(self.shape)))
+        data = {
+            k: (dims, np.asarray(v), {"units": COLUMN_UNITS.get(k, "")})
+            for k, v in self.columns.items()
+        }
+        data["last_height"] = (dims + ("impact",), self.last_height, {"units": "m"})
+        data["last_tof"] = (dims + ("impact",), self.last_tof, {"units": "s"})
+        return xr.Dataset(data, attrs={"scene": self.scene.name})
+
+
+def _scene(scene: Any) -> Any:
+    if isinstance(scene, str):
+        from billiard.scene.scene import load_scene
+
+        return load_scene(scene)
+    return scene
+
+
+def run_ensemble(
+    scene: Any,
+    *,
+    q1: Any,
+    q2: Any,
+    v1: Any = 0.0,
+    v2: Any = 0.0,
+    omega: Any = 0.0,
+    t: float = 0.0,
+    impacts: int = 1000,
+    transient: int = 0,
+    keep: int = 0,
+    duration: float | None = None,
+    tolerance: float = 1e-5,
+    max_period: int = 64,
+    rest_band: float = 0.01,
+    threads: int | None = None,
+    progress: Callable[[int], None] | None = None,
+) -> EnsembleResult:
+    """Run one trajectory per start (arrays broadcast together: positions in m,
+    velocities in m/s, spin in rad/s, all at time t in s) of ``scene`` (a scene or a
+    built-in name): ``transient`` impacts, then ``impacts`` measured ones, at most
+    ``duration`` s each. ``keep``: the last impacts' heights and times of flight kept
+    per start. ``tolerance`` (m), ``max_period`` (impacts) and ``rest_band`` (m) are
+    the sweep's period test and resting band (docs/sweeps.md).
+
+    Raises:
+        ValueError: a scene the ensemble kernel does not take (contact phases, method
+            rk4), or one that cannot be simulated.
+    """
+    import time
+
+    from billiard.engine import ensemble as EN
+    from billiard.kernels import ensemble as E
+
+    scene = _scene(scene)
+    if impacts < 1 or transient < 0 or keep < 0:
+        raise ValueError("impacts must be >= 1, transient and keep >= 0")
+    began = time.perf_counter()
+    setup = EN.prepare(scene)
+    starts = (q1, q2, v1, v2, omega)
+    arrays = np.broadcast_arrays(*(np.asarray(x, dtype=np.float64) for x in starts))
+    shape = arrays[0].shape
+    ctxs, valid = EN.start(setup, *(a.ravel() for a in arrays), t=t, duration=duration)
+    window = 256
+    width = max(window, keep, 1)
+    consts = EN.constants(scene, tolerance, max_period, window)
+    n = ctxs.shape[0]
+    run = np.nonzero(valid)[0]
+    stats = np.zeros((n, E.NSTAT))
+    stats[:, E.ST_STATUS] = E.RUN_FAILED
+    rings = np.full((n, width, E.RCOL), np.nan)
+    if run.size:
+        sub = np.ascontiguousarray(ctxs[run])
+        s, r = EN.advance(
+            sub, setup.params, setup.walls, consts, transient=transient, impacts=impacts,
+            width=width, threads=threads, progress=progress,
+        )  # fmt: skip
+        stats[run], rings[run], ctxs[run] = s, r, sub
+    columns = measured_columns(stats, rings, valid, setup.rest_height, rest_band, scene)
+    columns = {"q1_start": arrays[0].ravel(), "q2_start": arrays[1].ravel()} | columns
+    last_height, last_tof = last_impacts(stats, rings, keep)
+    from billiard.kernels import layout as L
+
+    final = {
+        name: ctxs[:, slot].reshape(shape)
+        for name, slot in (("t", L.EN_T), ("q1", L.EN_Q1), ("q2", L.EN_Q2))
+        + (("v1", L.EN_U1), ("v2", L.EN_U2), ("omega", L.EN_U3))
+    }
+    return EnsembleResult(
+        scene=scene,
+        shape=shape,
+        columns={k: v.reshape(shape) for k, v in columns.items()},
+        last_height=last_height.reshape(*shape, keep),
+        last_tof=last_tof.reshape(*shape, keep),
+        final=final,
+        seconds=time.perf_counter() - began,
+        ctxs=ctxs,
+    )
+
+
+def measured_columns(
+    stats: np.ndarray,
+    rings: np.ndarray,
+    valid: np.ndarray,
+    rest_height: Any,
+    rest_band: float,
+    scene: Any,
+) -> dict[str, np.ndarray]:
+    """The sweep's measurements of each trajectory from the kernel's ``stats``."""
+    from billiard.kernels import ensemble as E
+
+    measured = stats[:, E.ST_MEASURED]
+    has = measured > 0
+    with np.errstate(invalid="ignore", divide="ignore"):
+        height_std = np.sqrt(stats[:, E.ST_H_M2] / measured)
+        tof_std = np.sqrt(stats[:, E.ST_TOF_M2] / measured)
+        elastic = stats[:, E.ST_ELASTIC] / measured
+        lid = stats[:, E.ST_LID] / measured
+    codes = classes_of(stats, valid, rest_height, rest_band)
+    ok = (codes != CLASSES.index("failed")) & (codes != CLASSES.index("invalid"))
+    period = np.where(ok, stats[:, E.ST_PERIOD], 0).astype(np.int64)
+    frequency = scene.drive.frequency
+    drive_periods = np.zeros_like(period)
+    if frequency > 0.0:
+        # as the sweep rounds it: the period's time over the drive period
+        # (Python's round and numpy's rint both round half to even)
+        cycles = np.rint(stats[:, E.ST_PERIOD_TIME] * frequency)
+        drive_periods = np.where(period > 0, cycles, 0).astype(np.int64)
+    nan = np.where(has & ok, 1.0, math.nan)
+    status = stats[:, E.ST_STATUS]
+    run_status = np.where(
+        status == E.RUN_COMPLETE, "complete", np.where(status == E.RUN_TIME_LIMIT, "time_limit", "")
+    )
+    return {
+        "attractor": np.asarray(CLASSES, dtype=object)[codes],
+        "period": period,
+        "drive_periods": drive_periods,
+        "impacts": measured.astype(np.int64),
+        "total_impacts": stats[:, E.ST_TOTAL].astype(np.int64),
+        "height_mean": stats[:, E.ST_H_MEAN] * nan,
+        "height_std": height_std * nan,
+        "height_max": stats[:, E.ST_H_MAX] * nan,
+        "tof_mean": stats[:, E.ST_TOF_MEAN] * nan,
+        "tof_std": tof_std * nan,
+        "elastic_share": elastic * nan,
+        "lid_share": lid * nan,
+        "run_status": run_status,
+    }
+
+
+def last_impacts(stats: np.ndarray, rings: np.ndarray, keep: int) -> tuple[np.ndarray, ...]:
+    """The last ``keep`` measured heights and times of flight of each trajectory, oldest
+    first, NaN-padded at the front (n x keep each)."""
+    from billiard.kernels import ensemble as E
+
+    n, width = rings.shape[0], rings.shape[1]
+    heights = np.full((n, keep), np.nan)
+    tofs = np.full((n, keep), np.nan)
+    if keep == 0:
+        return heights, tofs
+    measured = stats[:, E.ST_MEASURED].astype(np.int64)
+    back = np.arange(keep, 0, -1)  # keep ... 1 impacts before the end
+    index = measured[:, None] - back[None, :]
+    present = index >= 0
+    slots = np.where(present, index, 0) % width
+    rows = np.arange(n)[:, None]
+    heights[present] = rings[rows, slots, E.R_Q2][present]
+    tofs[present] = rings[rows, slots, E.R_TOF][present]
+    return heights, tofs
