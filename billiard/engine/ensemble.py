@@ -167,7 +167,7 @@ def start(
         balls[:, column] = values.ravel()
     ctxs = np.empty((n, setup.template.size))
     gaps = np.empty(n)
-    params = np.ascontiguousarray(np.broadcast_to(setup.params, (n, setup.params.size)))
+    params = np.tile(setup.params, (n, 1))
     px = np.ascontiguousarray(px, dtype=np.float64).ravel()
     py = np.ascontiguousarray(py, dtype=np.float64).ravel()
     start_batch(ctxs, params, setup.walls, setup.template, balls, px, py, setup.offsets, gaps)
@@ -231,8 +231,8 @@ def advance(
     from billiard.kernels import ensemble as E
 
     n = ctxs.shape[0]
-    params = np.ascontiguousarray(np.broadcast_to(params, (n, params.shape[-1])))
-    consts = np.ascontiguousarray(np.broadcast_to(consts, (n, E.NCONST)))
+    params = np.tile(params, (n, 1)) if params.ndim == 1 else np.ascontiguousarray(params)
+    consts = np.tile(consts, (n, 1)) if consts.ndim == 1 else np.ascontiguousarray(consts)
     rows = np.empty((n, L.NCOL))
     rings = np.full((n, width, E.RCOL), np.nan)
     stats = np.zeros((n, E.NSTAT))

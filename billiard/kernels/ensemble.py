@@ -50,6 +50,10 @@ from .layout import (
     EN_ZERO,
     LID_LABEL,
     NCOL,
+    S_SLOPE,
+    S_SLOPE_AT,
+    SURF,
+    SURF_STRIDE,
 )
 from .loop import step
 from .surfaces import gap_rate
@@ -303,6 +307,12 @@ def start(ctx, p, walls, template, ball, px, py, offsets):
             worst = min(worst, gap)
     except Exception:  # noqa: BLE001 - numba catches any exception or none
         return math.nan
+    # the set-up checks on the surfaces' own state vectors: their slope memos stay
+    # there (a memo is the value f' would return: it changes no result, only the slots)
+    for j in range(offsets):
+        base = SURF + j * SURF_STRIDE
+        ctx[base + S_SLOPE_AT] = template[base + S_SLOPE_AT]
+        ctx[base + S_SLOPE] = template[base + S_SLOPE]
     return worst
 
 
