@@ -68,6 +68,8 @@ JOBS: tuple[tuple[str, dict[str, Any], int, bool, bool], ...] = (
         False,
     ),
 )
+#: the job after which a worker also runs a small ensemble (the impact loop's scene)
+ENSEMBLE_JOB = 0
 #: the jobs of each worker process, run side by side (numba compiles one function at a
 #: time in a process: two processes compile on two cores)
 WORKERS: tuple[tuple[int, ...], ...] = ((0,), (1, 2))
@@ -107,6 +109,21 @@ def run_jobs(jobs: list[int]) -> None:
         if csv:
             format_rows_bytes(np.zeros((1, len(COLUMNS))), "\n")
         Simulation(scene).run(impacts, MemoryRecorder())
+        if index == ENSEMBLE_JOB:
+            _ensemble(scene)
+
+
+def _ensemble(scene: Any) -> None:
+    """A two-trajectory ensemble of ``scene``: the ensemble kernels (its start check
+    and its measured loop, :mod:`billiard.kernels.ensemble`)."""
+    from billiard.engine import ensemble
+
+    setup = ensemble.prepare(scene)
+    ctxs, ok = ensemble.start(setup, [0.0, 0.01], [0.05, 0.06])
+    consts = ensemble.constants(scene, 1e-5, 64, 256)
+    ensemble.advance(
+        ctxs[ok], setup.params, setup.walls, consts, transient=1, impacts=2, width=4, threads=1
+    )
 
 
 def compile_all() -> bool:

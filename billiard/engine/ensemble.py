@@ -35,6 +35,7 @@ __all__ = [
     "advance",
     "prepare",
     "start",
+    "start_at_rest",
     "supports",
 ]
 
@@ -74,6 +75,11 @@ class EnsembleSetup:
         walls: the curve's wall functions as the kernels take them.
         offsets: surfaces checked at the start (the offset walls, which come first).
         rest_height: centre height (m) of the ball at rest on the bottom.
+        drive: the boundary's drive.
+        lid_level, escape_level: the highest centre height under the lid, the escape
+            height (m; inf: none).
+        at_rest: the state vector of a run whose ball starts at rest on the bottom (no
+            ``initial.q1``, ``initial.q2``) at time ``t``, at ``rest_position`` (m).
     """
 
     scene: Any
@@ -85,6 +91,9 @@ class EnsembleSetup:
     drive: Any
     lid_level: float
     escape_level: float
+    at_rest: np.ndarray
+    rest_position: tuple[float, float]
+    t: float
 
 
 def prepare(scene: Any) -> EnsembleSetup:
@@ -111,7 +120,8 @@ def prepare(scene: Any) -> EnsembleSetup:
     why = kernel_supports(sim)
     if why is not None:
         raise ValueError(f"the ensemble kernel does not take this scene: {why}")
-    template = np.array(state_vector(sim), dtype=np.float64)
+    at_rest_ctx = np.array(state_vector(sim), dtype=np.float64)
+    template = at_rest_ctx.copy()
     # the warm starts as a run's set-up has them before its start check moves them
     for j, (s, slope) in enumerate(sim.boundary.initial_warm()):
         base = L.SURF + j * L.SURF_STRIDE
@@ -128,6 +138,9 @@ def prepare(scene: Any) -> EnsembleSetup:
         drive=sim.drive,
         lid_level=math.inf if boundary.lid is None else float(boundary.lid.level),
         escape_level=math.inf if boundary.escape is None else float(boundary.escape.level),
+        at_rest=at_rest_ctx,
+        rest_position=(float(sim.initial.q1), float(sim.initial.q2)),
+        t=float(scene.initial.t),
     )
 
 
@@ -174,6 +187,26 @@ def start(
     ctxs[:, L.EN_UNTIL] = math.inf if duration is None else t + duration
     ok = (py <= setup.lid_level + _OVERLAP) & (py < setup.escape_level) & (gaps >= -_OVERLAP)
     return ctxs, ok
+
+
+def start_at_rest(
+    setup: EnsembleSetup,
+    n: int,
+    v1: Any = 0.0,
+    v2: Any = 0.0,
+    omega: Any = 0.0,
+    duration: float | None = None,
+) -> np.ndarray:
+    """State vectors of ``n`` runs whose ball starts on the bottom, as a scene without
+    ``initial.q1`` and ``initial.q2`` puts it, at the set-up's time ``setup.t``, with
+    velocities (m/s) and spin (rad/s) ``v1``, ``v2``, ``omega`` (arrays of n, or
+    numbers), each ending at ``setup.t + duration`` (s; None: no end in time)."""
+    ctxs = np.tile(setup.at_rest, (n, 1))
+    ctxs[:, L.EN_U1] = v1
+    ctxs[:, L.EN_U2] = v2
+    ctxs[:, L.EN_U3] = omega
+    ctxs[:, L.EN_UNTIL] = math.inf if duration is None else setup.t + duration
+    return ctxs
 
 
 def constants(scene: Any, tolerance: float, max_period: int, window: int) -> np.ndarray:

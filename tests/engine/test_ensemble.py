@@ -135,3 +135,15 @@ def test_a_duration_ends_trajectories_as_a_run_ends() -> None:
     run = simulate(point, collisions=10**6, duration=0.5)
     assert stats[0, E.ST_STATUS] == E.RUN_TIME_LIMIT
     assert stats[0, E.ST_TOTAL] == len(run.columns["n"]) > 0
+
+
+def test_a_start_at_rest_is_the_runs_state_vector() -> None:
+    """A scene without initial.q1, q2 puts the ball on the bottom: the set-up's vector."""
+    scene = load_scene("parabola-5.4hz")
+    point = with_values(scene, {"initial.v1": 0.05, "initial.omega": -2.0, "run.duration": 3.0})
+    setup = EN.prepare(point)
+    ctxs = EN.start_at_rest(setup, 2, v1=0.05, v2=0.0, omega=-2.0, duration=3.0)
+    ref = np.array(state_vector(Simulation(point)))
+    for ctx in ctxs:
+        same = (ref == ctx) | (np.isnan(ref) & np.isnan(ctx))
+        assert same.all(), np.nonzero(~same)[0]

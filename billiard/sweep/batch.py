@@ -1,0 +1,209 @@
+"""The points of a sweep chunk that the ensemble kernel takes, measured together.
+
+Points are grouped by their parameter set (every swept key but the ball's start,
+``initial.*``); each group is set up once (:func:`billiard.engine.ensemble.prepare`,
+cached for the worker's next chunks) and its starts run as one ensemble on this worker's
+core. A point's trajectory is bit for bit the one ``billiard run`` makes, and its
+measurements are the sweep's (:mod:`billiard.sweep.measure`): the class, period and
+impact counts equal the per-point path's, the means and spreads agree to the last bits
+(running sums instead of numpy's pairwise ones).
+
+Left to the per-point path (:func:`billiard.sweep.measure.measure_point`): points with
+``--lyapunov``, scenes the kernel does not take (contact phases, method rk4), starts
+with one of ``initial.q1``, ``initial.q2`` given and not the other, and points whose run
+stops early (measured again one by one, for the engine's own words of why).
+"""
+
+from __future__ import annotations
+
+import math
+from collections import OrderedDict
+from typing import Any
+
+import numpy as np
+
+from billiard.engine import ensemble as EN
+from billiard.sweep.attractor import CLASSES
+from billiard.sweep.columns import MODES, RUN_STATUSES, STATUSES
+from billiard.sweep.ensemble import last_impacts, measured_columns
+
+__all__ = ["measure_batch"]
+
+#: the set-ups a worker keeps for its next chunks (one per parameter set)
+_SETUPS: OrderedDict[Any, Any] = OrderedDict()
+_KEEP_SETUPS = 64
+#: the period test's window (impacts), as the per-point path's
+WINDOW = 256
+_BALL = {
+    "initial.q1": "q1",
+    "initial.q2": "q2",
+    "initial.v1": "v1",
+    "initial.v2": "v2",
+    "initial.omega": "omega",
+    "initial.t": "t",
+}
+
+
+def _setup(scene: Any, key: Any) -> Any:
+    if key in _SETUPS:
+        _SETUPS.move_to_end(key)
+        return _SETUPS[key]
+    setup = EN.prepare(scene)
+    _SETUPS[key] = setup
+    if len(_SETUPS) > _KEEP_SETUPS:
+        _SETUPS.popitem(last=False)
+    return setup
+
+
+def _groups(sweep: Any, indices: Any) -> dict[Any, list[tuple[int, dict[str, Any]]]]:
+    """Points by parameter set: (the set's values) -> [(index, the start's values)]."""
+    groups: dict[Any, list[tuple[int, dict[str, Any]]]] = {}
+    for index in indices:
+        values = sweep.point_values(int(index))
+        params = tuple((k, v) for k, v in values.items() if k not in _BALL)
+        start = {_BALL[k]: v for k, v in values.items() if k in _BALL}
+        groups.setdefault(params, []).append((int(index), start))
+    return groups
+
+
+def measure_batch(
+    sweep: Any, indices: Any, settings: dict[str, Any]
+) -> tuple[dict[str, np.ndarray] | None, list[int]]:
+    """Measure the points ``indices`` of ``sweep`` that the ensemble kernel takes.
+
+    Returns:
+        (columns, rest): the columns of the points measured here (``billiard.sweep.
+        columns``, ``index`` first; None when there are none) and the indices left to
+        the per-point path, in the order given.
+    """
+    from billiard.scene.scene import with_values
+
+    if settings["lyapunov"]:
+        return None, [int(i) for i in indices]
+    transient, impacts, keep = int(settings["transient"]), int(settings["impacts"]), int(
+        settings["keep"]
+    )
+    parts: list[dict[str, np.ndarray]] = []
+    rest: list[int] = []
+    for params, points in _groups(sweep, indices).items():
+        try:
+            scene = with_values(sweep.scene, dict(params))
+        except ValueError:
+            rest += [i for i, _ in points]
+            continue
+        if EN.supports(scene) is not None:
+            rest += [i for i, _ in points]
+            continue
+        duration = settings["duration"] if settings["duration"] is not None else None
+        duration = scene.run.duration if duration is None else duration
+        part, left = _measure_group(scene, params, points, duration, settings, keep)
+        rest += left
+        if part is not None:
+            parts.append(part)
+    if not parts:
+        return None, rest
+    columns = {name: np.concatenate([p[name] for p in parts]) for name in parts[0]}
+    return columns, rest
+
+
+def _measure_group(
+    scene: Any,
+    params: Any,
+    points: list[tuple[int, dict[str, Any]]],
+    duration: float | None,
+    settings: dict[str, Any],
+    keep: int,
+) -> tuple[dict[str, np.ndarray] | None, list[int]]:
+    init = scene.initial
+    base = {"q1": init.q1, "q2": init.q2, "v1": init.v1, "v2": init.v2}
+    base |= {"omega": init.omega, "t": init.t}
+    starts = [base | start for _, start in points]
+    try:
+        setup = _setup(scene, params)
+    except ValueError:  # a scene the engine cannot set up: the per-point path says why
+        return None, [i for i, _ in points]
+    placed = [s["q1"] is not None and s["q2"] is not None for s in starts]
+    resting = [s["q1"] is None and s["q2"] is None and s["t"] == setup.t for s in starts]
+    rows = [k for k in range(len(points)) if placed[k] or resting[k]]
+    left = [points[k][0] for k in range(len(points)) if not (placed[k] or resting[k])]
+    if not rows:
+        return None, left
+    ctxs = np.empty((len(rows), setup.template.size))
+    valid = np.ones(len(rows), dtype=bool)
+    by_time: dict[float, list[int]] = {}
+    for r, k in enumerate(rows):
+        if placed[k]:
+            by_time.setdefault(float(starts[k]["t"]), []).append(r)
+    for t, rs in by_time.items():
+        pick = [starts[rows[r]] for r in rs]
+        c, ok = EN.start(
+            setup,
+            *(np.array([float(s[name]) for s in pick]) for name in ("q1", "q2", "v1", "v2")),
+            np.array([float(s["omega"]) for s in pick]),
+            t=t,
+            duration=duration,
+        )
+        ctxs[rs], valid[rs] = c, ok
+    lying = [r for r, k in enumerate(rows) if resting[k]]
+    if lying:
+        pick = [starts[rows[r]] for r in lying]
+        ctxs[lying] = EN.start_at_rest(
+            setup,
+            len(lying),
+            *(np.array([float(s[name]) for s in pick]) for name in ("v1", "v2", "omega")),
+            duration=duration,
+        )
+    transient, impacts = int(settings["transient"]), int(settings["impacts"])
+    consts = EN.constants(scene, settings["tolerance"], settings["max_period"], WINDOW)
+    run = np.nonzero(valid)[0]
+    from billiard.kernels import ensemble as E
+
+    stats = np.zeros((len(rows), E.NSTAT))
+    stats[:, E.ST_STATUS] = E.RUN_FAILED
+    width = max(WINDOW, keep, 1)
+    rings = np.full((len(rows), width, E.RCOL), math.nan)
+    if run.size:
+        sub = np.ascontiguousarray(ctxs[run])
+        s, r = EN.advance(
+            sub, setup.params, setup.walls, consts, transient=transient, impacts=impacts,
+            width=width, threads=1,
+        )  # fmt: skip
+        stats[run], rings[run] = s, r
+    columns = measured_columns(stats, rings, valid, setup.rest_height, settings["rest_band"], scene)
+    # a run that stopped early, or an invalid start, or one without a measured impact:
+    # measured again one by one, for the engine's words of why
+    ok = (stats[:, E.ST_STATUS] != E.RUN_FAILED) & (stats[:, E.ST_MEASURED] > 0) & valid
+    keep_rows = np.nonzero(ok)[0]
+    left += [points[rows[r]][0] for r in np.nonzero(~ok)[0]]
+    if not keep_rows.size:
+        return None, left
+    heights, tofs = last_impacts(stats, rings, keep)
+    n = keep_rows.size
+    attractor = np.array([CLASSES.index(c) for c in columns["attractor"][keep_rows]], np.int8)
+    run_status = np.array(
+        [RUN_STATUSES.index(s) for s in columns["run_status"][keep_rows]], dtype=np.int8
+    )
+    part = {
+        "index": np.array([points[rows[r]][0] for r in keep_rows], dtype=np.int64),
+        "status": np.full(n, STATUSES.index("ok"), dtype=np.int8),
+        "attractor": attractor,
+        "run_status": run_status,
+        "final_mode": np.full(n, MODES.index("flight"), dtype=np.int8),
+        "period": columns["period"][keep_rows].astype(np.int32),
+        "drive_periods": columns["drive_periods"][keep_rows].astype(np.int32),
+        "impacts": columns["impacts"][keep_rows].astype(np.int64),
+        "total_impacts": columns["total_impacts"][keep_rows].astype(np.int64),
+        "elastic_impacts": stats[keep_rows, E.ST_ELASTIC].astype(np.int64),
+        "lid_impacts": stats[keep_rows, E.ST_LID].astype(np.int64),
+        "rest_height": np.full(n, setup.rest_height),
+        "height_mean": columns["height_mean"][keep_rows],
+        "height_std": columns["height_std"][keep_rows],
+        "height_max": columns["height_max"][keep_rows],
+        "tof_mean": columns["tof_mean"][keep_rows],
+        "tof_std": columns["tof_std"][keep_rows],
+        "lyapunov": np.full(n, math.nan),
+        "lyapunov_per_second": np.full(n, math.nan),
+        "last_height": heights[keep_rows],
+        "last_tof": tofs[keep_rows],
+    }
+    return part, left
