@@ -335,8 +335,8 @@ def write_csv(result: HysteresisResult, path: Path) -> Path:
 
 def hysteresis_figure(result: HysteresisResult, path: Path, title: str | None = None) -> Path:
     """Mean impact height (m) against the swept value, the up branch and the down branch
-    in two colours; one dot per start and value, small and translucent when there are
-    many starts, joined by lines when there is one."""
+    in two colours and markers; one marker per start and value, small and translucent
+    when there are many starts, joined by lines when there is one."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -348,17 +348,18 @@ def hysteresis_figure(result: HysteresisResult, path: Path, title: str | None = 
     fig, ax = plt.subplots(figsize=(8, 5))
     size = 16.0 if n <= 10 else max(1.0, 160.0 / n)
     alpha = 1.0 if n <= 10 else max(0.08, min(0.8, 10.0 / math.sqrt(n)))
-    styles = (("up", "tab:blue", -1), ("down", "tab:orange", 1))
+    # up: triangles pointing up, a little left; down: pointing down, a little right, so
+    # that where the branches agree both stay visible
+    styles = (("up", "tab:blue", "^", -1), ("down", "tab:orange", "v", 1))
     step = np.diff(result.values).min() if result.values.size > 1 else 0.0
-    for direction, (name, colour, side) in enumerate(styles):
+    for direction, (name, colour, marker, side) in enumerate(styles):
         heights = result.columns["height_mean"][direction]  # values x starts
-        # the branches a hair apart, so that where they agree both stay visible
-        x = np.repeat(result.values + side * 0.08 * step, n).reshape(heights.shape)
+        x = np.repeat(result.values + side * 0.2 * step, n).reshape(heights.shape)
         if n == 1:
             ax.plot(x[:, 0], heights[:, 0], "-", color=colour, lw=0.8, alpha=0.6)
         label = f"{name} ({'increasing' if name == 'up' else 'decreasing'} {result.key})"
         ax.scatter(x.ravel(), heights.ravel(), s=size, color=colour, alpha=alpha, lw=0,
-                   label=label)  # fmt: skip
+                   marker=marker, label=label)  # fmt: skip
     ax.set_xlabel(axis_label(result.key))
     ax.set_ylabel("mean impact height q2 (m)")
     starts = "the scene's start" if n == 1 else f"{n} starts"
@@ -367,7 +368,14 @@ def hysteresis_figure(result: HysteresisResult, path: Path, title: str | None = 
         f"{result.transient} impacts of transient + {result.impacts} measured per value"
     )
     ax.set_title("\n".join(textwrap.wrap(text, 80)), fontsize=10)
-    legend = ax.legend(loc="best", markerscale=max(1.0, 4.0 / math.sqrt(size)))
+    # below the axes, where it hides no branch
+    legend = ax.legend(
+        loc="upper center",
+        bbox_to_anchor=(0.5, -0.13),
+        ncol=2,
+        frameon=False,
+        markerscale=max(1.0, 4.0 / math.sqrt(size)),
+    )
     for handle in legend.legend_handles:
         handle.set_alpha(1.0)
     ax.grid(alpha=0.3)

@@ -23,6 +23,7 @@ from __future__ import annotations
 import csv
 import json
 import math
+import textwrap
 import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
@@ -353,12 +354,13 @@ def uncertainty_figure(result: UncertaintyResult, path: Path) -> Path:
     ax.set_yscale("log")
     ax.set_xlabel("displacement eps along q1 (m)")
     ax.set_ylabel("uncertain fraction f (1)")
-    ax.set_title(
+    text = (
         f"{result.scene.name}: uncertainty exponent, {result.samples} starts in "
         f"q1 {result.q1_range[0]:g}:{result.q1_range[1]:g} m, "
-        f"q2 {result.q2_range[0]:g}:{result.q2_range[1]:g} m",
-        fontsize=9,
+        f"q2 {result.q2_range[0]:g}:{result.q2_range[1]:g} m, "
+        f"{result.transient} + {result.impacts} impacts each"
     )
+    ax.set_title("\n".join(textwrap.wrap(text, 70)), fontsize=9)
     ax.grid(alpha=0.3, which="both")
     ax.legend(loc="best", fontsize=8)
     fig.tight_layout()
