@@ -65,6 +65,10 @@ def cmd_hysteresis(args: argparse.Namespace) -> int:
             f"hysteresis: --vary {axis.key}: the ball's start cannot be swept up and down "
             "(every value continues from the last one's final state)"
         )
+    from billiard.sweep.hysteresis import REFUSED
+
+    if axis.key in REFUSED:
+        raise UserError(f"hysteresis: --vary {axis.key}: {REFUSED[axis.key]}")
     scene = _scene(args, "hysteresis")
     try:
         check_keys(scene, [axis])
@@ -212,7 +216,7 @@ def add_parsers(sub: argparse._SubParsersAction) -> None:
         default=1,
         metavar="N",
         help="trajectories: 1 is the scene's own start; more are spread over the "
-        "container on a grid, at rest",
+        "container on a grid (docs/sweeps.md)",
     )
     p.add_argument("--impacts", type=int, default=300, help="impacts measured per value")
     p.add_argument(

@@ -37,6 +37,7 @@ import numpy as np
 
 __all__ = [
     "DIRECTIONS",
+    "REFUSED",
     "HysteresisResult",
     "continue_states",
     "drive_phases",
@@ -48,6 +49,12 @@ __all__ = [
 
 #: the two branches, in the order they are run
 DIRECTIONS = ("up", "down")
+#: keys an up/down sweep refuses, and why: each value continues the last one's state
+REFUSED = {
+    "drive.phase": "the drive angle is carried from value to value, so the phase has no effect",
+    "run.collisions": "the impacts per value are --impacts and --transient",
+    "run.duration": "each value runs --transient + --impacts impacts, not a duration",
+}
 #: the ball's slots a continuation carries besides those :func:`start` writes
 _CARRIED = ("EN_Q3", "EN_CLOCK", "EN_CLOCK_ERR", "FL_H")
 
@@ -130,7 +137,8 @@ def drive_phases(ctxs: np.ndarray, frequency: float) -> np.ndarray:
 
 
 def start_grid(scene: Any, setup: Any, count: int) -> tuple[np.ndarray, np.ndarray]:
-    """``count`` starting positions (m) of the ball at rest.
+    """``count`` starting positions (m) of the ball (which starts with the scene's
+    initial velocity and spin: at rest in the built-in scenes).
 
     One start: the scene's own (initial.q1, initial.q2), or the ball at rest on the
     bottom where the scene gives none. More: a square grid over the container, q1
@@ -196,8 +204,9 @@ def run_hysteresis(
 
     Raises:
         ValueError: fewer than 2 values, a value that is not a number, a key of the
-            ball's start, impacts < 1 or transient < 0, or a scene the ensemble kernel
-            does not take (contact phases, method rk4) or that cannot be simulated.
+            ball's start or one of :data:`REFUSED`, impacts < 1 or transient < 0, or a
+            scene the ensemble kernel does not take (contact phases, method rk4) or
+            that cannot be simulated.
     """
     from billiard.engine import ensemble as EN
     from billiard.kernels import ensemble as E
@@ -207,6 +216,8 @@ def run_hysteresis(
     began = time.perf_counter()
     if key.startswith("initial."):
         raise ValueError(f"{key}: a key of the ball's start cannot be swept up and down")
+    if key in REFUSED:
+        raise ValueError(f"{key} cannot be swept up and down: {REFUSED[key]}")
     if len(values) < 2:
         raise ValueError(f"{key}: an up/down sweep needs at least 2 values, got {len(values)}")
     for value in values:

@@ -133,6 +133,7 @@ def test_the_orbit_of_the_calibrated_frequency(parabola):
     [
         ("drive.frequency", [5.0], "at least 2 values"),
         ("initial.q1", [0.0, 0.01], "ball's start"),
+        ("drive.phase", [0.0, 1.0], "the phase has no effect"),
         ("drive.frequency", [5.0, "6"], "not a number"),
         ("drive.frequency", [5.0, math.nan], "not a finite number"),
     ],
