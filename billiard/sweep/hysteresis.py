@@ -55,8 +55,14 @@ REFUSED = {
     "run.collisions": "the impacts per value are --impacts and --transient",
     "run.duration": "each value runs --transient + --impacts impacts, not a duration",
 }
-#: the ball's slots a continuation carries besides those :func:`start` writes
+#: the ball as :func:`billiard.kernels.ensemble.start` takes it (t, theta, q1, q2, u1,
+#: u2, u3), and the slots a continuation carries besides: what is kept between values
+_BALL = ("EN_T", "EN_THETA", "EN_Q1", "EN_Q2", "EN_U1", "EN_U2", "EN_U3")
 _CARRIED = ("EN_Q3", "EN_CLOCK", "EN_CLOCK_ERR", "FL_H")
+_STATE = _BALL + _CARRIED
+#: trajectories per call of the kernel: bounds the memory of the state vectors (about
+#: 9 kB each) and rings (about 14 kB each); between values only _STATE is kept
+CHUNK = 4096
 
 
 @dataclass
@@ -102,13 +108,18 @@ def continue_states(setup: Any, ctxs: np.ndarray) -> tuple[np.ndarray, np.ndarra
         (ctxs, ok) as :func:`billiard.engine.ensemble.start` returns them (ok False: the
         ball overlaps a wall or the lid of the new set-up, or is above its escape height).
     """
+    return _resume(setup, ctxs[:, _slots(_STATE)])
+
+
+def _resume(setup: Any, state: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`continue_states` from the carried slots alone (``_STATE``, one row per
+    trajectory): what an up/down sweep keeps between two values."""
     from billiard.engine.ensemble import _OVERLAP
     from billiard.kernels import layout as L
     from billiard.kernels.ensemble import start_batch
 
-    n = ctxs.shape[0]
-    ball = _slots(("EN_T", "EN_THETA", "EN_Q1", "EN_Q2", "EN_U1", "EN_U2", "EN_U3"))
-    balls = np.ascontiguousarray(ctxs[:, ball])
+    n = state.shape[0]
+    balls = np.ascontiguousarray(state[:, : len(_BALL)])
     theta = balls[:, 1]
     d = setup.drive.amplitude * np.sin(theta)
     q1, q2 = balls[:, 2], balls[:, 3]
@@ -120,10 +131,11 @@ def continue_states(setup: Any, ctxs: np.ndarray) -> tuple[np.ndarray, np.ndarra
     params = np.tile(setup.params, (n, 1))  # writable, C-contiguous
     if n:
         start_batch(out, params, setup.walls, setup.template, balls, px, py, setup.offsets, gaps)
-    carried = _slots(_CARRIED)
-    out[:, carried] = ctxs[:, carried]
+    out[:, _slots(_CARRIED)] = state[:, len(_BALL) :]
     out[:, L.EN_UNTIL] = math.inf
-    ok = (py <= setup.lid_level + _OVERLAP) & (py < setup.escape_level) & (gaps >= -_OVERLAP)
+    with np.errstate(invalid="ignore"):
+        ok = (py <= setup.lid_level + _OVERLAP) & (py < setup.escape_level)
+        ok &= gaps >= -_OVERLAP  # NaN (no gap computed: a row not carried) is refused
     return out, ok
 
 
@@ -243,9 +255,11 @@ def run_hysteresis(
     first = setup_of(0)
     q1, q2 = start_grid(scene, first, starts)
     ini = scene.initial
-    ctxs, alive = EN.start(first, q1, q2, ini.v1, ini.v2, ini.omega, t=ini.t)
-    invalid = ~alive
     n, count = q1.size, values.size
+    alive = np.ones(n, dtype=bool)  # still continued
+    invalid = np.zeros(n, dtype=bool)  # refused by a set-up (the first, or a later one)
+    state = np.full((n, len(_STATE)), np.nan)
+    slots = _slots(_STATE)
     shape = (len(DIRECTIONS), count, n)
     columns: dict[str, np.ndarray] = {
         "attractor": np.full(shape, "invalid", dtype=object),
@@ -261,28 +275,37 @@ def run_hysteresis(
         if progress is not None:
             progress(DIRECTIONS[direction], step, len(order))
         setup = setup_of(i)
-        if step > 0:
-            ctxs, ok = continue_states(setup, ctxs)
-            invalid |= alive & ~ok
-            alive &= ok
-        consts = np.tile(EN.constants(scenes[i], tolerance, max_period, window), (n, 1))
-        consts[:, E.C_PHASE] = drive_phases(ctxs, scenes[i].drive.frequency)
-        stats = np.zeros((n, E.NSTAT))
-        stats[:, E.ST_STATUS] = E.RUN_FAILED
-        rings = np.full((n, window, E.RCOL), np.nan)
-        run = np.nonzero(alive)[0]
-        if run.size:
-            sub = np.ascontiguousarray(ctxs[run])
-            s, r = EN.advance(
-                sub, setup.params, setup.walls, consts[run], transient=transient,
-                impacts=impacts, width=window, threads=threads,
-            )  # fmt: skip
-            stats[run], rings[run], ctxs[run] = s, r, sub
-        measured = measured_columns(stats, rings, ~invalid, setup.rest_height, rest_band, scenes[i])
-        for name in columns:
-            columns[name][direction, i] = measured[name]
-        # a run that stopped or ended by time is not continued
-        alive &= stats[:, E.ST_STATUS] == E.RUN_COMPLETE
+        base = EN.constants(scenes[i], tolerance, max_period, window)
+        for lo in range(0, n, CHUNK):
+            part = slice(lo, min(n, lo + CHUNK))
+            if step == 0:
+                ctxs, ok = EN.start(first, q1[part], q2[part], ini.v1, ini.v2, ini.omega, t=ini.t)
+            else:
+                ctxs, ok = _resume(setup, state[part])
+            invalid[part] |= alive[part] & ~ok
+            alive[part] &= ok
+            consts = np.tile(base, (ctxs.shape[0], 1))
+            consts[:, E.C_PHASE] = drive_phases(ctxs, scenes[i].drive.frequency)
+            stats = np.zeros((ctxs.shape[0], E.NSTAT))
+            stats[:, E.ST_STATUS] = E.RUN_FAILED
+            rings = np.full((ctxs.shape[0], window, E.RCOL), np.nan)
+            run = np.nonzero(alive[part])[0]
+            if run.size:
+                sub = np.ascontiguousarray(ctxs[run])
+                s, r = EN.advance(
+                    sub, setup.params, setup.walls, consts[run], transient=transient,
+                    impacts=impacts, width=window, threads=threads,
+                )  # fmt: skip
+                stats[run], rings[run], ctxs[run] = s, r, sub
+            valid = ~invalid[part]
+            measured = measured_columns(
+                stats, rings, valid, setup.rest_height, rest_band, scenes[i]
+            )
+            for name in columns:
+                columns[name][direction, i, part] = measured[name]
+            # a run that stopped is not continued
+            alive[part] &= stats[:, E.ST_STATUS] == E.RUN_COMPLETE
+            state[part] = ctxs[:, slots]
     return HysteresisResult(
         scene=scene,
         key=key,
