@@ -194,6 +194,15 @@ def start_grid(scene: Any, setup: Any, count: int) -> tuple[np.ndarray, np.ndarr
     raise ValueError(f"found no {count} valid starts in the container")
 
 
+def _scene(scene: Any) -> Any:
+    """A scene, or a built-in scene's name or a scene file's path loaded."""
+    if isinstance(scene, str):
+        from billiard.scene.scene import load_scene
+
+        return load_scene(scene)
+    return scene
+
+
 def run_hysteresis(
     scene: Any,
     key: str,
@@ -208,11 +217,12 @@ def run_hysteresis(
     threads: int | None = None,
     progress: Callable[[str, int, int], None] | None = None,
 ) -> HysteresisResult:
-    """Sweep ``key`` (a numeric scene key, not ``initial.*``) up through ``values``
-    (increasing order) and back down, ``starts`` trajectories continued from value to
-    value (see the module's text). ``progress(direction, step, steps)`` is called
-    before each value. ``tolerance`` (m), ``max_period`` (impacts) and ``rest_band``
-    (m) are the sweep's period test and resting band.
+    """Sweep ``key`` (a numeric scene key, not ``initial.*``) of ``scene`` (a scene or
+    a built-in name) up through ``values`` (increasing order) and back down, ``starts``
+    trajectories continued from value to value (see the module's text).
+    ``progress(direction, step, steps)`` is called before each value. ``tolerance``
+    (m), ``max_period`` (impacts) and ``rest_band`` (m) are the sweep's period test and
+    resting band.
 
     Raises:
         ValueError: fewer than 2 values, a value that is not a number, a key of the
@@ -225,6 +235,7 @@ def run_hysteresis(
     from billiard.scene.scene import with_values
     from billiard.sweep.ensemble import measured_columns
 
+    scene = _scene(scene)
     began = time.perf_counter()
     if key.startswith("initial."):
         raise ValueError(f"{key}: a key of the ball's start cannot be swept up and down")

@@ -181,6 +181,15 @@ def _draw(
     return q1, q2, last + 1, dropped
 
 
+def _scene(scene: Any) -> Any:
+    """A scene, or a built-in scene's name or a scene file's path loaded."""
+    if isinstance(scene, str):
+        from billiard.scene.scene import load_scene
+
+        return load_scene(scene)
+    return scene
+
+
 def run_uncertainty(
     scene: Any,
     q1: tuple[float, float],
@@ -197,7 +206,8 @@ def run_uncertainty(
     threads: int | None = None,
     progress: Callable[[int, int], None] | None = None,
 ) -> UncertaintyResult:
-    """Estimate the uncertainty exponent of ``scene``'s basin boundaries in the box
+    """Estimate the uncertainty exponent of the basin boundaries of ``scene`` (a scene or
+    a built-in name) in the box
     ``q1`` x ``q2`` (m; each (low, high)) from ``samples`` random starts at rest (random
     generator seeded with ``seed``), displaced by each of ``eps`` (m) along q1, each
     trajectory ``transient`` impacts then ``impacts`` measured ones.
@@ -211,6 +221,7 @@ def run_uncertainty(
     from billiard.sweep.basins import attractor_labels
     from billiard.sweep.ensemble import measured_columns
 
+    scene = _scene(scene)
     began = time.perf_counter()
     eps = np.sort(np.asarray(eps, dtype=np.float64))
     for name, (lo, hi) in (("q1", q1), ("q2", q2)):

@@ -161,3 +161,13 @@ def test_the_result_does_not_depend_on_the_chunks(parabola, monkeypatch):
     chunked = run_hysteresis(*args, **kwargs)
     for name, column in whole.columns.items():
         assert np.array_equal(column, chunked.columns[name], equal_nan=column.dtype != object)
+
+
+def test_the_public_name_takes_a_scene_name():
+    import billiard
+
+    assert billiard.run_hysteresis is run_hysteresis
+    result = billiard.run_hysteresis(
+        "parabola-5.4hz", "drive.frequency", [5.3, 5.4], impacts=30, transient=50
+    )
+    assert result.scene.name == "parabola-5.4hz" and result.values.tolist() == [5.3, 5.4]

@@ -165,3 +165,13 @@ def test_a_scene_the_ensemble_kernel_does_not_take():
     scene = with_values(load_scene("wedge-6.6hz"), {"run.method": "rk4"})
     with pytest.raises(ValueError, match="run.method = 'rk4'"):
         run_uncertainty(scene, (-0.01, 0.01), (0.03, 0.05))
+
+
+def test_the_public_name_takes_a_scene_name():
+    import billiard
+
+    assert billiard.run_uncertainty is run_uncertainty
+    result = billiard.run_uncertainty(
+        "wedge-6.6hz", (-0.02, 0.02), (0.03, 0.06), samples=5, eps=[1e-4, 1e-3], impacts=5
+    )
+    assert result.scene.name == "wedge-6.6hz" and result.samples == 5
