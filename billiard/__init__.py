@@ -136,6 +136,8 @@ _EXPORTS = {
     "plot_run": "billiard.plot",
     "view": "billiard.plot.interactive",
     "run_ensemble": "billiard.sweep.ensemble",
+    "run_hysteresis": "billiard.sweep.hysteresis",
+    "run_uncertainty": "billiard.sweep.uncertainty",
 }
 
 __all__ = [
@@ -155,6 +157,8 @@ __all__ = [
     "read_contacts",
     "read_trajectory",
     "run_ensemble",
+    "run_hysteresis",
+    "run_uncertainty",
     "scene_from_dict",
     "scene_to_toml",
     "simulate",

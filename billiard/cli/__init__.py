@@ -1,5 +1,6 @@
 """Command line: ``billiard derive | scenes | run | export | calibrate | plot | lyapunov |
-bench | reproduce | sweep | view``, one module per command or group (this package).
+bench | reproduce | sweep | hysteresis | uncertainty | view``, one module per command or
+group (this package).
 
 Errors a user can cause (a bad scene, a bad curve expression, a stop condition) print one
 line and exit with status 2; no traceback.
@@ -13,7 +14,7 @@ import gc
 import sys
 from collections.abc import Sequence
 
-from billiard.cli import derive, export, run, study, sweep, view
+from billiard.cli import analyses, derive, export, run, study, sweep, view
 from billiard.cli.common import UserError
 
 __all__ = ["UserError", "build_parser", "main", "shows_default", "version_text"]
@@ -120,6 +121,7 @@ def build_parser() -> argparse.ArgumentParser:
     export.add_parser(sub)
     study.add_parsers(sub)  # calibrate, plot, lyapunov, bench, reproduce
     sweep._add_sweep_parser(sub)
+    analyses.add_parsers(sub)  # hysteresis, uncertainty
     view.add_parser(sub)
     for command in sub.choices.values():
         command.formatter_class = _DefaultsFormatter

@@ -180,7 +180,9 @@ def start(
         balls[:, column] = values.ravel()
     ctxs = np.empty((n, setup.template.size))
     gaps = np.empty(n)
-    params = np.tile(setup.params, (n, 1))
+    # a copy: a broadcast view is read-only (and stays one when it is already
+    # contiguous, as for one trajectory), which the kernels' wall functions refuse
+    params = np.array(np.broadcast_to(setup.params, (n, setup.params.size)), order="C")
     px = np.ascontiguousarray(px, dtype=np.float64).ravel()
     py = np.ascontiguousarray(py, dtype=np.float64).ravel()
     start_batch(ctxs, params, setup.walls, setup.template, balls, px, py, setup.offsets, gaps)
@@ -264,8 +266,9 @@ def advance(
     from billiard.kernels import ensemble as E
 
     n = ctxs.shape[0]
-    params = np.tile(params, (n, 1)) if params.ndim == 1 else np.ascontiguousarray(params)
-    consts = np.tile(consts, (n, 1)) if consts.ndim == 1 else np.ascontiguousarray(consts)
+    # writable C-ordered copies (see start)
+    params = np.array(np.broadcast_to(params, (n, params.shape[-1])), order="C")
+    consts = np.array(np.broadcast_to(consts, (n, E.NCONST)), order="C")
     rows = np.empty((n, L.NCOL))
     rings = np.full((n, width, E.RCOL), np.nan)
     stats = np.zeros((n, E.NSTAT))

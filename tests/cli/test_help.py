@@ -70,6 +70,8 @@ def test_every_command_is_walked():
         "bench",
         "reproduce",
         "sweep",
+        "hysteresis",
+        "uncertainty",
         "view",
     ]
     for _, parser in commands(build_parser()):
