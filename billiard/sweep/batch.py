@@ -80,9 +80,7 @@ def measure_batch(
 
     if settings["lyapunov"]:
         return None, [int(i) for i in indices]
-    transient, impacts, keep = int(settings["transient"]), int(settings["impacts"]), int(
-        settings["keep"]
-    )
+    keep = int(settings["keep"])
     parts: list[dict[str, np.ndarray]] = []
     rest: list[int] = []
     for params, points in _groups(sweep, indices).items():
