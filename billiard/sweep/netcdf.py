@@ -34,7 +34,7 @@ from __future__ import annotations
 
 import os
 import sys
-from collections.abc import Iterable, Sequence
+from collections.abc import Callable, Iterable, Sequence
 from pathlib import Path
 from typing import Any
 
@@ -42,6 +42,7 @@ import numpy as np
 from scipy.io import netcdf_file
 
 from billiard.sweep.attractor import CLASSES
+from billiard.sweep.columns import CODES, share
 from billiard.sweep.definition import Sweep, sweep_to_toml
 from billiard.sweep.units import key_unit, variable_name
 
@@ -161,39 +162,58 @@ def _title(sweep: Sweep) -> str:
     return f"billiard sweep of {sweep.scene.name} over {keys}"
 
 
+#: Rows of points.npy gathered at a time (bounded memory beside the result's own).
+_BLOCK = 1 << 16
+
+
+def _gather(rows: np.ndarray, name: str, out: np.ndarray, order: np.ndarray) -> np.ndarray:
+    """``out[index] = rows[name]`` for every row, read a block at a time."""
+    for start in range(0, len(rows), _BLOCK):
+        out[order[start : start + _BLOCK]] = rows[name][start : start + _BLOCK]
+    return out
+
+
+def _coded_chars(
+    codes: np.ndarray, names: Sequence[str], shape: tuple[int, ...]
+) -> tuple[np.ndarray, int]:
+    """The text of coded values as netCDF chars: as wide as the longest text present."""
+    present = np.unique(codes).tolist()
+    width = max([1, *(len(names[c].encode("utf-8")) for c in present)])
+    table = np.array([n.encode("utf-8") for n in names], dtype=f"S{width}")
+    return table[codes].view("S1").reshape(*shape, width), width
+
+
+def _reason_chars(
+    reasons: Callable[[], Iterable[tuple[int, str]]], size: int, shape: tuple[int, ...]
+) -> tuple[np.ndarray, int]:
+    """The reasons as netCDF chars, as wide as the longest (read twice: no dict held)."""
+    width = 1
+    for _, reason in reasons():
+        width = max(width, len(reason.encode("utf-8")))
+    data = np.zeros(size, dtype=f"S{width}")
+    for index, reason in reasons():
+        data[index] = reason.encode("utf-8")
+    return data.view("S1").reshape(*shape, width), width
+
+
 def write_result(
-    path: Path, sweep: Sweep, records: Iterable[dict[str, Any]], scene_toml: str
+    path: Path,
+    sweep: Sweep,
+    rows: np.ndarray,
+    reasons: Callable[[], Iterable[tuple[int, str]]],
+    scene_toml: str,
 ) -> Path:
-    """Write the result file from every point's record (any order: placed by index; read
-    one at a time, so ``records`` may be a generator over points.jsonl)."""
+    """Write the result file from the stored rows of every point (``points.npy`` rows,
+    any order: placed by index) and the reasons of the points not ok (``reasons()``
+    gives (index, reason) pairs; it is read twice, a later pair of a point replacing an
+    earlier one). Memory: the result's own arrays, rows read a block at a time."""
     size, keep = sweep.size, sweep.keep
+    order = np.asarray(rows["index"], dtype=np.int64)
     seen = np.zeros(size, dtype=bool)
-    text = {name: _Strings(size) for name, _ in _TEXT}
-    codes = np.zeros(size, dtype=np.int8)
-    scalars = {
-        name: np.zeros(size, dtype=np.int32) if dtype == "i4" else np.full(size, np.nan)
-        for name, dtype, _, _ in _SCALARS
-    }
-    tails = {name: np.full((size, keep), np.nan) for name in ("last_height", "last_tof")}
-    for r in records:
-        i = int(r["index"])
-        seen[i] = True
-        for name, _ in _TEXT:
-            text[name][i] = str(r.get(name, ""))
-        codes[i] = CLASSES.index(r["attractor"])
-        for name, dtype, _, _ in _SCALARS:
-            if dtype == "i4":
-                value = int(r[name] or 0)
-                scalars[name][i] = INT_FILL if value == 0 and name in _NONE_IS_ZERO else value
-            else:
-                scalars[name][i] = np.nan if r[name] is None else float(r[name])
-        for name, data in tails.items():
-            tail = r[name][-keep:]
-            data[i, :] = np.nan
-            if tail:
-                data[i, keep - len(tail) :] = tail
+    seen[order] = True
     if not seen.all():
         raise ValueError(f"the result needs every point; {int(size - seen.sum())} missing")
+    del seen
     shape = sweep.shape
     dims = tuple(variable_name(axis.key) for axis in sweep.axes)
     tmp = path.with_name(path.name + ".tmp")
@@ -234,22 +254,39 @@ def write_result(
         var = f.createVariable("point", "i4", dims)
         var[:] = np.arange(size, dtype=np.int32).reshape(shape)
         var.units = "1"
-        var.long_name = "point index (C order of the swept keys; as in points.jsonl)"
+        var.long_name = "point index (C order of the swept keys; as in points.npy)"
         var = f.createVariable("attractor", "b", dims)
-        var[:] = codes.reshape(shape)
+        var[:] = _gather(rows, "attractor", np.zeros(size, np.int8), order).reshape(shape)
         var.long_name = "attractor class (code; flag_meanings names each flag_values)"
         var.flag_values = np.arange(len(CLASSES), dtype=np.int8)
         var.flag_meanings = " ".join(CLASSES)
         for name, long_name in _TEXT:
-            chars, width = text.pop(name).chars(shape)
+            if name == "reason":
+                chars, width = _reason_chars(reasons, size, shape)
+            else:
+                codes = _gather(rows, name, np.zeros(size, np.int8), order)
+                chars, width = _coded_chars(codes, CODES[name], shape)
             f.createDimension(f"{name}_strlen", width)
             var = f.createVariable(name, "c", (*dims, f"{name}_strlen"))
             var[:] = chars
+            del chars
             var._Encoding = "utf-8"
             var.long_name = long_name
+        impacts = _gather(rows, "impacts", np.zeros(size, np.int64), order)
         for name, dtype, units, long_name in _SCALARS:
             var = f.createVariable(name, dtype, dims)
-            var[:] = scalars.pop(name).reshape(shape)
+            if name in ("elastic_share", "lid_share"):
+                count = name.replace("share", "impacts")
+                counts = _gather(rows, count, np.zeros(size, np.int64), order)
+                data = share(counts, impacts)
+            elif dtype == "i4":
+                data = _gather(rows, name, np.zeros(size, np.int32), order)
+                if name in _NONE_IS_ZERO:
+                    data[data == 0] = INT_FILL
+            else:
+                data = _gather(rows, name, np.full(size, np.nan), order)
+            var[:] = data.reshape(shape)
+            del data
             var.units = units
             var.long_name = long_name
             if name in _NONE_IS_ZERO:
@@ -261,7 +298,9 @@ def write_result(
             ("last_tof", "s", "last times of flight (NaN-padded at the front)"),
         ):
             var = f.createVariable(name, "f8", (*dims, "impact"))
-            var[:] = tails.pop(name).reshape(*shape, keep)
+            flat = var.data.reshape(size, keep)  # filled in place: no second copy
+            flat[...] = np.nan
+            _gather(rows, name, flat, order)
             var.units = units
             var.long_name = long_name
             var._FillValue = np.float64(np.nan)

@@ -8,7 +8,6 @@ starting worker processes.
 from __future__ import annotations
 
 import io
-import json
 import sys
 
 import numpy as np
@@ -141,19 +140,19 @@ def test_interrupted_sweep_resumes_to_the_same_bytes_without_recomputing(referen
     directory = tmp_path / "cut"
     first: list[int] = []
 
-    def stop_after_two(record):
+    def stop(record):
         first.append(record["index"])
-        if len(first) == 2:
-            raise StopSweep
+        raise StopSweep
 
     with pytest.raises(SweepInterrupted) as caught:
-        run_sweep(_sweep(), directory, workers=1, on_point=stop_after_two, progress=_quiet(sweep))
-    assert caught.value.done == 2
+        run_sweep(_sweep(), directory, workers=1, chunk=2, on_point=stop, progress=_quiet(sweep))
+    assert first == [0]
+    assert caught.value.done == 2  # the chunk of the point that stopped it is kept whole
     assert not (directory / "sweep.nc").exists()
-    lines = (directory / "points.jsonl").read_text().splitlines()
-    assert sorted(json.loads(line)["index"] for line in lines) == sorted(first)
-    with open(directory / "points.jsonl", "a") as f:  # a kill in the middle of a write
-        f.write('{"index": 3, "values": {"drive.amp')
+    rows = np.load(directory / "points.npy")
+    assert rows["index"].tolist() == [0, 1]
+    with open(directory / "points.npy", "ab") as f:  # a kill in the middle of a chunk
+        f.write(rows[:1].tobytes()[:50])
     second: list[int] = []
     resumed = run_sweep(
         None,
@@ -163,11 +162,19 @@ def test_interrupted_sweep_resumes_to_the_same_bytes_without_recomputing(referen
         on_point=lambda r: second.append(r["index"]),
         progress=_quiet(sweep),
     )
-    assert sorted(first + second) == list(range(sweep.size))
+    assert sorted(second) == [2, 3]
     assert list(resumed.computed) == second
     assert resumed.result.read_bytes() == outcome.result.read_bytes()
     again = run_sweep(None, directory, resume=True, progress=_quiet(sweep))
     assert list(again.computed) == []
+    assert again.result.read_bytes() == outcome.result.read_bytes()
+
+
+def test_chunk_size_does_not_change_the_bytes(reference, tmp_path):
+    sweep, outcome = reference
+    other = run_sweep(_sweep(), tmp_path / "one", workers=1, chunk=4, progress=_quiet(sweep))
+    assert other.result.read_bytes() == outcome.result.read_bytes()
+    assert np.load(tmp_path / "one" / "points.npy")["index"].tolist() == [0, 1, 2, 3]
 
 
 def test_dask_local_cluster_gives_the_same_bytes(reference, tmp_path):
@@ -177,7 +184,11 @@ def test_dask_local_cluster_gives_the_same_bytes(reference, tmp_path):
         n_workers=2, processes=False, threads_per_worker=1, dashboard_address=None
     ) as cluster:
         other = run_sweep(
-            _sweep(), tmp_path / "dask", dask=cluster.scheduler_address, progress=_quiet(sweep)
+            _sweep(),
+            tmp_path / "dask",
+            dask=cluster.scheduler_address,
+            chunk=3,
+            progress=_quiet(sweep),
         )
     assert "Dask scheduler" in other.where
     assert other.result.read_bytes() == outcome.result.read_bytes()
