@@ -306,6 +306,10 @@ def check_starts(scene: Any, q1s: np.ndarray, q2s: np.ndarray) -> dict[int, str]
     return reasons
 
 
+def _one_line(message: str) -> str:
+    return message if "\n" not in message and "  " not in message else " ".join(message.split())
+
+
 def _refuse(sweep: Sweep, index: int, message: str) -> SweepError:
     return SweepError(
         f"point {index} ({_describe(sweep.point_values(index))}): {message} "
@@ -345,9 +349,9 @@ def prepare(sweep: Sweep, skip_invalid: bool = False) -> dict[int, str]:
             first = int(order[0])
             message = messages if isinstance(messages, str) else messages[first]
             raise _refuse(sweep, int(indices[first]), " ".join(message.split()))
+        one = " ".join(messages.split()) if isinstance(messages, str) else None
         for k in order.tolist():
-            message = messages if isinstance(messages, str) else messages[k]
-            invalid[int(indices[k])] = " ".join(message.split())
+            invalid[int(indices[k])] = one if one is not None else _one_line(messages[k])
 
     for combo in itertools.product(*(range(shape[i]) for i in others)):
         pairs = zip(others, combo, strict=True)
@@ -430,27 +434,26 @@ def _check_set(
     base = scene.initial
 
     def column(name: str) -> np.ndarray | None:
+        """The points' start coordinate ``name`` (float64), None where the engine
+        resolves it (not given, or not a number)."""
         if f"initial.{name}" in keys:
             i = keys[f"initial.{name}"]
-            values = sweep.axes[i].values
-            return np.array([values[j] for j in multi[i].tolist()], dtype=object)
+            axis = sweep.axes[i]
+            if not axis.numeric:
+                return None
+            return np.asarray(axis.values, dtype=np.float64)[multi[i]]
         value = getattr(base, name)
-        return None if value is None else np.full(len(indices), value, dtype=object)
+        return None if value is None else np.full(len(indices), float(value))
 
     q1s, q2s = column("q1"), column("q2")
-    vectorised = (
-        q1s is not None
-        and q2s is not None
-        and "initial.t" not in keys
-        and not any(v is None for v in itertools.chain(q1s.tolist(), q2s.tolist()))
-    )
-    if vectorised:
+    if q1s is not None and q2s is not None and "initial.t" not in keys:
         ok = np.flatnonzero(~bad)
         try:
-            found = check_starts(scene, q1s[ok].astype(float), q2s[ok].astype(float))
+            found = check_starts(scene, q1s[ok], q2s[ok])
         except ValueError as exc:  # the geometry itself: every point of the set
             record(indices, str(exc))
             return
+        del q1s, q2s
         for position, message in found.items():
             messages[int(ok[position])] = message
             bad[ok[position]] = True
@@ -463,7 +466,7 @@ def _check_set(
                 for k in good.tolist():
                     messages[k] = problem
                 bad[good] = True
-    else:  # starts the engine resolves (a q1 or q2 left out): run each distinct one
+    else:  # starts the engine resolves (a q1 or q2 left out): run each one
         for k in np.flatnonzero(~bad).tolist():
             point = with_values(scene, _start_values(sweep, starts, multi, k))
             problem = _geometry_problem(sweep, point, checked)

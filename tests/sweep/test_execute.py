@@ -310,3 +310,86 @@ def test_progress_lines_when_not_a_terminal():
     lines = stream.getvalue().splitlines()
     assert lines and lines[-1].startswith("billiard sweep: 5/10 points")
     assert "impacts/s" in lines[-1] and "ETA" in lines[-1]
+
+
+# --- chunks, workers and checks --------------------------------------------------------
+
+
+def test_chunks_cover_the_points_left_in_index_order():
+    from billiard.sweep.execute import _chunks, chunk_size
+
+    assert chunk_size(12, 1) == 3 and chunk_size(10**6, 16) == 4096 and chunk_size(3, 8) == 1
+    sweep = Sweep(load_scene("parabola-5.4hz"), (parse_vary("drive.frequency=4:7:10"),))
+    done = bytearray(10)
+    for i in (0, 3, 4, 9):
+        done[i] = 1
+    tasks = list(_chunks(sweep, done, 3))
+    assert [t.points().tolist() for t in tasks] == [[1, 2, 5], [6, 7, 8]]
+    assert (tasks[0].start, tasks[0].stop) == (1, 6)
+    assert tasks[1].indices is None  # a whole range: no indices sent
+
+
+def test_window_follows_the_workers_present_and_a_lost_worker_is_logged(monkeypatch, tmp_path):
+    import threading
+    import time
+    from concurrent.futures import ThreadPoolExecutor
+
+    from billiard.sweep import execute
+    from billiard.sweep.columns import ChunkResult, empty_columns
+    from billiard.sweep.store import ChunkStore
+
+    sweep = Sweep(load_scene("parabola-5.4hz"), (parse_vary("drive.frequency=4:7:40"),), keep=2)
+    lock = threading.Lock()
+    running, most = [0], []
+
+    def measure(task):
+        with lock:
+            running[0] += 1
+            most.append((looks[0], running[0]))
+        time.sleep(0.02)
+        columns = empty_columns(len(task), sweep.keep)
+        columns["index"][:] = task.points()
+        with lock:
+            running[0] -= 1
+        return ChunkResult(columns)
+
+    looks = [0]
+
+    def present():  # one thread at first; a second worker joins, then the first leaves
+        looks[0] += 1
+        if looks[0] < 4:
+            return {"tcp://a:1": 1}
+        if looks[0] < 12:
+            return {"tcp://a:1": 1, "tcp://b:2": 3}
+        return {"tcp://b:2": 3}
+
+    monkeypatch.setattr(execute, "measure_chunk", measure)
+    monkeypatch.setattr(execute, "WORKERS_INTERVAL", 0.0)
+    with ThreadPoolExecutor(8) as pool, ChunkStore(tmp_path, sweep.size, sweep.keep) as store:
+        workers = execute.Workers(pool, "test", present)
+        tasks = execute._chunks(sweep, store.done, 1)
+        execute._drive(workers, tasks, store, _quiet(sweep), None, execute.array.array("q"), sweep)
+        assert store.count == 40
+    # two chunks in flight for one thread; once the second worker joins, up to eight
+    assert max(n for look, n in most if look < 4) <= 2
+    assert max(n for _, n in most) > 2
+    log = (tmp_path / "sweep.log").read_text()
+    assert "worker tcp://b:2 joined (3 threads)" in log
+    assert "worker tcp://a:1 left; its chunks are recomputed" in log
+
+
+def test_basin_map_starts_are_checked_as_the_engine_checks_them():
+    from billiard.run.simulate import Simulation
+    from billiard.sweep.execute import prepare
+
+    axes = (parse_vary("initial.q1=-0.06:0.06:7"), parse_vary("initial.q2=0.005:0.05:4"))
+    sweep = Sweep(load_scene("parabola-5.4hz"), axes, skip_invalid=True)
+    invalid = prepare(sweep, skip_invalid=True)
+    expected = {}
+    for index in range(sweep.size):
+        try:
+            Simulation(with_values(sweep.scene, sweep.point_values(index)))
+        except ValueError as exc:
+            expected[index] = " ".join(str(exc).split())
+    assert invalid == expected
+    assert 0 < len(invalid) < sweep.size
