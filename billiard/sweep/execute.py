@@ -55,6 +55,7 @@ from billiard.sweep.store import (
     StoreError,
     definition_digest,
     digest_lines,
+    iter_rows,
     points_table,
     read_reasons,
 )
@@ -737,17 +738,25 @@ def _finished(directory: Path, sweep: Sweep) -> bytearray:
                 f"run it again: `billiard sweep {directory / SWEEP_NAME} --out OTHER_DIR`"
             )
         return done
-    from billiard.runfile.npyfile import open_rows
-    from billiard.runfile.record import RunDataError
+    from billiard.runfile.npyfile import header_size, read_header
 
-    try:
-        rows = open_rows(path, points_table(sweep.keep))
-    except RunDataError as exc:
-        raise StoreError(str(exc)) from None
+    dtype = points_table(sweep.keep).dtype
     flags = np.frombuffer(done, dtype=np.uint8)
-    for start in range(0, len(rows), 1 << 20):
-        index = np.asarray(rows["index"][start : start + (1 << 20)], dtype=np.int64)
-        flags[index[(index >= 0) & (index < sweep.size)]] = 1
+    fd = os.open(path, os.O_RDONLY)
+    try:
+        try:
+            found, rows, _ = read_header(os.pread(fd, 1 << 16, 0))
+        except ValueError as exc:
+            raise StoreError(f"{path} is not a sweep's points file ({exc})") from None
+        if found != dtype:
+            raise StoreError(f"{path} holds rows of another kind than this sweep's")
+        # rows past the header's count are not points: the store cuts them
+        rows = min(rows, (os.fstat(fd).st_size - header_size(dtype)) // dtype.itemsize)
+        for block in iter_rows(fd, dtype, rows):
+            index = np.asarray(block["index"], dtype=np.int64)
+            flags[index[(index >= 0) & (index < sweep.size)]] = 1
+    finally:
+        os.close(fd)
     return done
 
 
@@ -861,15 +870,10 @@ def run_sweep(
         from billiard.scene.scene import scene_to_toml
 
         outcome = SweepOutcome(directory, directory / RESULT_NAME, computed, where, sweep=sweep)
-        try:
-            rows = store.stored()
-        except StoreError as exc:
-            raise SweepError(str(exc)) from None
-        _summarise(rows, store, sweep, outcome)
+        _summarise(store, sweep, outcome)
         result = write_result(
-            directory / RESULT_NAME, sweep, rows, store.reasons, scene_to_toml(sweep.scene)
+            directory / RESULT_NAME, sweep, store.blocks, store.reasons, scene_to_toml(sweep.scene)
         )
-        del rows
         if plots:
             from billiard.sweep.netcdf import read_result
             from billiard.sweep.plots import plot_sweep
@@ -894,26 +898,26 @@ def _store_invalid(store: ChunkStore, sweep: Sweep, invalid: dict[int, str]) -> 
         store.append(ChunkResult(columns, {i: invalid[i] for i in part}))
 
 
-def _summarise(rows: np.ndarray, store: ChunkStore, sweep: Sweep, outcome: SweepOutcome) -> None:
+def _summarise(store: ChunkStore, sweep: Sweep, outcome: SweepOutcome) -> None:
     """Points per status and per class, and the first failed points' records."""
     statuses = np.zeros(len(STATUSES), dtype=np.int64)
     classes = np.zeros(len(CLASSES), dtype=np.int64)
-    failed: list[int] = []
-    for start in range(0, len(rows), 1 << 20):
-        part = rows[start : start + (1 << 20)]
+    failed: dict[int, np.void] = {}  # the five lowest indices
+    for part in store.blocks():
         statuses += np.bincount(part["status"], minlength=len(STATUSES))
         classes += np.bincount(part["attractor"], minlength=len(CLASSES))
-        lost = np.asarray(part["index"][part["status"] == STATUSES.index("failed")])
-        failed = sorted([*failed, *np.sort(lost)[:5].tolist()])[:5]
+        lost = part[part["status"] == STATUSES.index("failed")]
+        for row in lost[np.argsort(lost["index"])][:5]:
+            failed[int(row["index"])] = row
+        for index in sorted(failed)[5:]:
+            del failed[index]
     outcome.statuses.update({STATUSES[i]: int(n) for i, n in enumerate(statuses) if n})
     outcome.classes.update({CLASSES[i]: int(n) for i, n in enumerate(classes) if n})
     if failed:
-        wanted = set(failed)
-        reasons = {i: r for i, r in store.reasons() if i in wanted}
-        positions = np.flatnonzero(np.isin(rows["index"], failed)).tolist()
-        at = {int(rows["index"][k]): k for k in positions}
+        reasons = {i: r for i, r in store.reasons() if i in failed}
         outcome.failed_examples = [
-            record_of_row(rows[at[i]], sweep.point_values(i), reasons.get(i, "")) for i in failed
+            record_of_row(failed[i], sweep.point_values(i), reasons.get(i, ""))
+            for i in sorted(failed)
         ]
 
 
@@ -921,7 +925,7 @@ def _records(directory: Path, sweep: Sweep) -> list[dict[str, Any]]:
     """Every stored point's record, by index (for small sweeps and tests)."""
     from billiard.runfile.npyfile import open_rows
 
-    rows = open_rows(directory / POINTS_NAME, points_table(sweep.keep))
+    rows = open_rows(directory / POINTS_NAME, points_table(sweep.keep))  # small sweeps
     done = bytearray(sweep.size)
     for i in rows["index"].tolist():
         done[i] = 1

@@ -162,58 +162,45 @@ def _title(sweep: Sweep) -> str:
     return f"billiard sweep of {sweep.scene.name} over {keys}"
 
 
-#: Rows of points.npy gathered at a time (bounded memory beside the result's own).
-_BLOCK = 1 << 16
-
-
-def _gather(rows: np.ndarray, name: str, out: np.ndarray, order: np.ndarray) -> np.ndarray:
-    """``out[index] = rows[name]`` for every row, read a block at a time."""
-    for start in range(0, len(rows), _BLOCK):
-        out[order[start : start + _BLOCK]] = rows[name][start : start + _BLOCK]
-    return out
-
-
-def _coded_chars(
-    codes: np.ndarray, names: Sequence[str], shape: tuple[int, ...]
-) -> tuple[np.ndarray, int]:
-    """The text of coded values as netCDF chars: as wide as the longest text present."""
-    present = np.unique(codes).tolist()
-    width = max([1, *(len(names[c].encode("utf-8")) for c in present)])
-    table = np.array([n.encode("utf-8") for n in names], dtype=f"S{width}")
-    return table[codes].view("S1").reshape(*shape, width), width
-
-
-def _reason_chars(
-    reasons: Callable[[], Iterable[tuple[int, str]]], size: int, shape: tuple[int, ...]
-) -> tuple[np.ndarray, int]:
-    """The reasons as netCDF chars, as wide as the longest (read twice: no dict held)."""
-    width = 1
-    for _, reason in reasons():
-        width = max(width, len(reason.encode("utf-8")))
-    data = np.zeros(size, dtype=f"S{width}")
-    for index, reason in reasons():
-        data[index] = reason.encode("utf-8")
-    return data.view("S1").reshape(*shape, width), width
+def _widths(blocks: Callable[[], Iterable[np.ndarray]], size: int) -> dict[str, int]:
+    """Check that the rows hold every point, and the width of each coded text variable:
+    its longest text present (at least 1)."""
+    seen = np.zeros(size, dtype=bool)
+    present: dict[str, set[int]] = {name: set() for name, _ in _TEXT if name in CODES}
+    for rows in blocks():
+        seen[rows["index"]] = True
+        for name, codes in present.items():
+            codes.update(np.unique(rows[name]).tolist())
+    if not seen.all():
+        raise ValueError(f"the result needs every point; {int(size - seen.sum())} missing")
+    return {
+        name: max([1, *(len(CODES[name][c].encode("utf-8")) for c in codes)])
+        for name, codes in present.items()
+    }
 
 
 def write_result(
     path: Path,
     sweep: Sweep,
-    rows: np.ndarray,
+    blocks: Callable[[], Iterable[np.ndarray]],
     reasons: Callable[[], Iterable[tuple[int, str]]],
     scene_toml: str,
 ) -> Path:
-    """Write the result file from the stored rows of every point (``points.npy`` rows,
-    any order: placed by index) and the reasons of the points not ok (``reasons()``
-    gives (index, reason) pairs; it is read twice, a later pair of a point replacing an
-    earlier one). Memory: the result's own arrays, rows read a block at a time."""
+    """Write the result file from the stored rows of every point and the reasons of the
+    points not ok.
+
+    Args:
+        blocks: gives the ``points.npy`` rows of every point, a block at a time, in any
+            order (each placed by its index); called twice.
+        reasons: gives (index, reason) pairs; called twice (a later pair of a point
+            replaces an earlier one).
+
+    Memory: the result's own arrays (scipy holds them until the file is closed), filled
+    in place; the rows are read a block at a time.
+    """
     size, keep = sweep.size, sweep.keep
-    order = np.asarray(rows["index"], dtype=np.int64)
-    seen = np.zeros(size, dtype=bool)
-    seen[order] = True
-    if not seen.all():
-        raise ValueError(f"the result needs every point; {int(size - seen.sum())} missing")
-    del seen
+    widths = _widths(blocks, size)
+    widths["reason"] = max([1, *(len(r.encode("utf-8")) for _, r in reasons())])
     shape = sweep.shape
     dims = tuple(variable_name(axis.key) for axis in sweep.axes)
     tmp = path.with_name(path.name + ".tmp")
@@ -255,38 +242,31 @@ def write_result(
         var[:] = np.arange(size, dtype=np.int32).reshape(shape)
         var.units = "1"
         var.long_name = "point index (C order of the swept keys; as in points.npy)"
+        # every variable below is filled in place (its array, as scipy holds it) from
+        # the rows, in one pass once all are made
+        fill: dict[str, Callable[[np.ndarray, np.ndarray], None]] = {}
         var = f.createVariable("attractor", "b", dims)
-        var[:] = _gather(rows, "attractor", np.zeros(size, np.int8), order).reshape(shape)
+        fill["attractor"] = _filler(var.data.reshape(size), "attractor")
         var.long_name = "attractor class (code; flag_meanings names each flag_values)"
         var.flag_values = np.arange(len(CLASSES), dtype=np.int8)
         var.flag_meanings = " ".join(CLASSES)
         for name, long_name in _TEXT:
-            if name == "reason":
-                chars, width = _reason_chars(reasons, size, shape)
-            else:
-                codes = _gather(rows, name, np.zeros(size, np.int8), order)
-                chars, width = _coded_chars(codes, CODES[name], shape)
+            width = widths[name]
             f.createDimension(f"{name}_strlen", width)
             var = f.createVariable(name, "c", (*dims, f"{name}_strlen"))
-            var[:] = chars
-            del chars
+            text = var.data.reshape(size * width).view(f"S{width}")
+            if name == "reason":
+                text[...] = b""
+                for index, reason in reasons():
+                    text[index] = reason.encode("utf-8")
+            else:
+                table = np.array([n.encode("utf-8") for n in CODES[name]], dtype=f"S{width}")
+                fill[name] = _coded_filler(text, name, table)
             var._Encoding = "utf-8"
             var.long_name = long_name
-        impacts = _gather(rows, "impacts", np.zeros(size, np.int64), order)
         for name, dtype, units, long_name in _SCALARS:
             var = f.createVariable(name, dtype, dims)
-            if name in ("elastic_share", "lid_share"):
-                count = name.replace("share", "impacts")
-                counts = _gather(rows, count, np.zeros(size, np.int64), order)
-                data = share(counts, impacts)
-            elif dtype == "i4":
-                data = _gather(rows, name, np.zeros(size, np.int32), order)
-                if name in _NONE_IS_ZERO:
-                    data[data == 0] = INT_FILL
-            else:
-                data = _gather(rows, name, np.full(size, np.nan), order)
-            var[:] = data.reshape(shape)
-            del data
+            fill[name] = _filler(var.data.reshape(size), name)
             var.units = units
             var.long_name = long_name
             if name in _NONE_IS_ZERO:
@@ -298,16 +278,51 @@ def write_result(
             ("last_tof", "s", "last times of flight (NaN-padded at the front)"),
         ):
             var = f.createVariable(name, "f8", (*dims, "impact"))
-            flat = var.data.reshape(size, keep)  # filled in place: no second copy
-            flat[...] = np.nan
-            _gather(rows, name, flat, order)
+            fill[name] = _filler(var.data.reshape(size, keep), name)
             var.units = units
             var.long_name = long_name
             var._FillValue = np.float64(np.nan)
+        for rows in blocks():
+            index = np.asarray(rows["index"], dtype=np.int64)
+            for put in fill.values():
+                put(index, rows)
     finally:
         f.close()
     os.replace(tmp, path)
     return path
+
+
+def _filler(out: np.ndarray, name: str) -> Callable[[np.ndarray, np.ndarray], None]:
+    """Places a block's values of the variable ``name`` (from its rows) at their
+    points."""
+    if name in ("elastic_share", "lid_share"):
+        count = name.replace("share", "impacts")
+
+        def put_share(index: np.ndarray, rows: np.ndarray) -> None:
+            out[index] = share(rows[count], rows["impacts"])
+
+        return put_share
+    if name in _NONE_IS_ZERO:
+
+        def put_or_fill(index: np.ndarray, rows: np.ndarray) -> None:
+            values = np.asarray(rows[name], dtype=np.int32)
+            out[index] = np.where(values == 0, np.int32(INT_FILL), values)
+
+        return put_or_fill
+
+    def put(index: np.ndarray, rows: np.ndarray) -> None:
+        out[index] = rows[name]
+
+    return put
+
+
+def _coded_filler(
+    out: np.ndarray, name: str, table: np.ndarray
+) -> Callable[[np.ndarray, np.ndarray], None]:
+    def put(index: np.ndarray, rows: np.ndarray) -> None:
+        out[index] = table[rows[name]]
+
+    return put
 
 
 def _text(value: Any) -> Any:

@@ -55,6 +55,7 @@ __all__ = [
     "ChunkStore",
     "StoreError",
     "points_table",
+    "iter_rows",
     "read_reasons",
 ]
 
@@ -79,6 +80,22 @@ def points_table(keep: int) -> Table:
     """The table of ``points.npy`` for a sweep keeping ``keep`` impacts."""
     dtype = disk_dtype(keep)
     return Table("points", "", POINTS_NAME, tuple(dtype.names or ()), dtype)
+
+
+#: Rows read at a time by :func:`iter_rows`.
+BLOCK_ROWS = 1 << 15
+
+
+def iter_rows(fd: int, dtype: np.dtype, rows: int, block: int = BLOCK_ROWS) -> Iterator[np.ndarray]:
+    """The first ``rows`` rows of the points file open as ``fd``, ``block`` rows at a
+    time (read, not mapped)."""
+    head = header_size(dtype)
+    for start in range(0, rows, block):
+        count = min(block, rows - start)
+        data = os.pread(fd, count * dtype.itemsize, head + start * dtype.itemsize)
+        if len(data) != count * dtype.itemsize:
+            raise StoreError(f"points file: {rows} rows counted, fewer on disk (cut short?)")
+        yield np.frombuffer(data, dtype=dtype)
 
 
 def _lines(path: Path) -> Iterator[tuple[bytes, int]]:
@@ -193,16 +210,12 @@ class ChunkStore:
         if length > end:  # a chunk's rows written, not yet counted: cut off
             os.ftruncate(self.fd, end)
             os.fsync(self.fd)
-        if rows:
-            index = open_rows(self.path, self.table)["index"]
-            for start in range(0, rows, 1 << 20):
-                part = np.asarray(index[start : start + (1 << 20)])
-                if part.size and (part.min() < 0 or part.max() >= size):
-                    bad = int(part[(part < 0) | (part >= size)][0])
-                    raise StoreError(
-                        f"{self.path}: point {bad} is not in the sweep (0 to {size - 1})"
-                    )
-                self._mark(part)
+        for block in iter_rows(self.fd, self.dtype, rows):
+            index = np.asarray(block["index"], dtype=np.int64)
+            if index.size and (index.min() < 0 or index.max() >= size):
+                bad = int(index[(index < 0) | (index >= size)][0])
+                raise StoreError(f"{self.path}: point {bad} is not in the sweep (0 to {size - 1})")
+            self._mark(index)
         os.lseek(self.fd, end, os.SEEK_SET)
         return rows
 
@@ -261,6 +274,11 @@ class ChunkStore:
             return open_rows(self.path, self.table)
         except RunDataError as exc:
             raise StoreError(str(exc)) from None
+
+    def blocks(self) -> Iterator[np.ndarray]:
+        """The stored rows, read a block at a time (in the order they were stored; no
+        mapping left behind: memory is one block)."""
+        return iter_rows(self.fd, self.dtype, self.rows)
 
     def reasons(self) -> Iterator[tuple[int, str]]:
         """(index, reason) of the stored points not ``ok`` (read from the file)."""
