@@ -177,7 +177,7 @@ def test_chunk_size_does_not_change_the_bytes(reference, tmp_path):
     assert np.load(tmp_path / "one" / "points.npy")["index"].tolist() == [0, 1, 2, 3]
 
 
-def test_dask_local_cluster_gives_the_same_bytes(reference, tmp_path):
+def test_dask_local_cluster_gives_the_same_bytes(reference, tmp_path, capsys):
     distributed = pytest.importorskip("distributed")
     sweep, outcome = reference
     with distributed.LocalCluster(
@@ -191,6 +191,10 @@ def test_dask_local_cluster_gives_the_same_bytes(reference, tmp_path):
             progress=_quiet(sweep),
         )
     assert "Dask scheduler" in other.where
+    # the scheduler names its dashboard (its HTTP server): the link is printed
+    assert "billiard sweep: Dask dashboard at http://" in capsys.readouterr().err
+    log = (tmp_path / "dask" / "sweep.log").read_text()
+    assert "3 per chunk" in log and "chunk 0-2: 3 points (3 ok)" in log
     assert other.result.read_bytes() == outcome.result.read_bytes()
 
 
