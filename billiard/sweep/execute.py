@@ -878,11 +878,23 @@ def run_sweep(
             from billiard.sweep.netcdf import read_result
             from billiard.sweep.plots import plot_sweep
 
-            outcome.plots = plot_sweep(sweep, read_result(result), directory)
+            outcome.plots = plot_sweep(sweep, read_result(result, _plotted(sweep)), directory)
         store.log(f"wrote {result.name}" + "".join(f", {p.name}" for p in outcome.plots))
         if not outcome.measured:
             store.log(f"no point measured: {dict(outcome.statuses)}")
     return outcome
+
+
+def _plotted(sweep: Sweep) -> list[str]:
+    """The result's variables the plots read (a large sweep's text variables and tails
+    are not read back for them)."""
+    from billiard.sweep.units import variable_name
+
+    names = [variable_name(axis.key) for axis in sweep.axes]
+    names += ["attractor", "status", "period", "height_mean", "lyapunov", "rest_height"]
+    if len(sweep.axes) == 1:
+        names += ["last_height", "last_tof"]
+    return names
 
 
 def _store_invalid(store: ChunkStore, sweep: Sweep, invalid: dict[int, str]) -> None:

@@ -10,6 +10,7 @@ chunk it came in.
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass
 from typing import Any
@@ -109,7 +110,6 @@ def _rest_height(scene: Any) -> float:
     The engine places a ball without a start position at rest on the bottom when it is
     set up; nothing is simulated (a run from rest under ``contact.model = "phases"`` may
     roll for ever, and the set-up gives the same height a one-impact run reports)."""
-    from billiard.run.simulate import Simulation
     from billiard.scene.scene import with_values
 
     at_rest = with_values(
@@ -117,6 +117,16 @@ def _rest_height(scene: Any) -> float:
         {"initial.q1": None, "initial.q2": None, "initial.v1": 0.0, "initial.v2": 0.0}
         | {"initial.omega": 0.0, "run.duration": None},
     )
+    return _rest_height_of(at_rest)
+
+
+@functools.lru_cache(maxsize=256)
+def _rest_height_of(at_rest: Any) -> float:
+    """The resting height of a scene whose ball starts at rest: once per distinct
+    parameter set in a worker (a basin map's points share one; setting up the
+    simulation is half the cost of a short point)."""
+    from billiard.run.simulate import Simulation
+
     return float(Simulation(at_rest).initial.q2)
 
 

@@ -329,34 +329,48 @@ def _text(value: Any) -> Any:
     return value.decode("utf-8") if isinstance(value, bytes) else value
 
 
-def read_result(path: Path) -> dict[str, Any]:
+def _decode(var: Any) -> np.ndarray:
+    """One variable's data, decoded as xarray decodes it (see :func:`read_result`)."""
+    data = np.array(var.data)
+    if data.dtype.kind == "S" and data.dtype.itemsize == 1 and data.ndim >= 1:
+        rows = data.reshape(-1, data.shape[-1])
+        text = [b"".join(row).rstrip(b"\0").decode() for row in rows]
+        data = np.array(text, dtype=object).reshape(data.shape[:-1])
+    meanings = getattr(var, "flag_meanings", None)
+    fill = getattr(var, "_FillValue", None)
+    if meanings is not None:
+        codes = np.ravel(var.flag_values).tolist()
+        names = dict(zip(codes, _text(meanings).split(), strict=True))
+        flat = [names[int(code)] for code in data.ravel()]
+        data = np.array(flat, dtype=object).reshape(data.shape)
+    elif fill is not None and data.dtype.kind in "iu":
+        data = np.where(data == fill, np.nan, data.astype(float))
+    return data
+
+
+def read_result(path: Path, names: Iterable[str] | None = None) -> dict[str, Any]:
     """The result file as a dict of numpy arrays, decoded as xarray decodes them, and its
     global attributes (under ``"_attributes"``).
 
     Text variables become arrays of ``str``; ``attractor`` its class names (through
     ``flag_meanings``); an integer variable with a ``_FillValue`` becomes float, NaN where
     filled (``period`` where no period was found). Files written before the attractor
-    was coded (text) read the same.
+    was coded (text) read the same. ``names``: only these variables (a large sweep's
+    plots need a few of them).
     """
-    with netcdf_file(path, "r", mmap=False) as f:
-        out: dict[str, Any] = {}
-        for name, var in f.variables.items():
-            data = np.array(var.data)
-            if data.dtype.kind == "S" and data.dtype.itemsize == 1 and data.ndim >= 1:
-                rows = data.reshape(-1, data.shape[-1])
-                text = [b"".join(row).rstrip(b"\0").decode() for row in rows]
-                data = np.array(text, dtype=object).reshape(data.shape[:-1])
-            meanings = getattr(var, "flag_meanings", None)
-            fill = getattr(var, "_FillValue", None)
-            if meanings is not None:
-                codes = np.ravel(var.flag_values).tolist()
-                names = dict(zip(codes, _text(meanings).split(), strict=True))
-                flat = [names[int(code)] for code in data.ravel()]
-                data = np.array(flat, dtype=object).reshape(data.shape)
-            elif fill is not None and data.dtype.kind in "iu":
-                data = np.where(data == fill, np.nan, data.astype(float))
-            out[name] = data
+    wanted = None if names is None else set(names)
+    # mapped when only some variables are read: the others are never loaded
+    f = netcdf_file(path, "r", mmap=wanted is not None)
+    try:
+        out: dict[str, Any] = {
+            name: _decode(var)
+            for name, var in f.variables.items()
+            if wanted is None or name in wanted
+        }
         out["_attributes"] = {
             name: _text(getattr(f, name)) for name in GLOBAL_ATTRIBUTES if hasattr(f, name)
         }
+    finally:
+        f.variables.clear()  # no array left on the mapping: it closes cleanly
+        f.close()
     return out
