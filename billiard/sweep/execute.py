@@ -447,14 +447,15 @@ def _check_set(
         return None if value is None else np.full(len(indices), float(value))
 
     q1s, q2s = column("q1"), column("q2")
+    found = None
     if q1s is not None and q2s is not None and "initial.t" not in keys:
         ok = np.flatnonzero(~bad)
         try:
             found = check_starts(scene, q1s[ok], q2s[ok])
-        except ValueError as exc:  # the geometry itself: every point of the set
-            record(indices, str(exc))
-            return
+        except ValueError:  # no ball at rest to set up (no bottom): each start on its own
+            found = None
         del q1s, q2s
+    if found is not None:
         for position, message in found.items():
             messages[int(ok[position])] = message
             bad[ok[position]] = True
@@ -467,7 +468,7 @@ def _check_set(
                 for k in good.tolist():
                     messages[k] = problem
                 bad[good] = True
-    else:  # starts the engine resolves (a q1 or q2 left out): run each one
+    else:  # starts the engine resolves (a q1 or q2 left out), or no ball at rest: each one
         for k in np.flatnonzero(~bad).tolist():
             point = with_values(scene, _start_values(sweep, starts, multi, k))
             problem = _geometry_problem(sweep, point, checked)
@@ -478,7 +479,9 @@ def _check_set(
     record(indices[where], [messages[int(k)] for k in where.tolist()])
 
 
-def _start_values(sweep: Sweep, starts: list[int], multi: list[np.ndarray], k: int) -> dict:
+def _start_values(
+    sweep: Sweep, starts: list[int], multi: list[np.ndarray], k: int
+) -> dict[str, Any]:
     return {sweep.axes[i].key: sweep.axes[i].values[int(multi[i][k])] for i in starts}
 
 
