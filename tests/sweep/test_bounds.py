@@ -548,3 +548,12 @@ def test_reasons_file_is_read_line_by_line(tmp_path):
     path.write_text('{"index": 0, "reason": "r"}\n[1, 2]\n')
     with pytest.raises(StoreError, match="line 2 is not a point's reason"):
         list(read_reasons(path))
+
+
+def test_a_folder_of_an_older_points_file_is_refused_in_one_line(tmp_path, capsys):
+    directory = _interrupted(tmp_path)
+    (directory / "points.npy").rename(directory / "points.jsonl")
+    code, _, err = _cli(capsys, "--resume", str(directory))
+    _one_line_error(code, err)
+    assert f"{directory} holds a sweep of an older version (points.jsonl)" in err
+    assert not (directory / "points.npy").exists()
