@@ -7,7 +7,7 @@ source checkout::
     python -m bench.sweep --quick    # about 1 minute, smaller sizes
 
 It measures with :func:`billiard.sweep.run_sweep`, the code behind ``billiard sweep``
-(worker start-up, checking the points, writing points.jsonl and the result file all
+(worker start-up, checking the points, writing points.npy and the result file all
 included; plots excluded), saves ``docs/figures/sweeps/bench.json`` and rewrites the
 section between the markers ``<!-- sweep-bench -->`` and ``<!-- /sweep-bench -->`` of
 ``docs/performance.md`` (appending it if absent).
@@ -210,11 +210,12 @@ def render(results: dict) -> str:
         f"{per_point:,}-impact points. Give each worker 2 GiB and keep points below "
         f"{largest:,.0f} impacts (memory grows with impacts per point, not with the "
         "number of points).",
-        "* output: the parent process appends each point to `points.jsonl` (about 2 kB "
-        "per point with `--keep 100`: 40 MB for 2 x 10^4 points) and writes `sweep.nc` "
-        "(about the same size) at the end; the scheduler sees one small task per point.",
-        "* interruptions: a lost worker or a stopped parent loses only the points in "
-        "flight (at most two per worker); `--resume DIR` computes the rest.",
+        "* output: the parent process appends each chunk of points to `points.npy` "
+        "(1,696 bytes per point with `--keep 100`: 34 MB for 2 x 10^4 points) and writes "
+        "`sweep.nc` (about the same size) at the end; the scheduler sees one task per "
+        "chunk of points (up to 4096, at least four chunks per worker).",
+        "* interruptions: a lost worker or a stopped parent loses only the chunks in "
+        "flight (at most two per worker thread); `--resume DIR` computes the rest.",
         "* check before the big run: run a 10^6-impact slice of the same sweep with the "
         "same options on the cluster and scale its wall time by 100 / (its share of "
         "workers), as here.",

@@ -117,7 +117,7 @@ def _add_sweep_parser(sub: argparse._SubParsersAction) -> None:
         help="vary scene keys over a grid; attractor, heights, times of flight per point",
         description="Run a scene over a grid of values of one or more scene keys (any "
         "dotted key; initial.* gives a basin map), in parallel, and write DIR/sweep.nc "
-        "(netCDF) and plots. Every finished point is kept in DIR/points.jsonl; after "
+        "(netCDF) and plots. Every finished chunk of points is kept in DIR/points.npy; after "
         "Ctrl-C or a kill, `billiard sweep --resume DIR` computes only the rest. "
         "See docs/sweeps.md.",
     )

@@ -1,15 +1,18 @@
 """Running a sweep: check its size and every point, then measure the rest on an executor.
 
-One code path for both places a sweep runs: points are submitted to a
-``concurrent.futures`` executor, a :class:`~concurrent.futures.ProcessPoolExecutor` on
-this machine or a ``dask.distributed`` client's executor (``client.get_executor()``) on
-a cluster, at most two points per worker in flight. Each finished point is appended to
-``DIR/points.jsonl`` at once, so an interrupted sweep keeps everything finished and
-``resume`` computes only the rest.
+One code path for both places a sweep runs: chunks of points (:class:`ChunkTask`,
+thousands of points each in a large sweep, but at least four chunks per worker) are
+submitted to a ``concurrent.futures`` executor, a
+:class:`~concurrent.futures.ProcessPoolExecutor` on this machine or a
+``dask.distributed`` client's executor (``client.get_executor()``) on a cluster, at most
+two chunks per worker in flight; on a cluster the window follows the workers present
+(read again every second), so workers that join later get chunks. Each finished chunk is
+appended to ``DIR/points.npy`` at once (one sync per chunk), so an interrupted sweep
+keeps everything finished and ``resume`` computes only the rest.
 
 Memory does not grow with the points finished: tasks are made one at a time as workers
-free up, finished records go to disk and are dropped, and the result file is built by
-reading points.jsonl back line by line into arrays the size of the result.
+free up, finished chunks go to disk and are dropped, and the result file is built from
+points.npy, mapped, in arrays the size of the result.
 """
 
 from __future__ import annotations
@@ -17,39 +20,52 @@ from __future__ import annotations
 import array
 import asyncio
 import contextlib
+import itertools
+import math
 import multiprocessing
 import os
 import signal
+import sys
 import threading
 import time
 from collections import Counter, OrderedDict
-from collections.abc import Callable, Iterable, Iterator
+from collections.abc import Callable, Iterator
 from concurrent.futures import FIRST_COMPLETED, Executor, Future, ProcessPoolExecutor, wait
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+import numpy as np
+
+from billiard.sweep.attractor import CLASSES
+from billiard.sweep.columns import STATUSES, ChunkResult, empty_columns, record_of_row
 from billiard.sweep.definition import Sweep, SweepError, read_sweep_file, sweep_to_toml
-from billiard.sweep.measure import PointTask, empty_record, measure_point
+from billiard.sweep.measure import ChunkTask, measure_chunk
 from billiard.sweep.netcdf import RESULT_NAME, write_result
 from billiard.sweep.progress import SweepProgress
 from billiard.sweep.store import (
     DIGEST_NAME,
+    LEGACY_POINTS_NAME,
     LOG_NAME,
     POINTS_NAME,
+    REASONS_NAME,
     SCENE_NAME,
     SWEEP_NAME,
-    PointStore,
+    ChunkStore,
     StoreError,
     definition_digest,
     digest_lines,
-    iter_points,
+    iter_rows,
+    points_table,
+    read_reasons,
 )
 
 __all__ = [
     "SweepInterrupted",
     "SweepOutcome",
     "StopSweep",
+    "check_starts",
+    "chunk_size",
     "estimate_size",
     "load_sweep_dir",
     "run_sweep",
@@ -68,17 +84,24 @@ DASK_TIMEOUT = 10.0
 PRECHECK_SPAN = 1.0
 
 #: A sweep larger than this needs ``--yes`` (``yes=True``): points, and bytes of its
-#: output files (points.jsonl and sweep.nc).
+#: output files (points.npy and sweep.nc).
 MAX_POINTS_UNCONFIRMED = 100_000
 MAX_BYTES_UNCONFIRMED = 10**9
 
 #: Geometry checks remembered (for grids whose points share a container and start).
 _CHECK_CACHE = 4096
 
+#: Most points in one chunk (one task of a worker; one sync of points.npy).
+MAX_CHUNK = 4096
+#: Fewest chunks per worker (so that every worker stays busy to the end).
+CHUNKS_PER_WORKER = 4
+#: Seconds between two looks at a cluster's workers (the in-flight window follows them).
+WORKERS_INTERVAL = 1.0
+
 
 class StopSweep(Exception):
-    """Raised by an ``on_point`` callback to stop the sweep after the current point (as
-    Ctrl-C does)."""
+    """Raised by an ``on_point`` callback to stop the sweep (as Ctrl-C does); the chunk
+    the point came in is already stored."""
 
 
 class SweepInterrupted(KeyboardInterrupt):
@@ -116,13 +139,15 @@ class SweepOutcome:
     statuses: Counter = field(default_factory=Counter)
     failed_examples: list[dict[str, Any]] = field(default_factory=list)
     plots: list[Path] = field(default_factory=list)
+    sweep: Sweep | None = None
 
     @property
     def records(self) -> list[dict[str, Any]]:
-        """Every point's record, by index, read from ``points.jsonl`` on each access (a
-        sweep does not hold them: use ``read_result`` for large sweeps)."""
-        by_index = {int(r["index"]): r for r, _ in iter_points(self.directory / POINTS_NAME)}
-        return [by_index[i] for i in sorted(by_index)]
+        """Every point's record (the dict of ``measure_point``), by index, read from
+        ``points.npy`` on each access (a sweep does not hold them: use ``read_result``
+        for large sweeps)."""
+        sweep = self.sweep if self.sweep is not None else load_sweep_dir(self.directory)
+        return _records(self.directory, sweep)
 
     @property
     def failed(self) -> list[dict[str, Any]]:
@@ -196,17 +221,22 @@ class SweepOutcome:
 
 
 def estimate_size(sweep: Sweep) -> dict[str, int]:
-    """Bytes the sweep's output files will take, about: ``points.jsonl`` (one JSON line
-    per point: some 600 bytes of fields and about 21 bytes per stored height and time of
-    flight) and ``sweep.nc`` (8 bytes per number, the last K heights and times of flight
-    included, and a header with the definition: some 6 kB and 32 bytes per axis value),
-    from the grid's shape alone (nothing is materialised)."""
+    """Bytes the sweep's output files will take, about: ``points.npy`` (one packed row
+    per point: 96 bytes and 16 bytes per stored height and time of flight, and a header
+    of a few hundred bytes) and ``sweep.nc`` (8 bytes per number, the last K heights and
+    times of flight included, and a header with the definition: some 6 kB and 32 bytes
+    per axis value), from the grid's shape alone (nothing is materialised).
+    ``reasons.jsonl`` holds a line only per failed or invalid point and is left out."""
+    from billiard.runfile.npyfile import header_size
+
     keep = sweep.keep
-    values = sum(len(axis.key) + 24 for axis in sweep.axes)  # "key": value, per point
-    per_line = 600 + values + 2 * keep * 21
+    table = points_table(keep)
     per_cell = 4 * 5 + 8 * 10 + 2 * keep * 8 + 64  # ints, floats, last K, class strings
     header = 6000 + 32 * sum(sweep.shape)
-    return {POINTS_NAME: sweep.size * per_line, RESULT_NAME: sweep.size * per_cell + header}
+    return {
+        POINTS_NAME: header_size(table.dtype) + sweep.size * table.dtype.itemsize,
+        RESULT_NAME: sweep.size * per_cell + header,
+    }
 
 
 def _bytes(n: float) -> str:
@@ -252,10 +282,49 @@ def precheck_duration(sweep: Sweep, scene: Any) -> float:
     return PRECHECK_SPAN if duration is None else min(float(duration), PRECHECK_SPAN)
 
 
+def check_starts(scene: Any, q1s: np.ndarray, q2s: np.ndarray) -> dict[int, str]:
+    """The starting positions (m, lab frame, at the scene's start time) among ``q1s``,
+    ``q2s`` that put the ball into a wall or the lid or above the escape height, with the
+    engine's one-line reason, by position in the arrays; one Simulation is built for the
+    scene (its ball at rest) and each start checked as the engine checks it.
+
+    Raises:
+        ValueError: the scene cannot be set up (its geometry is invalid).
+    """
+    from billiard.run.simulate import Simulation
+    from billiard.scene.scene import with_values
+
+    at_rest = with_values(scene, {"initial.q1": None, "initial.q2": None, "run.duration": None})
+    simulation = Simulation(at_rest)
+    boundary, warm = simulation.boundary, simulation.warm
+    theta = simulation.drive.angle(scene.initial.t)
+    reasons: dict[int, str] = {}
+    for position, (q1, q2) in enumerate(zip(q1s.tolist(), q2s.tolist(), strict=True)):
+        try:
+            boundary.check_initial_position(q1, q2, theta, warm)
+        except ValueError as exc:
+            reasons[position] = str(exc)
+    return reasons
+
+
+def _one_line(message: str) -> str:
+    return message if "\n" not in message and "  " not in message else " ".join(message.split())
+
+
+def _refuse(sweep: Sweep, index: int, message: str) -> SweepError:
+    return SweepError(
+        f"point {index} ({_describe(sweep.point_values(index))}): {message} "
+        "(no point was run; --skip-invalid records such points as invalid)"
+    )
+
+
 def prepare(sweep: Sweep, skip_invalid: bool = False) -> dict[int, str]:
     """Check every point: its scene is valid and its geometry can be simulated (up to one
     impact, within :func:`precheck_duration`); curves are derived here, once, before any
-    worker starts. Points are visited one at a time, nothing is kept per valid point.
+    worker starts. Nothing is simulated per point: each distinct set of the swept keys
+    other than ``initial.*`` is built and validated once, each distinct geometry simulated
+    once (a short run), and the starting positions of a basin map are checked against the
+    walls by :func:`check_starts`.
 
     Returns:
         The invalid points' one-line reasons, by index (empty unless ``skip_invalid``).
@@ -264,44 +333,156 @@ def prepare(sweep: Sweep, skip_invalid: bool = False) -> dict[int, str]:
         SweepError: a point's scene is invalid (naming the point and the key), unless
             ``skip_invalid``, which records such points as ``invalid`` instead.
     """
-    from billiard.geometry.curves import load_curve
-    from billiard.run.simulate import simulate
     from billiard.scene.scene import with_values
 
-    per_point = any(a.key.startswith(_GEOMETRY_PREFIXES) for a in sweep.axes)
+    starts = [i for i, axis in enumerate(sweep.axes) if axis.key.startswith("initial.")]
+    others = [i for i in range(len(sweep.axes)) if i not in starts]
+    shape = sweep.shape
     checked: OrderedDict[Any, str | None] = OrderedDict()  # a bounded memory of checks
     invalid: dict[int, str] = {}
-    for index, values in enumerate(sweep.points()):
-        problem = None
-        scene = None
+
+    def record(indices: np.ndarray, messages: Any) -> None:
+        """Points found invalid: refused (the lowest index named), or recorded."""
+        if not len(indices):
+            return
+        order = np.argsort(indices, kind="stable")
+        if not skip_invalid:
+            first = int(order[0])
+            message = messages if isinstance(messages, str) else messages[first]
+            raise _refuse(sweep, int(indices[first]), " ".join(message.split()))
+        one = " ".join(messages.split()) if isinstance(messages, str) else None
+        for k in order.tolist():
+            invalid[int(indices[k])] = one if one is not None else _one_line(messages[k])
+
+    for combo in itertools.product(*(range(shape[i]) for i in others)):
+        pairs = zip(others, combo, strict=True)
+        values = {sweep.axes[i].key: sweep.axes[i].values[j] for i, j in pairs}
+        # the points of this parameter set: every start, in index order
+        multi = [np.zeros(1, dtype=np.int64)] * len(shape)
+        for i, j in zip(others, combo, strict=True):
+            multi[i] = np.array([j])
+        if starts:
+            grids = np.meshgrid(*(np.arange(shape[i]) for i in starts), indexing="ij")
+            for i, g in zip(starts, grids, strict=True):
+                multi[i] = g.ravel()
+        count = max(len(m) for m in multi)
+        multi = [np.broadcast_to(m, (count,)) for m in multi]
+        indices = np.ravel_multi_index(multi, shape).astype(np.int64)
         try:
             scene = with_values(sweep.scene, values)
         except ValueError as exc:
-            problem = str(exc)
-        if scene is not None:
-            curve = (scene.boundary.curve, scene.boundary.parameters)
-            geometry = (curve, scene.ball, scene.initial) if per_point else "base"
-            if geometry in checked:
-                checked.move_to_end(geometry)
-            else:
-                try:
-                    load_curve(curve[0], dict(curve[1]))  # derived (and cached) once
-                    simulate(scene, collisions=1, duration=precheck_duration(sweep, scene))
-                    checked[geometry] = None
-                except ValueError as exc:  # SceneError, GeometryError, curve errors
-                    checked[geometry] = str(exc)
-                if len(checked) > _CHECK_CACHE:
-                    checked.popitem(last=False)
-            problem = checked[geometry]
-        if problem is not None:
-            message = " ".join(problem.split())
-            if not skip_invalid:
-                raise SweepError(
-                    f"point {index} ({_describe(values)}): {message} "
-                    "(no point was run; --skip-invalid records such points as invalid)"
-                )
-            invalid[index] = message
+            record(indices, str(exc))
+            continue
+        if not starts:
+            problem = _geometry_problem(sweep, scene, checked)
+            if problem is not None:
+                record(indices, problem)
+            continue
+        _check_set(sweep, scene, starts, multi, indices, checked, record)
     return invalid
+
+
+def _geometry_problem(
+    sweep: Sweep, scene: Any, checked: OrderedDict[Any, str | None]
+) -> str | None:
+    """Why the scene cannot be simulated (None: it runs), from a short run once per
+    distinct geometry and start (remembered in ``checked``)."""
+    from billiard.geometry.curves import load_curve
+    from billiard.run.simulate import simulate
+
+    curve = (scene.boundary.curve, scene.boundary.parameters)
+    geometry = (curve, scene.boundary, scene.ball, scene.initial)
+    if geometry in checked:
+        checked.move_to_end(geometry)
+    else:
+        try:
+            load_curve(curve[0], dict(curve[1]))  # derived (and cached) once
+            simulate(scene, collisions=1, duration=precheck_duration(sweep, scene))
+            checked[geometry] = None
+        except ValueError as exc:  # SceneError, GeometryError, curve errors
+            checked[geometry] = str(exc)
+        if len(checked) > _CHECK_CACHE:
+            checked.popitem(last=False)
+    return checked[geometry]
+
+
+def _check_set(
+    sweep: Sweep,
+    scene: Any,
+    starts: list[int],
+    multi: list[np.ndarray],
+    indices: np.ndarray,
+    checked: OrderedDict[Any, str | None],
+    record: Callable[[np.ndarray, Any], None],
+) -> None:
+    """Check the starts of one parameter set (the ``initial.*`` axes): each value of each
+    axis once, then each start's position, then one short run from the first valid
+    start."""
+    from billiard.scene.scene import with_values
+
+    bad = np.zeros(len(indices), dtype=bool)
+    messages: dict[int, str] = {}
+    for i in starts:  # each value of each initial axis, validated once
+        axis = sweep.axes[i]
+        for j, value in enumerate(axis.values):
+            try:
+                with_values(scene, {axis.key: value})
+            except ValueError as exc:
+                for k in np.flatnonzero((multi[i] == j) & ~bad).tolist():
+                    messages[k] = str(exc)
+                bad[multi[i] == j] = True
+    keys = {sweep.axes[i].key: i for i in starts}
+    base = scene.initial
+
+    def column(name: str) -> np.ndarray | None:
+        """The points' start coordinate ``name`` (float64), None where the engine
+        resolves it (not given, or not a number)."""
+        if f"initial.{name}" in keys:
+            i = keys[f"initial.{name}"]
+            axis = sweep.axes[i]
+            if not axis.numeric:
+                return None
+            return np.asarray(axis.values, dtype=np.float64)[multi[i]]
+        value = getattr(base, name)
+        return None if value is None else np.full(len(indices), float(value))
+
+    q1s, q2s = column("q1"), column("q2")
+    found = None
+    if q1s is not None and q2s is not None and "initial.t" not in keys:
+        ok = np.flatnonzero(~bad)
+        try:
+            found = check_starts(scene, q1s[ok], q2s[ok])
+        except ValueError:  # no ball at rest to set up (no bottom): each start on its own
+            found = None
+        del q1s, q2s
+    if found is not None:
+        for position, message in found.items():
+            messages[int(ok[position])] = message
+            bad[ok[position]] = True
+        good = np.flatnonzero(~bad)
+        if len(good):  # one short run of this parameter set, from its first valid start
+            k = int(good[0])
+            point = with_values(scene, _start_values(sweep, starts, multi, k))
+            problem = _geometry_problem(sweep, point, checked)
+            if problem is not None:
+                for k in good.tolist():
+                    messages[k] = problem
+                bad[good] = True
+    else:  # starts the engine resolves (a q1 or q2 left out), or no ball at rest: each one
+        for k in np.flatnonzero(~bad).tolist():
+            point = with_values(scene, _start_values(sweep, starts, multi, k))
+            problem = _geometry_problem(sweep, point, checked)
+            if problem is not None:
+                messages[k] = problem
+                bad[k] = True
+    where = np.flatnonzero(bad)
+    record(indices[where], [messages[int(k)] for k in where.tolist()])
+
+
+def _start_values(
+    sweep: Sweep, starts: list[int], multi: list[np.ndarray], k: int
+) -> dict[str, Any]:
+    return {sweep.axes[i].key: sweep.axes[i].values[int(multi[i][k])] for i in starts}
 
 
 # ----------------------------------------------------------------------------------------
@@ -313,8 +494,27 @@ def _worker_init() -> None:
     signal.signal(signal.SIGINT, signal.SIG_IGN)
 
 
+@dataclass
+class Workers:
+    """Where chunks run: an executor, a description, and the workers present now.
+
+    Attributes:
+        executor: the ``concurrent.futures`` executor chunks are submitted to.
+        where: where they run, for the log and the summary.
+        present: worker name -> threads, asked again as the sweep goes (a cluster's
+            workers come and go).
+    """
+
+    executor: Executor
+    where: str
+    present: Callable[[], dict[str, int]]
+
+    def threads(self, present: dict[str, int] | None = None) -> int:
+        return max(1, sum((self.present() if present is None else present).values()))
+
+
 @contextlib.contextmanager
-def local_executor(workers: int) -> Iterator[tuple[Executor, int, str]]:
+def local_executor(workers: int) -> Iterator[Workers]:
     """A process pool of ``workers`` fresh interpreters (spawned, so they inherit no
     threads or locks, and read the same environment, e.g. ``BILLIARD_HOME``)."""
     pool = ProcessPoolExecutor(
@@ -324,7 +524,8 @@ def local_executor(workers: int) -> Iterator[tuple[Executor, int, str]]:
     )
     clean = False
     try:
-        yield pool, workers, f"{workers} local worker process{'es' if workers > 1 else ''}"
+        where = f"{workers} local worker process{'es' if workers > 1 else ''}"
+        yield Workers(pool, where, lambda: {"local": workers})
         clean = True
     finally:
         if clean:
@@ -342,10 +543,11 @@ def local_executor(workers: int) -> Iterator[tuple[Executor, int, str]]:
 
 
 @contextlib.contextmanager
-def dask_executor(address: str) -> Iterator[tuple[Executor, int, str]]:
+def dask_executor(address: str) -> Iterator[Workers]:
     """The ``concurrent.futures`` executor of a client of the Dask scheduler at
     ``address``; its workers need this package installed (and, for a curve expression,
-    the same curve cache, ``BILLIARD_HOME``)."""
+    the same curve cache, ``BILLIARD_HOME``). The dashboard's link is printed on stderr
+    when the scheduler has one."""
     try:
         import distributed
     except ImportError:
@@ -356,12 +558,24 @@ def dask_executor(address: str) -> Iterator[tuple[Executor, int, str]]:
     except Exception as exc:  # the probe answered: any failure now is a protocol fault
         message = " ".join(str(exc).split()) or type(exc).__name__
         raise SweepError(f"cannot reach the Dask scheduler at {address}: {message}") from None
+
+    def present() -> dict[str, int]:
+        workers = client.scheduler_info()["workers"]
+        return {name: int(w.get("nthreads", 1)) for name, w in workers.items()}
+
     try:
-        threads = sum(w.get("nthreads", 1) for w in client.scheduler_info()["workers"].values())
+        threads = sum(present().values())
+        try:
+            link = client.dashboard_link
+        except Exception:  # no dashboard: the scheduler runs without one
+            link = None
+        if link:
+            print(f"billiard sweep: Dask dashboard at {link}", file=sys.stderr)
         executor = client.get_executor(pure=False)
         clean = False
         try:
-            yield executor, max(threads, 1), f"Dask scheduler {address} ({threads} worker threads)"
+            where = f"Dask scheduler {address} ({threads} worker threads at the start)"
+            yield Workers(executor, where, present)
             clean = True
         finally:
             executor.shutdown(wait=clean)
@@ -471,6 +685,7 @@ _SWEEP_OUTPUTS = (
     SCENE_NAME,
     DIGEST_NAME,
     RESULT_NAME,
+    REASONS_NAME,
     LOG_NAME,
     "bifurcation.png",
     "heatmaps.png",
@@ -482,7 +697,7 @@ def _check_new_dir(directory: Path) -> None:
     """Refuse a folder a new sweep must not write into (before any work is done)."""
     if directory.exists() and not directory.is_dir():
         raise SweepError(f"cannot write the sweep: {directory} is a file")
-    if (directory / SWEEP_NAME).exists() or (directory / POINTS_NAME).exists():
+    if any((directory / name).exists() for name in (SWEEP_NAME, POINTS_NAME, LEGACY_POINTS_NAME)):
         raise SweepError(
             f"{directory} already holds a sweep; continue it with `billiard sweep --resume "
             f"{directory}` or choose another --out"
@@ -515,28 +730,43 @@ def _start_dir(directory: Path, sweep: Sweep) -> None:
         os.replace(tmp, directory / name)
 
 
-def _record_check(sweep: Sweep, directory: Path) -> Callable[[dict[str, Any]], None]:
-    """A check that a stored record is the point of this sweep its index says."""
-
-    def check(record: dict[str, Any]) -> None:
-        index = int(record["index"])
-        if not 0 <= index < sweep.size or record.get("values") != sweep.point_values(index):
+def _finished(directory: Path, sweep: Sweep) -> bytearray:
+    """One byte per point, 1 for a point stored in the folder (read-only; no lock)."""
+    done = bytearray(sweep.size)
+    path = directory / POINTS_NAME
+    if not path.exists():
+        if (directory / LEGACY_POINTS_NAME).exists():
             raise StoreError(
-                f"cannot resume {directory}: {POINTS_NAME} has point {index} with values "
-                f"{record.get('values')!r}, which is not in {SWEEP_NAME}"
+                f"{directory} holds a sweep of an older version ({LEGACY_POINTS_NAME}); "
+                f"run it again: `billiard sweep {directory / SWEEP_NAME} --out OTHER_DIR`"
             )
+        return done
+    from billiard.runfile.npyfile import header_size, read_header
 
-    return check
-
-
-def _finished(path: Path, size: int) -> bytearray:
-    """One byte per point, 1 for a point stored in ``path`` (read-only; no lock)."""
-    done = bytearray(size)
-    for record, _ in iter_points(path):
-        index = record["index"]
-        if 0 <= index < size:
-            done[index] = 1
+    dtype = points_table(sweep.keep).dtype
+    flags = np.frombuffer(done, dtype=np.uint8)
+    fd = os.open(path, os.O_RDONLY)
+    try:
+        try:
+            found, rows, _ = read_header(os.pread(fd, 1 << 16, 0))
+        except ValueError as exc:
+            raise StoreError(f"{path} is not a sweep's points file ({exc})") from None
+        if found != dtype:
+            raise StoreError(f"{path} holds rows of another kind than this sweep's")
+        # rows past the header's count are not points: the store cuts them
+        rows = min(rows, (os.fstat(fd).st_size - header_size(dtype)) // dtype.itemsize)
+        for block in iter_rows(fd, dtype, rows):
+            index = np.asarray(block["index"], dtype=np.int64)
+            flags[index[(index >= 0) & (index < sweep.size)]] = 1
+    finally:
+        os.close(fd)
     return done
+
+
+def chunk_size(points: int, workers: int) -> int:
+    """Points per chunk: up to MAX_CHUNK, but at least CHUNKS_PER_WORKER chunks per
+    worker while there are points enough (every worker busy to the end)."""
+    return min(MAX_CHUNK, max(1, math.ceil(points / (CHUNKS_PER_WORKER * max(workers, 1)))))
 
 
 # ----------------------------------------------------------------------------------------
@@ -555,6 +785,7 @@ def run_sweep(
     progress: SweepProgress | None = None,
     plots: bool = True,
     yes: bool = False,
+    chunk: int | None = None,
 ) -> SweepOutcome:
     """Run (or, with ``resume=True`` and ``sweep=None``, continue) a sweep in ``directory``.
 
@@ -566,16 +797,19 @@ def run_sweep(
         resume: continue the sweep stored in ``directory``.
         skip_invalid: record points whose scene is invalid as ``invalid`` instead of
             refusing the sweep.
-        on_point: called in this process after each point is stored (its record); it may
-            raise :class:`StopSweep` to stop the sweep as Ctrl-C does.
+        on_point: called in this process with each point's record, after the chunk the
+            point came in is stored; it may raise :class:`StopSweep` to stop the sweep as
+            Ctrl-C does (the chunk stays stored).
         progress: progress reporter (default: one on stderr).
         plots: draw the plots at the end.
         yes: run a new sweep beyond MAX_POINTS_UNCONFIRMED points or
             MAX_BYTES_UNCONFIRMED bytes of output files (``--yes``).
+        chunk: points per chunk (default: :func:`chunk_size` of the points to compute
+            and the workers); the results do not depend on it.
 
     Raises:
         SweepError: bad input, reported before any point runs.
-        SweepInterrupted: Ctrl-C, SIGTERM or :class:`StopSweep`; finished points are kept.
+        SweepInterrupted: Ctrl-C, SIGTERM or :class:`StopSweep`; finished chunks are kept.
     """
     directory = Path(directory)
     if resume:
@@ -588,42 +822,43 @@ def run_sweep(
         _check_new_dir(directory)
     if workers is not None and workers < 1:
         raise SweepError(f"--workers {workers}: needs at least 1 worker")
+    if chunk is not None and chunk < 1:
+        raise SweepError(f"chunk {chunk}: needs at least 1 point")
     invalid = prepare(sweep, skip_invalid=skip_invalid or sweep.skip_invalid)  # nothing written
     try:
-        done = _finished(directory / POINTS_NAME, sweep.size) if resume else None
+        done = _finished(directory, sweep) if resume else bytearray(sweep.size)
     except StoreError as exc:
         raise SweepError(f"cannot resume: {exc}") from None
-    to_compute = sum(
-        1 for i in range(sweep.size) if i not in invalid and not (done is not None and done[i])
-    )
+    flags = np.frombuffer(done, dtype=np.uint8)
+    to_compute = sweep.size - int(np.count_nonzero(flags)) - sum(1 for i in invalid if not flags[i])
+    del flags
     computed = array.array("q")
     where = "nothing to compute"
     with contextlib.ExitStack() as stack:
-        executor = slots = None
+        pool = None
         if to_compute:  # reach the workers (or the scheduler) before writing anything
             stack.enter_context(_terminate_as_interrupt())
             opener = dask_executor(dask) if dask else local_executor(workers or os.cpu_count() or 1)
-            executor, slots, where = stack.enter_context(opener)
+            pool = stack.enter_context(opener)
+            where = pool.where
         if not resume:
             _start_dir(directory, sweep)
         try:
-            store = stack.enter_context(
-                PointStore(directory, sweep.size, check=_record_check(sweep, directory))
-            )
+            store = stack.enter_context(ChunkStore(directory, sweep.size, sweep.keep))
         except StoreError as exc:
             raise SweepError(str(exc)) from None
-        for index, message in invalid.items():  # skipped invalid points are recorded at once
-            if index not in store:
-                store.append(empty_record(index, sweep.point_values(index), "invalid", message))
+        _store_invalid(store, sweep, invalid)  # skipped invalid points are recorded at once
+        del invalid
         todo = sweep.size - store.count
         if progress is None:
             progress = SweepProgress(sweep.size, done=store.count)
-        if todo and executor is not None:
+        if todo and pool is not None:
             started = time.perf_counter()
-            store.log(f"start: {todo} of {sweep.size} points on {where}")
+            size = chunk or chunk_size(todo, pool.threads())
+            store.log(f"start: {todo} of {sweep.size} points on {where}, {size} per chunk")
             try:
-                tasks = _tasks(sweep, store)
-                _drive(executor, tasks, 2 * slots, store, progress, on_point, computed)
+                tasks = _chunks(sweep, store.done, size)
+                _drive(pool, tasks, store, progress, on_point, computed, sweep)
             except (KeyboardInterrupt, StopSweep):
                 progress.close()
                 store.log(f"interrupted: {store.count} of {sweep.size} points kept")
@@ -637,97 +872,196 @@ def run_sweep(
             )
         from billiard.scene.scene import scene_to_toml
 
-        outcome = SweepOutcome(directory, directory / RESULT_NAME, computed, where)
-        records = _summarised(store.records(), outcome)
-        result = write_result(directory / RESULT_NAME, sweep, records, scene_to_toml(sweep.scene))
+        outcome = SweepOutcome(directory, directory / RESULT_NAME, computed, where, sweep=sweep)
+        _summarise(store, sweep, outcome)
+        result = write_result(
+            directory / RESULT_NAME, sweep, store.blocks, store.reasons, scene_to_toml(sweep.scene)
+        )
         if plots:
             from billiard.sweep.netcdf import read_result
             from billiard.sweep.plots import plot_sweep
 
-            outcome.plots = plot_sweep(sweep, read_result(result), directory)
+            outcome.plots = plot_sweep(sweep, read_result(result, _plotted(sweep)), directory)
         store.log(f"wrote {result.name}" + "".join(f", {p.name}" for p in outcome.plots))
         if not outcome.measured:
             store.log(f"no point measured: {dict(outcome.statuses)}")
     return outcome
 
 
-def _summarised(records: Iterable[dict[str, Any]], outcome: SweepOutcome) -> Iterator[dict]:
-    """The records, passed on one at a time, counted into ``outcome`` on the way."""
-    examples: dict[int, dict[str, Any]] = {}
-    for record in records:
-        outcome.classes[record["attractor"]] += 1
-        outcome.statuses[record["status"]] += 1
-        if record["status"] == "failed":
-            examples[int(record["index"])] = record
-            if len(examples) > 5:  # keep the five lowest indices
-                examples.pop(max(examples))
-        yield record
-    outcome.failed_examples = [examples[i] for i in sorted(examples)]
+def _plotted(sweep: Sweep) -> list[str]:
+    """The result's variables the plots read (a large sweep's text variables and tails
+    are not read back for them)."""
+    from billiard.sweep.units import variable_name
+
+    names = [variable_name(axis.key) for axis in sweep.axes]
+    names += ["attractor", "status", "period", "height_mean", "lyapunov", "rest_height"]
+    if len(sweep.axes) == 1:
+        names += ["last_height", "last_tof"]
+    return names
 
 
-def _tasks(sweep: Sweep, store: PointStore) -> Iterator[PointTask]:
-    """The points still to compute, in index order, each made when a worker can take it
-    (a grid's tasks, scenes included, are never all held)."""
-    from billiard.scene.scene import with_values
+def _store_invalid(store: ChunkStore, sweep: Sweep, invalid: dict[int, str]) -> None:
+    """Record the invalid points not stored yet, 16 x MAX_CHUNK at a time (a sync each)."""
+    indices = [i for i in sorted(invalid) if i not in store]
+    step = 16 * MAX_CHUNK
+    for start in range(0, len(indices), step):
+        part = indices[start : start + step]
+        columns = empty_columns(len(part), sweep.keep)
+        columns["index"][:] = part
+        columns["status"][:] = STATUSES.index("invalid")
+        columns["attractor"][:] = CLASSES.index("invalid")
+        store.append(ChunkResult(columns, {i: invalid[i] for i in part}))
 
-    settings = sweep.settings()
-    for index in range(sweep.size):
-        if index in store:
-            continue
-        values = sweep.point_values(index)
-        yield PointTask(index, values, with_values(sweep.scene, values), settings)
+
+def _summarise(store: ChunkStore, sweep: Sweep, outcome: SweepOutcome) -> None:
+    """Points per status and per class, and the first failed points' records."""
+    statuses = np.zeros(len(STATUSES), dtype=np.int64)
+    classes = np.zeros(len(CLASSES), dtype=np.int64)
+    failed: dict[int, np.void] = {}  # the five lowest indices
+    for part in store.blocks():
+        statuses += np.bincount(part["status"], minlength=len(STATUSES))
+        classes += np.bincount(part["attractor"], minlength=len(CLASSES))
+        lost = part[part["status"] == STATUSES.index("failed")]
+        for row in lost[np.argsort(lost["index"])][:5]:
+            failed[int(row["index"])] = row
+        for index in sorted(failed)[5:]:
+            del failed[index]
+    outcome.statuses.update({STATUSES[i]: int(n) for i, n in enumerate(statuses) if n})
+    outcome.classes.update({CLASSES[i]: int(n) for i, n in enumerate(classes) if n})
+    if failed:
+        reasons = {i: r for i, r in store.reasons() if i in failed}
+        outcome.failed_examples = [
+            record_of_row(failed[i], sweep.point_values(i), reasons.get(i, ""))
+            for i in sorted(failed)
+        ]
+
+
+def _records(directory: Path, sweep: Sweep) -> list[dict[str, Any]]:
+    """Every stored point's record, by index (for small sweeps and tests)."""
+    from billiard.runfile.npyfile import open_rows
+
+    rows = open_rows(directory / POINTS_NAME, points_table(sweep.keep))  # small sweeps
+    done = bytearray(sweep.size)
+    for i in rows["index"].tolist():
+        done[i] = 1
+    reasons = dict(read_reasons(directory / REASONS_NAME, done))
+    by_index = {int(row["index"]): row for row in rows}
+    return [
+        record_of_row(by_index[i], sweep.point_values(i), reasons.get(i, ""))
+        for i in sorted(by_index)
+    ]
+
+
+def _chunks(sweep: Sweep, done: bytearray, size: int) -> Iterator[ChunkTask]:
+    """The points still to compute, in index order, ``size`` at a time, each chunk made
+    when a worker can take it (nothing is held per point beyond the chunk's indices)."""
+    flags = np.frombuffer(done, dtype=np.uint8)
+    start = 0
+    block = max(size, 1 << 16)
+    pending: list[np.ndarray] = []
+    count = 0
+    while start < sweep.size:
+        stop = min(start + block, sweep.size)
+        free = np.flatnonzero(flags[start:stop] == 0) + start
+        start = stop
+        while len(free):
+            take = free[: size - count]
+            free = free[len(take) :]
+            pending.append(take)
+            count += len(take)
+            if count == size:
+                yield _task(sweep, np.concatenate(pending))
+                pending, count = [], 0
+    if count:
+        yield _task(sweep, np.concatenate(pending))
+
+
+def _task(sweep: Sweep, indices: np.ndarray) -> ChunkTask:
+    start, stop = int(indices[0]), int(indices[-1]) + 1
+    whole = stop - start == len(indices)
+    return ChunkTask(sweep, start, stop, None if whole else indices.astype(np.int64))
 
 
 def _drive(
-    executor: Executor,
-    todo: Iterator[PointTask],
-    window: int,
-    store: PointStore,
+    pool: Workers,
+    tasks: Iterator[ChunkTask],
+    store: ChunkStore,
     progress: SweepProgress,
     on_point: Callable[[dict[str, Any]], None] | None,
     computed: array.array,
+    sweep: Sweep,
 ) -> None:
-    queue = todo
-    pending: dict[Future, PointTask] = {}
+    pending: dict[Future, ChunkTask] = {}
     submitted_at: dict[int, float] = {}
+    present = pool.present()
+    looked = time.monotonic()
 
     def fill() -> None:
+        window = 2 * pool.threads(present)  # two chunks per worker thread present now
         while len(pending) < window:
-            task = next(queue, None)
+            task = next(tasks, None)
             if task is None:
                 return
-            pending[executor.submit(measure_point, task)] = task
-            submitted_at[task.index] = time.perf_counter()
+            pending[pool.executor.submit(measure_chunk, task)] = task
+            submitted_at[task.start] = time.perf_counter()
 
     try:
         fill()
         while pending:
             done, _ = wait(list(pending), timeout=1.0, return_when=FIRST_COMPLETED)
-            for future in sorted(done, key=lambda f: pending[f].index):
+            for future in sorted(done, key=lambda f: pending[f].start):
                 task = pending.pop(future)
                 try:
-                    record = future.result()
+                    chunk = future.result()
                 except Exception as exc:  # a worker died (killed, out of memory)
                     message = " ".join(str(exc).split()) or type(exc).__name__
                     raise SweepError(
-                        f"point {task.index}: the worker running it failed ({message}); "
-                        f"finished points are kept: continue with --resume"
+                        f"points {task.start} to {task.stop - 1}: the worker running them "
+                        f"failed ({message}); finished points are kept: continue with --resume"
                     ) from None
-                store.append(record)
-                computed.append(task.index)
-                seconds = time.perf_counter() - submitted_at.pop(task.index)
+                store.append(chunk)
+                indices = chunk.columns["index"]
+                computed.extend(indices.tolist())
+                impacts = int(chunk.columns["total_impacts"].sum())
+                ok = int(np.count_nonzero(chunk.columns["status"] == 0))
+                seconds = time.perf_counter() - submitted_at.pop(task.start)
                 store.log(
-                    f"point {task.index}: {record['status']} {record['attractor']}, "
-                    f"{record['total_impacts']} impacts, {seconds:.3f} s since submitted"
+                    f"chunk {task.start}-{task.stop - 1}: {len(chunk)} points ({ok} ok), "
+                    f"{impacts} impacts, {seconds:.3f} s since submitted"
                 )
-                progress.point(record)
+                progress.chunk(len(chunk), impacts)
                 if on_point is not None:
-                    on_point(record)
+                    _call_per_point(on_point, chunk, sweep)
+            if time.monotonic() - looked >= WORKERS_INTERVAL:
+                present = _look_at_workers(pool, present, store)
+                looked = time.monotonic()
             fill()
             progress.tick()
     finally:
         for future in pending:
             future.cancel()
+
+
+def _look_at_workers(pool: Workers, before: dict[str, int], store: ChunkStore) -> dict[str, int]:
+    """The workers present now; those that left or joined since ``before`` are logged."""
+    try:
+        now = pool.present()
+    except Exception:  # the scheduler did not answer this time: keep the last count
+        return before
+    for name in sorted(set(before) - set(now)):
+        store.log(f"worker {name} left; its chunks are recomputed")
+    for name in sorted(set(now) - set(before)):
+        store.log(f"worker {name} joined ({now[name]} threads)")
+    return now
+
+
+def _call_per_point(
+    on_point: Callable[[dict[str, Any]], None], chunk: ChunkResult, sweep: Sweep
+) -> None:
+    columns = chunk.columns
+    for k, index in enumerate(columns["index"].tolist()):
+        row = {name: column[k] for name, column in columns.items()}
+        on_point(record_of_row(row, sweep.point_values(index), chunk.reasons.get(index, "")))
 
 
 @contextlib.contextmanager

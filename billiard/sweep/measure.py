@@ -1,12 +1,16 @@
-"""One point of a sweep: simulate its scene and measure the attractor it reaches.
+"""Points of a sweep: simulate their scenes and measure the attractors they reach.
 
-:func:`measure_point` runs in a worker process (local or on a Dask cluster) and returns
-a plain dict of numbers, strings and lists (JSON-ready, no timings): the same scene gives
-the same dict bit for bit wherever it runs.
+A worker (a local process or a Dask worker) runs one :class:`ChunkTask` at a time:
+:func:`measure_chunk` measures the chunk's points and returns their columns
+(:class:`~billiard.sweep.columns.ChunkResult`). :func:`measure_point` measures one point
+and returns a plain dict of numbers, strings and lists (no timings): the same scene gives
+the same dict bit for bit wherever it runs, so a point's result does not depend on the
+chunk it came in.
 """
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass
 from typing import Any
@@ -15,8 +19,67 @@ import numpy as np
 
 from billiard.runfile.record import LID_WALL
 from billiard.sweep.attractor import classify, contact_class, find_period
+from billiard.sweep.columns import ChunkResult, empty_columns, set_row
 
-__all__ = ["PointTask", "measure_point"]
+__all__ = ["ChunkTask", "PointTask", "measure_chunk", "measure_point"]
+
+
+@dataclass(frozen=True)
+class ChunkTask:
+    """Everything a worker needs for a chunk of points.
+
+    Attributes:
+        sweep: the sweep (its base scene, axes and measurement settings).
+        start, stop: the chunk's points are indices in [start, stop) of the sweep.
+        indices: the points to measure, sorted, within [start, stop) (int64); None for
+            every point of the range (points already stored or invalid are left out).
+    """
+
+    sweep: Any
+    start: int
+    stop: int
+    indices: np.ndarray | None = None
+
+    def points(self) -> np.ndarray:
+        """The indices of the points to measure (int64)."""
+        if self.indices is None:
+            return np.arange(self.start, self.stop, dtype=np.int64)
+        return np.asarray(self.indices, dtype=np.int64)
+
+    def __len__(self) -> int:
+        return self.stop - self.start if self.indices is None else len(self.indices)
+
+
+def measure_chunk(task: ChunkTask) -> ChunkResult:
+    """Measure every point of a chunk; never raises for a point that fails.
+
+    Each point is measured on its own (its result is the same in any chunk). This is the
+    one place where a compiled ensemble takes the points it supports, the rest going
+    through :func:`_measure_points`.
+    """
+    return _measure_points(task, task.points())
+
+
+def _measure_points(task: ChunkTask, indices: np.ndarray) -> ChunkResult:
+    """The points ``indices`` of the chunk, one :func:`measure_point` each."""
+    from billiard.scene.scene import with_values
+
+    sweep = task.sweep
+    settings = sweep.settings()
+    columns = empty_columns(len(indices), sweep.keep)
+    reasons: dict[int, str] = {}
+    for row, index in enumerate(indices.tolist()):
+        values = sweep.point_values(index)
+        try:
+            scene = with_values(sweep.scene, values)
+        except ValueError as exc:  # checked before the sweep started: not expected
+            record = empty_record(index, values, "invalid", str(exc))
+        else:
+            record = measure_point(PointTask(index, values, scene, settings))
+        set_row(columns, row, record)
+        if record["reason"]:
+            reasons[index] = record["reason"]
+    return ChunkResult(columns, reasons)
 
 
 @dataclass(frozen=True)
@@ -47,7 +110,6 @@ def _rest_height(scene: Any) -> float:
     The engine places a ball without a start position at rest on the bottom when it is
     set up; nothing is simulated (a run from rest under ``contact.model = "phases"`` may
     roll for ever, and the set-up gives the same height a one-impact run reports)."""
-    from billiard.run.simulate import Simulation
     from billiard.scene.scene import with_values
 
     at_rest = with_values(
@@ -55,6 +117,16 @@ def _rest_height(scene: Any) -> float:
         {"initial.q1": None, "initial.q2": None, "initial.v1": 0.0, "initial.v2": 0.0}
         | {"initial.omega": 0.0, "run.duration": None},
     )
+    return _rest_height_of(at_rest)
+
+
+@functools.lru_cache(maxsize=256)
+def _rest_height_of(at_rest: Any) -> float:
+    """The resting height of a scene whose ball starts at rest: once per distinct
+    parameter set in a worker (a basin map's points share one; setting up the
+    simulation is half the cost of a short point)."""
+    from billiard.run.simulate import Simulation
+
     return float(Simulation(at_rest).initial.q2)
 
 

@@ -34,7 +34,7 @@ from __future__ import annotations
 
 import os
 import sys
-from collections.abc import Iterable, Sequence
+from collections.abc import Callable, Iterable, Sequence
 from pathlib import Path
 from typing import Any
 
@@ -42,6 +42,7 @@ import numpy as np
 from scipy.io import netcdf_file
 
 from billiard.sweep.attractor import CLASSES
+from billiard.sweep.columns import CODES, share
 from billiard.sweep.definition import Sweep, sweep_to_toml
 from billiard.sweep.units import key_unit, variable_name
 
@@ -161,39 +162,45 @@ def _title(sweep: Sweep) -> str:
     return f"billiard sweep of {sweep.scene.name} over {keys}"
 
 
-def write_result(
-    path: Path, sweep: Sweep, records: Iterable[dict[str, Any]], scene_toml: str
-) -> Path:
-    """Write the result file from every point's record (any order: placed by index; read
-    one at a time, so ``records`` may be a generator over points.jsonl)."""
-    size, keep = sweep.size, sweep.keep
+def _widths(blocks: Callable[[], Iterable[np.ndarray]], size: int) -> dict[str, int]:
+    """Check that the rows hold every point, and the width of each coded text variable:
+    its longest text present (at least 1)."""
     seen = np.zeros(size, dtype=bool)
-    text = {name: _Strings(size) for name, _ in _TEXT}
-    codes = np.zeros(size, dtype=np.int8)
-    scalars = {
-        name: np.zeros(size, dtype=np.int32) if dtype == "i4" else np.full(size, np.nan)
-        for name, dtype, _, _ in _SCALARS
-    }
-    tails = {name: np.full((size, keep), np.nan) for name in ("last_height", "last_tof")}
-    for r in records:
-        i = int(r["index"])
-        seen[i] = True
-        for name, _ in _TEXT:
-            text[name][i] = str(r.get(name, ""))
-        codes[i] = CLASSES.index(r["attractor"])
-        for name, dtype, _, _ in _SCALARS:
-            if dtype == "i4":
-                value = int(r[name] or 0)
-                scalars[name][i] = INT_FILL if value == 0 and name in _NONE_IS_ZERO else value
-            else:
-                scalars[name][i] = np.nan if r[name] is None else float(r[name])
-        for name, data in tails.items():
-            tail = r[name][-keep:]
-            data[i, :] = np.nan
-            if tail:
-                data[i, keep - len(tail) :] = tail
+    present: dict[str, set[int]] = {name: set() for name, _ in _TEXT if name in CODES}
+    for rows in blocks():
+        seen[rows["index"]] = True
+        for name, codes in present.items():
+            codes.update(np.unique(rows[name]).tolist())
     if not seen.all():
         raise ValueError(f"the result needs every point; {int(size - seen.sum())} missing")
+    return {
+        name: max([1, *(len(CODES[name][c].encode("utf-8")) for c in codes)])
+        for name, codes in present.items()
+    }
+
+
+def write_result(
+    path: Path,
+    sweep: Sweep,
+    blocks: Callable[[], Iterable[np.ndarray]],
+    reasons: Callable[[], Iterable[tuple[int, str]]],
+    scene_toml: str,
+) -> Path:
+    """Write the result file from the stored rows of every point and the reasons of the
+    points not ok.
+
+    Args:
+        blocks: gives the ``points.npy`` rows of every point, a block at a time, in any
+            order (each placed by its index); called twice.
+        reasons: gives (index, reason) pairs; called twice (a later pair of a point
+            replaces an earlier one).
+
+    Memory: the result's own arrays (scipy holds them until the file is closed), filled
+    in place; the rows are read a block at a time.
+    """
+    size, keep = sweep.size, sweep.keep
+    widths = _widths(blocks, size)
+    widths["reason"] = max([1, *(len(r.encode("utf-8")) for _, r in reasons())])
     shape = sweep.shape
     dims = tuple(variable_name(axis.key) for axis in sweep.axes)
     tmp = path.with_name(path.name + ".tmp")
@@ -234,22 +241,32 @@ def write_result(
         var = f.createVariable("point", "i4", dims)
         var[:] = np.arange(size, dtype=np.int32).reshape(shape)
         var.units = "1"
-        var.long_name = "point index (C order of the swept keys; as in points.jsonl)"
+        var.long_name = "point index (C order of the swept keys; as in points.npy)"
+        # every variable below is filled in place (its array, as scipy holds it) from
+        # the rows, in one pass once all are made
+        fill: dict[str, Callable[[np.ndarray, np.ndarray], None]] = {}
         var = f.createVariable("attractor", "b", dims)
-        var[:] = codes.reshape(shape)
+        fill["attractor"] = _filler(var.data.reshape(size), "attractor")
         var.long_name = "attractor class (code; flag_meanings names each flag_values)"
         var.flag_values = np.arange(len(CLASSES), dtype=np.int8)
         var.flag_meanings = " ".join(CLASSES)
         for name, long_name in _TEXT:
-            chars, width = text.pop(name).chars(shape)
+            width = widths[name]
             f.createDimension(f"{name}_strlen", width)
             var = f.createVariable(name, "c", (*dims, f"{name}_strlen"))
-            var[:] = chars
+            text = var.data.reshape(size * width).view(f"S{width}")
+            if name == "reason":
+                text[...] = b""
+                for index, reason in reasons():
+                    text[index] = reason.encode("utf-8")
+            else:
+                table = np.array([n.encode("utf-8") for n in CODES[name]], dtype=f"S{width}")
+                fill[name] = _coded_filler(text, name, table)
             var._Encoding = "utf-8"
             var.long_name = long_name
         for name, dtype, units, long_name in _SCALARS:
             var = f.createVariable(name, dtype, dims)
-            var[:] = scalars.pop(name).reshape(shape)
+            fill[name] = _filler(var.data.reshape(size), name)
             var.units = units
             var.long_name = long_name
             if name in _NONE_IS_ZERO:
@@ -261,48 +278,99 @@ def write_result(
             ("last_tof", "s", "last times of flight (NaN-padded at the front)"),
         ):
             var = f.createVariable(name, "f8", (*dims, "impact"))
-            var[:] = tails.pop(name).reshape(*shape, keep)
+            fill[name] = _filler(var.data.reshape(size, keep), name)
             var.units = units
             var.long_name = long_name
             var._FillValue = np.float64(np.nan)
+        for rows in blocks():
+            index = np.asarray(rows["index"], dtype=np.int64)
+            for put in fill.values():
+                put(index, rows)
     finally:
         f.close()
     os.replace(tmp, path)
     return path
 
 
+def _filler(out: np.ndarray, name: str) -> Callable[[np.ndarray, np.ndarray], None]:
+    """Places a block's values of the variable ``name`` (from its rows) at their
+    points."""
+    if name in ("elastic_share", "lid_share"):
+        count = name.replace("share", "impacts")
+
+        def put_share(index: np.ndarray, rows: np.ndarray) -> None:
+            out[index] = share(rows[count], rows["impacts"])
+
+        return put_share
+    if name in _NONE_IS_ZERO:
+
+        def put_or_fill(index: np.ndarray, rows: np.ndarray) -> None:
+            values = np.asarray(rows[name], dtype=np.int32)
+            out[index] = np.where(values == 0, np.int32(INT_FILL), values)
+
+        return put_or_fill
+
+    def put(index: np.ndarray, rows: np.ndarray) -> None:
+        out[index] = rows[name]
+
+    return put
+
+
+def _coded_filler(
+    out: np.ndarray, name: str, table: np.ndarray
+) -> Callable[[np.ndarray, np.ndarray], None]:
+    def put(index: np.ndarray, rows: np.ndarray) -> None:
+        out[index] = table[rows[name]]
+
+    return put
+
+
 def _text(value: Any) -> Any:
     return value.decode("utf-8") if isinstance(value, bytes) else value
 
 
-def read_result(path: Path) -> dict[str, Any]:
+def _decode(var: Any) -> np.ndarray:
+    """One variable's data, decoded as xarray decodes it (see :func:`read_result`)."""
+    data = np.array(var.data)
+    if data.dtype.kind == "S" and data.dtype.itemsize == 1 and data.ndim >= 1:
+        rows = data.reshape(-1, data.shape[-1])
+        text = [b"".join(row).rstrip(b"\0").decode() for row in rows]
+        data = np.array(text, dtype=object).reshape(data.shape[:-1])
+    meanings = getattr(var, "flag_meanings", None)
+    fill = getattr(var, "_FillValue", None)
+    if meanings is not None:
+        codes = np.ravel(var.flag_values).tolist()
+        names = dict(zip(codes, _text(meanings).split(), strict=True))
+        flat = [names[int(code)] for code in data.ravel()]
+        data = np.array(flat, dtype=object).reshape(data.shape)
+    elif fill is not None and data.dtype.kind in "iu":
+        data = np.where(data == fill, np.nan, data.astype(float))
+    return data
+
+
+def read_result(path: Path, names: Iterable[str] | None = None) -> dict[str, Any]:
     """The result file as a dict of numpy arrays, decoded as xarray decodes them, and its
     global attributes (under ``"_attributes"``).
 
     Text variables become arrays of ``str``; ``attractor`` its class names (through
     ``flag_meanings``); an integer variable with a ``_FillValue`` becomes float, NaN where
     filled (``period`` where no period was found). Files written before the attractor
-    was coded (text) read the same.
+    was coded (text) read the same. ``names``: only these variables (a large sweep's
+    plots need a few of them).
     """
-    with netcdf_file(path, "r", mmap=False) as f:
-        out: dict[str, Any] = {}
-        for name, var in f.variables.items():
-            data = np.array(var.data)
-            if data.dtype.kind == "S" and data.dtype.itemsize == 1 and data.ndim >= 1:
-                rows = data.reshape(-1, data.shape[-1])
-                text = [b"".join(row).rstrip(b"\0").decode() for row in rows]
-                data = np.array(text, dtype=object).reshape(data.shape[:-1])
-            meanings = getattr(var, "flag_meanings", None)
-            fill = getattr(var, "_FillValue", None)
-            if meanings is not None:
-                codes = np.ravel(var.flag_values).tolist()
-                names = dict(zip(codes, _text(meanings).split(), strict=True))
-                flat = [names[int(code)] for code in data.ravel()]
-                data = np.array(flat, dtype=object).reshape(data.shape)
-            elif fill is not None and data.dtype.kind in "iu":
-                data = np.where(data == fill, np.nan, data.astype(float))
-            out[name] = data
+    wanted = None if names is None else set(names)
+    # mapped when only some variables are read: the others are never loaded
+    f = netcdf_file(path, "r", mmap=wanted is not None)
+    try:
+        out: dict[str, Any] = {
+            name: _decode(var)
+            for name, var in f.variables.items()
+            if wanted is None or name in wanted
+        }
         out["_attributes"] = {
             name: _text(getattr(f, name)) for name in GLOBAL_ATTRIBUTES if hasattr(f, name)
         }
+    finally:
+        f.variables.clear()  # no array left on the mapping: it closes cleanly
+        f.close()
     return out

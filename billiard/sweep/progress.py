@@ -46,8 +46,12 @@ class SweepProgress:
         self.active = False
 
     def point(self, record: dict[str, Any]) -> None:
-        self.done += 1
-        self.impacts += int(record.get("total_impacts") or 0)
+        self.chunk(1, int(record.get("total_impacts") or 0))
+
+    def chunk(self, points: int, impacts: int) -> None:
+        """A finished chunk of ``points`` points that simulated ``impacts`` impacts."""
+        self.done += points
+        self.impacts += impacts
         self.tick(force=self.tty)
 
     def text(self) -> str:

@@ -12,7 +12,6 @@ import gc
 import importlib
 import io
 import json
-import os
 import socketserver
 import subprocess
 import sys
@@ -330,8 +329,9 @@ def test_a_huge_axis_is_refused_before_anything_is_materialised(tmp_path):
         tracemalloc.stop()
     assert peak < 2_000_000  # bytes: two million values would take 60 MB or more
     message = str(caught.value)
-    assert "the sweep has 2,000,000 points (2,000,000) and would write about 13." in message
-    assert "GB (points.jsonl 9." in message and "GB, sweep.nc 3." in message
+    assert "the sweep has 2,000,000 points (2,000,000) and would write about 6.98 GB" in message
+    # 96 bytes per point and 16 per kept impact (keep = 100): 1,696 bytes a point
+    assert "GB (points.npy 3.39 GB, sweep.nc 3." in message
     assert "--yes" in message
     assert not (tmp_path / "big").exists()
     # the values are those of the range, computed when asked for
@@ -472,7 +472,7 @@ def _interrupted(tmp_path: Path) -> Path:
 
     with pytest.raises(SweepInterrupted, match="points kept"):
         run_sweep(sweep, directory, workers=1, on_point=stop, progress=_quiet(sweep))
-    assert len((directory / "points.jsonl").read_text().splitlines()) == 1
+    assert len(np.load(directory / "points.npy")) == 1
     return directory
 
 
@@ -489,7 +489,7 @@ def test_resume_refuses_an_edited_definition(tmp_path, capsys, name, old, new):
     code, _, err = _cli(capsys, "--resume", str(directory))
     _one_line_error(code, err)
     assert f"cannot resume {directory}: {name} changed since the sweep started" in err
-    assert len((directory / "points.jsonl").read_text().splitlines()) == 1
+    assert len(np.load(directory / "points.npy")) == 1
     assert not (directory / "sweep.nc").exists()
     if name == "scene.toml":
         return
@@ -536,19 +536,24 @@ def _interrupted_with(sweep: Sweep, tmp_path: Path) -> Path:
     return directory
 
 
-def test_points_file_is_read_line_by_line(tmp_path):
-    from billiard.sweep.store import iter_points
+def test_reasons_file_is_read_line_by_line(tmp_path):
+    from billiard.sweep.store import StoreError, read_reasons
 
-    path = tmp_path / "points.jsonl"
-    lines = [json.dumps({"index": i, "values": {}}) for i in range(3)]
-    path.write_text("\n".join(lines) + '\n{"index": 3, "val')
-    got = list(iter_points(path))
-    assert [r["index"] for r, _ in got] == [0, 1, 2]
-    assert got[-1][1] == len("\n".join(lines)) + 1
-    assert os.path.getsize(path) > got[-1][1]
-    # a record-less line is reported, not loaded
-    path.write_text('{"index": 0}\n[1, 2]\n')
-    from billiard.sweep.store import StoreError
+    path = tmp_path / "reasons.jsonl"
+    lines = [json.dumps({"index": i, "reason": f"r{i}"}) for i in range(3)]
+    path.write_text("\n".join(lines) + '\n{"index": 3, "rea')
+    assert list(read_reasons(path)) == [(0, "r0"), (1, "r1"), (2, "r2")]
+    # only the points stored in points.npy, when asked
+    assert list(read_reasons(path, bytearray([1, 0, 1, 1]))) == [(0, "r0"), (2, "r2")]
+    path.write_text('{"index": 0, "reason": "r"}\n[1, 2]\n')
+    with pytest.raises(StoreError, match="line 2 is not a point's reason"):
+        list(read_reasons(path))
 
-    with pytest.raises(StoreError, match="line 2 is not a point record"):
-        list(iter_points(path))
+
+def test_a_folder_of_an_older_points_file_is_refused_in_one_line(tmp_path, capsys):
+    directory = _interrupted(tmp_path)
+    (directory / "points.npy").rename(directory / "points.jsonl")
+    code, _, err = _cli(capsys, "--resume", str(directory))
+    _one_line_error(code, err)
+    assert f"{directory} holds a sweep of an older version (points.jsonl)" in err
+    assert not (directory / "points.npy").exists()

@@ -8,7 +8,6 @@ starting worker processes.
 from __future__ import annotations
 
 import io
-import json
 import sys
 
 import numpy as np
@@ -141,19 +140,19 @@ def test_interrupted_sweep_resumes_to_the_same_bytes_without_recomputing(referen
     directory = tmp_path / "cut"
     first: list[int] = []
 
-    def stop_after_two(record):
+    def stop(record):
         first.append(record["index"])
-        if len(first) == 2:
-            raise StopSweep
+        raise StopSweep
 
     with pytest.raises(SweepInterrupted) as caught:
-        run_sweep(_sweep(), directory, workers=1, on_point=stop_after_two, progress=_quiet(sweep))
-    assert caught.value.done == 2
+        run_sweep(_sweep(), directory, workers=1, chunk=2, on_point=stop, progress=_quiet(sweep))
+    assert first == [0]
+    assert caught.value.done == 2  # the chunk of the point that stopped it is kept whole
     assert not (directory / "sweep.nc").exists()
-    lines = (directory / "points.jsonl").read_text().splitlines()
-    assert sorted(json.loads(line)["index"] for line in lines) == sorted(first)
-    with open(directory / "points.jsonl", "a") as f:  # a kill in the middle of a write
-        f.write('{"index": 3, "values": {"drive.amp')
+    rows = np.load(directory / "points.npy")
+    assert rows["index"].tolist() == [0, 1]
+    with open(directory / "points.npy", "ab") as f:  # a kill in the middle of a chunk
+        f.write(rows[:1].tobytes()[:50])
     second: list[int] = []
     resumed = run_sweep(
         None,
@@ -163,23 +162,39 @@ def test_interrupted_sweep_resumes_to_the_same_bytes_without_recomputing(referen
         on_point=lambda r: second.append(r["index"]),
         progress=_quiet(sweep),
     )
-    assert sorted(first + second) == list(range(sweep.size))
+    assert sorted(second) == [2, 3]
     assert list(resumed.computed) == second
     assert resumed.result.read_bytes() == outcome.result.read_bytes()
     again = run_sweep(None, directory, resume=True, progress=_quiet(sweep))
     assert list(again.computed) == []
+    assert again.result.read_bytes() == outcome.result.read_bytes()
 
 
-def test_dask_local_cluster_gives_the_same_bytes(reference, tmp_path):
+def test_chunk_size_does_not_change_the_bytes(reference, tmp_path):
+    sweep, outcome = reference
+    other = run_sweep(_sweep(), tmp_path / "one", workers=1, chunk=4, progress=_quiet(sweep))
+    assert other.result.read_bytes() == outcome.result.read_bytes()
+    assert np.load(tmp_path / "one" / "points.npy")["index"].tolist() == [0, 1, 2, 3]
+
+
+def test_dask_local_cluster_gives_the_same_bytes(reference, tmp_path, capsys):
     distributed = pytest.importorskip("distributed")
     sweep, outcome = reference
     with distributed.LocalCluster(
         n_workers=2, processes=False, threads_per_worker=1, dashboard_address=None
     ) as cluster:
         other = run_sweep(
-            _sweep(), tmp_path / "dask", dask=cluster.scheduler_address, progress=_quiet(sweep)
+            _sweep(),
+            tmp_path / "dask",
+            dask=cluster.scheduler_address,
+            chunk=3,
+            progress=_quiet(sweep),
         )
     assert "Dask scheduler" in other.where
+    # the scheduler names its dashboard (its HTTP server): the link is printed
+    assert "billiard sweep: Dask dashboard at http://" in capsys.readouterr().err
+    log = (tmp_path / "dask" / "sweep.log").read_text()
+    assert "3 per chunk" in log and "chunk 0-2: 3 points (3 ok)" in log
     assert other.result.read_bytes() == outcome.result.read_bytes()
 
 
@@ -299,3 +314,86 @@ def test_progress_lines_when_not_a_terminal():
     lines = stream.getvalue().splitlines()
     assert lines and lines[-1].startswith("billiard sweep: 5/10 points")
     assert "impacts/s" in lines[-1] and "ETA" in lines[-1]
+
+
+# --- chunks, workers and checks --------------------------------------------------------
+
+
+def test_chunks_cover_the_points_left_in_index_order():
+    from billiard.sweep.execute import _chunks, chunk_size
+
+    assert chunk_size(12, 1) == 3 and chunk_size(10**6, 16) == 4096 and chunk_size(3, 8) == 1
+    sweep = Sweep(load_scene("parabola-5.4hz"), (parse_vary("drive.frequency=4:7:10"),))
+    done = bytearray(10)
+    for i in (0, 3, 4, 9):
+        done[i] = 1
+    tasks = list(_chunks(sweep, done, 3))
+    assert [t.points().tolist() for t in tasks] == [[1, 2, 5], [6, 7, 8]]
+    assert (tasks[0].start, tasks[0].stop) == (1, 6)
+    assert tasks[1].indices is None  # a whole range: no indices sent
+
+
+def test_window_follows_the_workers_present_and_a_lost_worker_is_logged(monkeypatch, tmp_path):
+    import threading
+    import time
+    from concurrent.futures import ThreadPoolExecutor
+
+    from billiard.sweep import execute
+    from billiard.sweep.columns import ChunkResult, empty_columns
+    from billiard.sweep.store import ChunkStore
+
+    sweep = Sweep(load_scene("parabola-5.4hz"), (parse_vary("drive.frequency=4:7:40"),), keep=2)
+    lock = threading.Lock()
+    running, most = [0], []
+
+    def measure(task):
+        with lock:
+            running[0] += 1
+            most.append((looks[0], running[0]))
+        time.sleep(0.02)
+        columns = empty_columns(len(task), sweep.keep)
+        columns["index"][:] = task.points()
+        with lock:
+            running[0] -= 1
+        return ChunkResult(columns)
+
+    looks = [0]
+
+    def present():  # one thread at first; a second worker joins, then the first leaves
+        looks[0] += 1
+        if looks[0] < 4:
+            return {"tcp://a:1": 1}
+        if looks[0] < 12:
+            return {"tcp://a:1": 1, "tcp://b:2": 3}
+        return {"tcp://b:2": 3}
+
+    monkeypatch.setattr(execute, "measure_chunk", measure)
+    monkeypatch.setattr(execute, "WORKERS_INTERVAL", 0.0)
+    with ThreadPoolExecutor(8) as pool, ChunkStore(tmp_path, sweep.size, sweep.keep) as store:
+        workers = execute.Workers(pool, "test", present)
+        tasks = execute._chunks(sweep, store.done, 1)
+        execute._drive(workers, tasks, store, _quiet(sweep), None, execute.array.array("q"), sweep)
+        assert store.count == 40
+    # two chunks in flight for one thread; once the second worker joins, up to eight
+    assert max(n for look, n in most if look < 4) <= 2
+    assert max(n for _, n in most) > 2
+    log = (tmp_path / "sweep.log").read_text()
+    assert "worker tcp://b:2 joined (3 threads)" in log
+    assert "worker tcp://a:1 left; its chunks are recomputed" in log
+
+
+def test_basin_map_starts_are_checked_as_the_engine_checks_them():
+    from billiard.run.simulate import Simulation
+    from billiard.sweep.execute import prepare
+
+    axes = (parse_vary("initial.q1=-0.06:0.06:7"), parse_vary("initial.q2=0.005:0.05:4"))
+    sweep = Sweep(load_scene("parabola-5.4hz"), axes, skip_invalid=True)
+    invalid = prepare(sweep, skip_invalid=True)
+    expected = {}
+    for index in range(sweep.size):
+        try:
+            Simulation(with_values(sweep.scene, sweep.point_values(index)))
+        except ValueError as exc:
+            expected[index] = " ".join(str(exc).split())
+    assert invalid == expected
+    assert 0 < len(invalid) < sweep.size

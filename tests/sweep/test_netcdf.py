@@ -128,3 +128,13 @@ def test_read_result_masks_as_xarray_does(sweep_file):
         for name in ("period", "drive_periods", "height_mean", "last_height", "impacts"):
             np.testing.assert_array_equal(data[name], ds[name].values)
         assert data["status"].tolist() == ds.status.values.tolist()
+
+
+def test_read_result_reads_only_the_variables_asked_for(sweep_file):
+    outcome, _ = sweep_file
+    whole = read_result(outcome.result)
+    some = read_result(outcome.result, ["attractor", "period", "drive_amplitude"])
+    assert sorted(some) == ["_attributes", "attractor", "drive_amplitude", "period"]
+    assert some["attractor"].tolist() == whole["attractor"].tolist()
+    np.testing.assert_array_equal(some["period"], whole["period"])
+    assert some["_attributes"] == whole["_attributes"]
