@@ -44,7 +44,9 @@ _BALL = {
 }
 
 
-def _setup(scene: Any, key: Any) -> Any:
+def _setup(scene: Any) -> Any:
+    """The set-up of ``scene`` (its parameter set), made once per worker."""
+    key = scene  # a frozen dataclass: equal scenes, one set-up
     if key in _SETUPS:
         _SETUPS.move_to_end(key)
         return _SETUPS[key]
@@ -94,7 +96,7 @@ def measure_batch(
             continue
         duration = settings["duration"] if settings["duration"] is not None else None
         duration = scene.run.duration if duration is None else duration
-        part, left = _measure_group(scene, params, points, duration, settings, keep)
+        part, left = _measure_group(scene, points, duration, settings, keep)
         rest += left
         if part is not None:
             parts.append(part)
@@ -106,7 +108,6 @@ def measure_batch(
 
 def _measure_group(
     scene: Any,
-    params: Any,
     points: list[tuple[int, dict[str, Any]]],
     duration: float | None,
     settings: dict[str, Any],
@@ -117,7 +118,7 @@ def _measure_group(
     base |= {"omega": init.omega, "t": init.t}
     starts = [base | start for _, start in points]
     try:
-        setup = _setup(scene, params)
+        setup = _setup(scene)
     except ValueError:  # a scene the engine cannot set up: the per-point path says why
         return None, [i for i, _ in points]
     placed = [s["q1"] is not None and s["q2"] is not None for s in starts]

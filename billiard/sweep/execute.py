@@ -37,6 +37,7 @@ from typing import Any
 
 import numpy as np
 
+from billiard.engine import ensemble
 from billiard.sweep.attractor import CLASSES
 from billiard.sweep.columns import STATUSES, ChunkResult, empty_columns, record_of_row
 from billiard.sweep.definition import Sweep, SweepError, read_sweep_file, sweep_to_toml
@@ -298,13 +299,29 @@ def check_starts(scene: Any, q1s: np.ndarray, q2s: np.ndarray) -> dict[int, str]
     simulation = Simulation(at_rest)
     boundary, warm = simulation.boundary, simulation.warm
     theta = simulation.drive.angle(scene.initial.t)
+    positions = range(len(q1s))
+    if ensemble.supports(scene) is None:
+        # the ensemble kernel's start check, compiled (the engine's own, with fresh warm
+        # starts): only the starts it refuses are checked again here, for the reason
+        positions = _refused_starts(scene, q1s, q2s)
     reasons: dict[int, str] = {}
-    for position, (q1, q2) in enumerate(zip(q1s.tolist(), q2s.tolist(), strict=True)):
+    for position in positions:
         try:
-            boundary.check_initial_position(q1, q2, theta, warm)
+            boundary.check_initial_position(float(q1s[position]), float(q2s[position]), theta, warm)
         except ValueError as exc:
             reasons[position] = str(exc)
     return reasons
+
+
+def _refused_starts(scene: Any, q1s: np.ndarray, q2s: np.ndarray) -> list[int]:
+    """The positions of the starts the ensemble kernel's set-up refuses."""
+    setup = ensemble.prepare(scene)
+    refused: list[int] = []
+    block = 4096  # state vectors of 9 kB each
+    for lo in range(0, len(q1s), block):
+        _, ok = ensemble.start(setup, q1s[lo : lo + block], q2s[lo : lo + block], t=scene.initial.t)
+        refused += (lo + np.nonzero(~ok)[0]).tolist()
+    return refused
 
 
 def _one_line(message: str) -> str:

@@ -53,11 +53,23 @@ class ChunkTask:
 def measure_chunk(task: ChunkTask) -> ChunkResult:
     """Measure every point of a chunk; never raises for a point that fails.
 
-    Each point is measured on its own (its result is the same in any chunk). This is the
-    one place where a compiled ensemble takes the points it supports, the rest going
-    through :func:`_measure_points`.
+    Each point is measured on its own (its result is the same in any chunk): the points
+    the ensemble kernel takes together (:func:`billiard.sweep.batch.measure_batch`), the
+    rest one by one through :func:`_measure_points`. Which path a point takes depends on
+    its scene and the settings alone, never on the chunk. Rows in index order.
     """
-    return _measure_points(task, task.points())
+    from billiard.sweep.batch import measure_batch
+
+    indices = task.points()
+    batch, rest = measure_batch(task.sweep, indices, task.sweep.settings())
+    if batch is None:
+        return _measure_points(task, indices)
+    if not rest:
+        return ChunkResult(batch)
+    single = _measure_points(task, np.asarray(rest, dtype=np.int64))
+    columns = {k: np.concatenate([batch[k], single.columns[k]]) for k in batch}
+    order = np.argsort(columns["index"], kind="stable")
+    return ChunkResult({k: v[order] for k, v in columns.items()}, single.reasons)
 
 
 def _measure_points(task: ChunkTask, indices: np.ndarray) -> ChunkResult:
