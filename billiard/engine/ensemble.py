@@ -153,9 +153,11 @@ def start(
     omega: Any = 0.0,
     t: float = 0.0,
     duration: float | None = None,
+    out: np.ndarray | None = None,
 ) -> tuple[np.ndarray, np.ndarray]:
     """State vectors of the starts (arrays broadcast together; m, m/s, rad/s) at time t
-    (s), each run ending at t + ``duration`` (s; None: no end in time).
+    (s), each run ending at t + ``duration`` (s; None: no end in time); written into
+    ``out`` (n x SIZE, C order) when given.
 
     Returns:
         (ctxs, ok): the state vectors (n x SIZE) and, per start, whether a run's set-up
@@ -178,7 +180,7 @@ def start(
     balls[:, 1] = theta
     for column, values in enumerate((q1, q2, v1, v2, omega), start=2):
         balls[:, column] = values.ravel()
-    ctxs = np.empty((n, setup.template.size))
+    ctxs = np.empty((n, setup.template.size)) if out is None else out
     gaps = np.empty(n)
     # a copy: a broadcast view is read-only (and stays one when it is already
     # contiguous, as for one trajectory), which the kernels' wall functions refuse
@@ -270,7 +272,8 @@ def advance(
     params = np.array(np.broadcast_to(params, (n, params.shape[-1])), order="C")
     consts = np.array(np.broadcast_to(consts, (n, E.NCONST)), order="C")
     rows = np.empty((n, L.NCOL))
-    rings = np.full((n, width, E.RCOL), np.nan)
+    # not filled: a ring's slots are read only once written (find_period, last_impacts)
+    rings = np.empty((n, width, E.RCOL))
     stats = np.zeros((n, E.NSTAT))
     stats[:, E.ST_STATUS] = E.RUN_PENDING
     total = transient + impacts

@@ -135,14 +135,18 @@ def _measure_group(
             by_time.setdefault(float(starts[k]["t"]), []).append(r)
     for t, rs in by_time.items():
         pick = [starts[rows[r]] for r in rs]
+        whole = len(rs) == len(rows)  # the common case: one start time, nothing at rest
         c, ok = EN.start(
             setup,
             *(np.array([float(s[name]) for s in pick]) for name in ("q1", "q2", "v1", "v2")),
             np.array([float(s["omega"]) for s in pick]),
             t=t,
             duration=duration,
+            out=ctxs if whole else None,
         )
-        ctxs[rs], valid[rs] = c, ok
+        if not whole:
+            ctxs[rs] = c
+        valid[rs] = ok
     lying = [r for r, k in enumerate(rows) if resting[k]]
     if lying:
         pick = [starts[rows[r]] for r in lying]
@@ -154,36 +158,37 @@ def _measure_group(
         )
     transient, impacts = int(settings["transient"]), int(settings["impacts"])
     consts = EN.constants(scene, settings["tolerance"], settings["max_period"], WINDOW)
-    run = np.nonzero(valid)[0]
     from billiard.kernels import ensemble as E
 
-    stats = np.zeros((len(rows), E.NSTAT))
-    stats[:, E.ST_STATUS] = E.RUN_FAILED
-    width = max(WINDOW, keep, 1)
-    rings = np.full((len(rows), width, E.RCOL), math.nan)
-    if run.size:
-        sub = np.ascontiguousarray(ctxs[run])
-        s, r = EN.advance(
-            sub, setup.params, setup.walls, consts, transient=transient, impacts=impacts,
-            width=width, threads=1,
-        )  # fmt: skip
-        stats[run], rings[run] = s, r
-    columns = measured_columns(stats, rings, valid, setup.rest_height, settings["rest_band"], scene)
-    # a run that stopped early, or an invalid start, or one without a measured impact:
-    # measured again one by one, for the engine's words of why
-    ok = (stats[:, E.ST_STATUS] != E.RUN_FAILED) & (stats[:, E.ST_MEASURED] > 0) & valid
+    # invalid starts (refused before the sweep ran, so rare here) go to the per-point path
+    run = np.nonzero(valid)[0]
+    left += [points[rows[r]][0] for r in np.nonzero(~valid)[0]]
+    if not run.size:
+        return None, left
+    if run.size < len(rows):
+        ctxs = ctxs[run]
+    stats, rings = EN.advance(
+        ctxs, setup.params, setup.walls, consts, transient=transient, impacts=impacts,
+        width=max(WINDOW, keep, 1), threads=1,
+    )  # fmt: skip
+    columns = measured_columns(
+        stats, rings, np.ones(run.size, dtype=bool), setup.rest_height, settings["rest_band"], scene
+    )
+    # a run that stopped early, or one without a measured impact: measured again one by
+    # one, for the engine's words of why
+    ok = (stats[:, E.ST_STATUS] != E.RUN_FAILED) & (stats[:, E.ST_MEASURED] > 0)
     keep_rows = np.nonzero(ok)[0]
-    left += [points[rows[r]][0] for r in np.nonzero(~ok)[0]]
+    left += [points[rows[run[r]]][0] for r in np.nonzero(~ok)[0]]
     if not keep_rows.size:
         return None, left
-    heights, tofs = last_impacts(stats, rings, keep)
+    heights, tofs = last_impacts(stats[keep_rows], rings[keep_rows], keep)
     n = keep_rows.size
     attractor = np.array([CLASSES.index(c) for c in columns["attractor"][keep_rows]], np.int8)
     run_status = np.array(
         [RUN_STATUSES.index(s) for s in columns["run_status"][keep_rows]], dtype=np.int8
     )
     part = {
-        "index": np.array([points[rows[r]][0] for r in keep_rows], dtype=np.int64),
+        "index": np.array([points[rows[run[r]]][0] for r in keep_rows], dtype=np.int64),
         "status": np.full(n, STATUSES.index("ok"), dtype=np.int8),
         "attractor": attractor,
         "run_status": run_status,
@@ -202,7 +207,7 @@ def _measure_group(
         "tof_std": columns["tof_std"][keep_rows],
         "lyapunov": np.full(n, math.nan),
         "lyapunov_per_second": np.full(n, math.nan),
-        "last_height": heights[keep_rows],
-        "last_tof": tofs[keep_rows],
+        "last_height": heights,
+        "last_tof": tofs,
     }
     return part, left

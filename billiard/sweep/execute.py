@@ -358,12 +358,13 @@ def prepare(sweep: Sweep, skip_invalid: bool = False) -> dict[int, str]:
     checked: OrderedDict[Any, str | None] = OrderedDict()  # a bounded memory of checks
     invalid: dict[int, str] = {}
 
-    def record(indices: np.ndarray, messages: Any) -> None:
-        """Points found invalid: refused (the lowest index named), or recorded."""
+    def record(indices: np.ndarray, messages: Any, outside: bool = False) -> None:
+        """Points found invalid: refused (the lowest index named), or recorded; starts
+        ``outside`` the container are recorded always (a basin map's rectangle)."""
         if not len(indices):
             return
         order = np.argsort(indices, kind="stable")
-        if not skip_invalid:
+        if not skip_invalid and not outside:
             first = int(order[0])
             message = messages if isinstance(messages, str) else messages[first]
             raise _refuse(sweep, int(indices[first]), " ".join(message.split()))
@@ -465,6 +466,7 @@ def _check_set(
 
     q1s, q2s = column("q1"), column("q2")
     found = None
+    done = np.zeros(len(indices), dtype=bool)  # recorded already
     if q1s is not None and q2s is not None and "initial.t" not in keys:
         ok = np.flatnonzero(~bad)
         try:
@@ -473,9 +475,12 @@ def _check_set(
             found = None
         del q1s, q2s
     if found is not None:
-        for position, message in found.items():
-            messages[int(ok[position])] = message
+        # a start outside the container is a blank pixel of a basin map, not bad input
+        outside = np.array(sorted(int(ok[position]) for position in found), dtype=np.int64)
+        record(indices[outside], [_one_line(found[p]) for p in sorted(found)], True)
+        for position in found:
             bad[ok[position]] = True
+        done[outside] = True
         good = np.flatnonzero(~bad)
         if len(good):  # one short run of this parameter set, from its first valid start
             k = int(good[0])
@@ -492,7 +497,7 @@ def _check_set(
             if problem is not None:
                 messages[k] = problem
                 bad[k] = True
-    where = np.flatnonzero(bad)
+    where = np.flatnonzero(bad & ~done)
     record(indices[where], [messages[int(k)] for k in where.tolist()])
 
 
