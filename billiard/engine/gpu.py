@@ -38,8 +38,8 @@ Chaotic trajectories therefore leave the CPU's after some hundreds of impacts, w
 their statistics agree (measured: docs/design.md, "numba-cuda"; ``bench/gpu_check.py``).
 Under the simulator the kernels run as Python on numpy floats (the device functions
 are the plain functions: see :class:`_Device`): the rows are the CPU's, bit for bit
-(tested). A launch compiles the kernel it calls on its first call, per process (about
-8 s for ``advance`` on an H200; not cached on disk).
+(tested). A launch compiles the kernel it calls on its first call, per process (8-11 s
+for ``advance`` on an H200; not cached on disk).
 """
 
 from __future__ import annotations
