@@ -22,8 +22,13 @@ if WALLS is None:
 
     @inline
     def call_wall(walls, k, w, x, p):
-        """``walls[k][w](x, p)``: function k of wall w at x."""
-        return walls[k][w](x, p)
+        """``walls[k][w](x, p)``: function k of wall w at x (the row by a constant
+        index in each branch, as the kernels indexed it before this seam)."""
+        if k == 0:
+            return walls[0][w](x, p)
+        if k == 1:
+            return walls[1][w](x, p)
+        return walls[2][w](x, p)
 
 else:
     (_F0, _F1), (_DF0, _DF1), (_D2F0, _D2F1) = WALLS
