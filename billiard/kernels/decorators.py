@@ -22,18 +22,33 @@ The same files also load as the interpreted twin :mod:`billiard.kernels_py`
 time; there every decorator here is the identity (and ``ulp`` is ``math.ulp``) whether
 numba is there or not: the kernels import these from their sibling, so the package a
 file is loaded in decides.
+
+A device twin (:mod:`billiard.kernels.twin`, loaded for a GPU by
+:mod:`billiard.engine.gpu`) carries a ``DEVICE`` object on its package, set by its
+loader before any of its modules runs: its ``jit(fn, inline)`` compiles a kernel for
+the device (``inline``: inlined into its device callers), and its ``walls`` are the
+curve's wall functions compiled for the device, which :mod:`.wallcall` calls (``WALLS``
+here; None elsewhere). There ``ulp`` is :func:`_ulp_compiled`.
 """
 
 from __future__ import annotations
 
 import math
+import sys
 
 from billiard import jit as _jit
 
-__all__ = ["COMPILED", "inline", "jit", "ulp"]
+__all__ = ["COMPILED", "DEVICE", "WALLS", "inline", "jit", "ulp"]
 
 #: compiled by numba: the package billiard.kernels with numba enabled (never the twin)
 COMPILED = _jit.ENABLED and __package__ == "billiard.kernels"
+#: the device twin's compiler and wall functions (None: not a device twin)
+_DEVICE = None if COMPILED else getattr(sys.modules.get(__package__ or ""), "DEVICE", None)
+#: compiled for a device: the package is a device twin
+DEVICE = _DEVICE is not None
+#: the curve's wall functions compiled for the device, rows (f, f', f''), one function
+#: per wall slot (None on the CPU)
+WALLS = _DEVICE.walls if DEVICE else None
 
 # the constants of _ulp_compiled: Rump's phi = 2**52 + 1 and 1 - 2**-53, the scalings
 # that keep phi * x finite and normal, and the results outside the finite numbers
@@ -46,12 +61,17 @@ _NOT_FINITE = 2.0**972
 
 
 def jit(fn):
-    """:func:`billiard.jit.jit` (the identity in the interpreted twin)."""
+    """:func:`billiard.jit.jit` (the identity in the interpreted twin; compiled for the
+    device in a device twin)."""
+    if DEVICE:
+        return _DEVICE.jit(fn, False)
     return _jit.jit(fn) if COMPILED else fn
 
 
 def inline(fn):
     """``jit(fn)``, inlined into every compiled caller (numba's ``forceinline``)."""
+    if DEVICE:
+        return _DEVICE.jit(fn, True)
     return _jit.jit(fn, inline=True) if COMPILED else fn
 
 
@@ -86,4 +106,4 @@ def _ulp(x):
     return math.ulp(x)
 
 
-ulp = _ulp_compiled if COMPILED else _ulp
+ulp = _ulp_compiled if COMPILED or DEVICE else _ulp

@@ -11,6 +11,7 @@ from .decorators import inline
 from .layout import (
     E_STEP_CONTROL,
     EN_ERR_VALUE,
+    EN_STOP,
     FL_CLIN,
     FL_CMAG,
     FL_CQUAD,
@@ -171,6 +172,7 @@ def advance(ctx, tau_a, tau_target):
         h *= max(0.2, 0.9 * err**-0.2)
         ctx[FL_H] = h
     ctx[EN_ERR_VALUE] = tau_a
+    ctx[EN_STOP] = E_STEP_CONTROL
     raise KernelError(E_STEP_CONTROL)
 
 

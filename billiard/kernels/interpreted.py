@@ -19,14 +19,12 @@ self-contained. A documented stop inside a kernel raises the twin's
 
 from __future__ import annotations
 
-import importlib
-import importlib.util
-import sys
-from pathlib import Path
 from types import ModuleType
 
 from billiard import jit as _jit
 from billiard.errors import SimulationError
+
+from . import twin as _twin
 
 __all__ = [
     "PACKAGE",
@@ -47,32 +45,10 @@ __all__ = [
 
 #: the twin's package name
 PACKAGE = "billiard.kernels_py"
-_KERNELS = Path(__file__).resolve().parent
-
-
-def _package() -> ModuleType:
-    """``billiard.kernels_py``: billiard/kernels/__init__.py, its submodules found in
-    the same folder."""
-    module = sys.modules.get(PACKAGE)
-    if module is not None:
-        return module
-    spec = importlib.util.spec_from_file_location(
-        PACKAGE, _KERNELS / "__init__.py", submodule_search_locations=[str(_KERNELS)]
-    )
-    assert spec is not None and spec.loader is not None
-    module = importlib.util.module_from_spec(spec)
-    sys.modules[PACKAGE] = module
-    try:
-        spec.loader.exec_module(module)
-    except BaseException:
-        del sys.modules[PACKAGE]
-        raise
-    return module
 
 
 def _load(name: str) -> ModuleType:
-    _package()
-    return importlib.import_module(f"{PACKAGE}.{name}")
+    return _twin.load_module(PACKAGE, name)
 
 
 layout = _load("layout")

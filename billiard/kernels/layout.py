@@ -383,6 +383,15 @@ RK_HI = _ctx("RK_HI", "hi", MAX_SURFACES, "m", "... end")
 RK_ANSWER = _ctx("RK_ANSWER", "answer", 4 * RK_MAX_ANSWERS, "", "answers: px, py (m), wall, s (m)")
 RK_END = CTX.end()
 
+# --- the stop -----------------------------------------------------------------------
+# A stop of the impact path (loop, locate, flight, surfaces) writes its E_* code here
+# before it raises KernelError: on a GPU, where numba-cuda does not report a device
+# function's exception (the thread just ends), each trajectory's ctx row keeps its reason
+# (billiard.engine.gpu). The CPU engine reads the exception; nothing reads this slot there.
+CTX.begin("stop")
+EN_STOP = _ctx("EN_STOP", "code", 1, "", "E_* code of the stop that ended the kernel (0: none)")
+CTX.end()
+
 SIZE = CTX.size
 
 

@@ -18,6 +18,7 @@ from .layout import (
     E_EXTREMUM,
     E_NO_IMPACT,
     E_ROOT,
+    EN_STOP,
     H_BRACKET,
     H_FIRST,
     H_LONGEST,
@@ -193,6 +194,7 @@ def root(ctx, p, walls, j, lo, glo, dglo, hi, ghi, dghi):
             continue
         dx_old, dx = dx, step
         t = newton
+    ctx[EN_STOP] = E_ROOT
     raise KernelError(E_ROOT)
 
 
@@ -219,6 +221,7 @@ def rate_root(ctx, p, walls, j, a, da, b, db):
             side = 1
         if b - a <= 1e-13 + 4.0 * ulp(b):
             return 0.5 * (a + b)
+    ctx[EN_STOP] = E_EXTREMUM
     raise KernelError(E_EXTREMUM)
 
 
@@ -405,4 +408,5 @@ def locate(ctx, p, walls, theta0, q1, q2, u1, u2, u3):
             base = SURF + j * SURF_STRIDE
             ctx[base + S_GA] = ctx[base + S_GB]
             ctx[base + S_DGA] = ctx[base + S_DGB]
+    ctx[EN_STOP] = E_NO_IMPACT
     raise KernelError(E_NO_IMPACT)

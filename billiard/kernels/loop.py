@@ -37,6 +37,7 @@ from .layout import (
     EN_RCOUNT,
     EN_RHEAD,
     EN_SETTLES,
+    EN_STOP,
     EN_T,
     EN_TARGET,
     EN_THETA,
@@ -115,6 +116,7 @@ def step(ctx, p, walls, out, row):
     """Advance to the next impact and write its row ``out[row]``; returns False (and
     changes nothing) when the impact comes after ``ctx[EN_UNTIL]``."""
     if ctx[EN_FAULT] != 0.0:
+        ctx[EN_STOP] = E_COLLAPSE
         raise KernelError(E_COLLAPSE)
     ctx[EN_EVENT_T] = math.nan  # searching: a stop here is "after" the last impact
     tau, j, q1, q2, u1, u2, theta, s, z = locate(
@@ -128,6 +130,7 @@ def step_fixed(ctx, p, walls, nears, out, row):
     """:func:`step` with the paper's fixed-step detection (method ``rk4``,
     :func:`billiard.kernels.fixed_step.locate`; ``nears``: the nearest-point functions)."""
     if ctx[EN_FAULT] != 0.0:
+        ctx[EN_STOP] = E_COLLAPSE
         raise KernelError(E_COLLAPSE)
     ctx[EN_EVENT_T] = math.nan  # searching: a stop here is "after" the last impact
     tau, j, q1, q2, u1, u2, theta, s, z = fixed_step.locate(
@@ -152,6 +155,7 @@ def impact(ctx, p, walls, out, row, tau, j, q1, q2, u1, u2, theta, s, z):
     base = SURF + j * SURF_STRIDE
     kind = ctx[base + S_KIND]
     if kind == ESCAPE:
+        ctx[EN_STOP] = E_ESCAPED
         raise KernelError(E_ESCAPED)
     q3 = ctx[EN_Q3] + u3 * tau
     v = ctx[AMP] * ctx[OMEGA] * math.cos(theta)
@@ -191,6 +195,7 @@ def impact(ctx, p, walls, out, row, tau, j, q1, q2, u1, u2, theta, s, z):
     if not math.isfinite(
         t + q1 + q2 + n1 + n2 + n3 + u4 + un + tau + z + e + rt + rn + s + q3
     ):  # fmt: skip
+        ctx[EN_STOP] = E_NON_FINITE
         raise KernelError(E_NON_FINITE)
     # commit
     ctx[EN_IMPACTS] = n

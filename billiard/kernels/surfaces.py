@@ -3,9 +3,11 @@ one, the lid and the escape level, with the warm starts in the surface's block o
 ``ctx``. The classes of :mod:`billiard.geometry.surfaces` are these functions, run interpreted.
 
 A curved wall's functions come in ``walls = (f, df, d2f)``, each a tuple with one
-function per wall of the curve, called as ``walls[1][w](x, p)``; compiled, they are
+function per wall of the curve, called through :func:`.wallcall.call_wall` as
+``call_wall(walls, 1, w, x, p)`` (``walls[1][w](x, p)``); compiled, they are
 first-class function values of type ``float64(float64, float64[::1])`` (see
-:mod:`billiard.run.compiled`), so the kernels are compiled once for every curve.
+:mod:`billiard.geometry.wall_functions`), so the kernels are compiled once for every
+curve; on a GPU the call is the seam of :mod:`.wallcall`.
 """
 
 from __future__ import annotations
@@ -17,6 +19,7 @@ from .layout import (
     CURVED,
     E_INVERSION,
     EN_ERR_VALUE,
+    EN_STOP,
     LINE,
     S_A,
     S_B,
@@ -32,6 +35,7 @@ from .layout import (
     SURF_STRIDE,
     KernelError,
 )
+from .wallcall import call_wall
 
 # Newton on the offset inversion stops once a step is below this (m); the error left after
 # that step is of order curvature * step^2, far below a double's resolution.
@@ -58,20 +62,19 @@ def foot(ctx, p, walls, base, x, s, fp):
     """Abscissa s of the wall point whose offset point has abscissa x (Newton from s;
     ``fp``: f'(s) when known, else nan)."""
     w = int(ctx[base + S_WALL])
-    df = walls[1][w]
-    d2f = walls[2][w]
     r = ctx[base + S_A]
     for _ in range(60):
         if math.isnan(fp):
-            fp = df(s, p)
+            fp = call_wall(walls, 1, w, s, p)
         q = 1.0 + fp * fp
         wr = r / math.sqrt(q)
-        ds = (s - fp * wr - x) / (1.0 - d2f(s, p) * wr / q)
+        ds = (s - fp * wr - x) / (1.0 - call_wall(walls, 2, w, s, p) * wr / q)
         s -= ds
         if abs(ds) < FOOT_STEP_TOL:
             return s
         fp = math.nan  # not known at the new s
     ctx[EN_ERR_VALUE] = x
+    ctx[EN_STOP] = E_INVERSION
     raise KernelError(E_INVERSION)
 
 
@@ -105,8 +108,8 @@ def offset_height(ctx, p, walls, j, x):
         s = foot(ctx, p, walls, base, x, ctx[base + S_WS], math.nan)
         ctx[base + S_WS] = s
         w = int(ctx[base + S_WALL])
-        fp = walls[1][w](s, p)
-        return walls[0][w](s, p) + ctx[base + S_A] / math.sqrt(1.0 + fp * fp)
+        fp = call_wall(walls, 1, w, s, p)
+        return call_wall(walls, 0, w, s, p) + ctx[base + S_A] / math.sqrt(1.0 + fp * fp)
     return ctx[base + S_A] * x + ctx[base + S_B]
 
 
@@ -118,11 +121,12 @@ def gap_rate(ctx, p, walls, j, px, py, vx, vy):
     if kind == CURVED:
         s = foot(ctx, p, walls, base, px, ctx[base + S_WS], known_slope(ctx, base))
         w = int(ctx[base + S_WALL])
-        fp = walls[1][w](s, p)
+        fp = call_wall(walls, 1, w, s, p)
         ctx[base + S_WS] = s
         ctx[base + S_WSLOPE] = fp
         remember_slope(ctx, base, s, fp)
-        return py - walls[0][w](s, p) - ctx[base + S_A] / math.sqrt(1.0 + fp * fp), vy - fp * vx
+        f = call_wall(walls, 0, w, s, p)
+        return py - f - ctx[base + S_A] / math.sqrt(1.0 + fp * fp), vy - fp * vx
     if kind == LINE:
         b = ctx[base + S_A]
         return py - b * px - ctx[base + S_B], vy - b * vx
@@ -138,9 +142,9 @@ def gap_accel(ctx, p, walls, j, px, py, vx, vy, ax, ay):
         s = foot(ctx, p, walls, base, px, ctx[base + S_WS], known_slope(ctx, base))
         ctx[base + S_WS] = s
         w = int(ctx[base + S_WALL])
-        fp = walls[1][w](s, p)
+        fp = call_wall(walls, 1, w, s, p)
         remember_slope(ctx, base, s, fp)
-        curvature = offset_curvature(fp, walls[2][w](s, p), ctx[base + S_A])
+        curvature = offset_curvature(fp, call_wall(walls, 2, w, s, p), ctx[base + S_A])
         return ay - fp * ax - curvature * vx * vx
     if kind == LINE:
         return ay - ctx[base + S_A] * ax
@@ -155,7 +159,7 @@ def contact(ctx, p, walls, j, px):
     if kind == CURVED:
         s = foot(ctx, p, walls, base, px, ctx[base + S_WS], known_slope(ctx, base))
         ctx[base + S_WS] = s
-        fp = walls[1][int(ctx[base + S_WALL])](s, p)
+        fp = call_wall(walls, 1, int(ctx[base + S_WALL]), s, p)
         remember_slope(ctx, base, s, fp)
         return s, math.atan(fp)
     if kind == LINE:

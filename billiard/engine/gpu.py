@@ -1,0 +1,257 @@
+"""The kernels on an NVIDIA GPU, through numba's CUDA target (the ``numba-cuda``
+package, optional extra ``[gpu]``): the same source files as the CPU kernels, loaded as
+a device twin per curve, and a generic launch of a ``@cuda.jit`` kernel over a batch of
+trajectories, one thread each.
+
+* :func:`available`: None where a CUDA GPU and numba-cuda can be used (or numba's CUDA
+  simulator, ``NUMBA_ENABLE_CUDASIM=1``), else a one-line reason.
+* :func:`device_kernels` / :func:`device_module`: the device twin of
+  :mod:`billiard.kernels` for a simulation's curve, package
+  ``billiard.kernels_cuda_<n>`` (:mod:`billiard.kernels.twin`), made once per curve
+  and process: every ``@jit`` / ``@inline`` kernel is ``numba.cuda.jit(device=True)``
+  (``forceinline`` for ``@inline``), and the curve's generated wall functions are
+  device functions too, which :func:`billiard.kernels.wallcall.call_wall` calls by
+  branches on (function, wall). Any module of ``billiard/kernels`` loads in it by name.
+* :func:`launch`: a kernel over ``n`` threads, its array arguments copied to the device
+  and back.
+* :func:`run_rows_gpu`: the impact rows of a batch of trajectories: thread ``i``
+  advances ``ctxs[i]`` (the state vector of :func:`billiard.engine.ctx.state_vector`)
+  with the curve parameters ``params[i]`` by :func:`billiard.kernels.loop.run_chunk`,
+  writing its rows into ``out[i]`` (the kernel :func:`advance`).
+
+The seam between the targets, where the device differs from the CPU (the same
+physics, not the same bits):
+
+* wall functions: no first-class functions on a device; the twin calls the curve's
+  device functions by branches (:mod:`billiard.kernels.wallcall`), so a twin serves one
+  curve (any parameters: ``params`` is per trajectory), of at most ``WALL_SLOTS`` walls;
+* sin, cos, atan, sqrt, pow and the float remainder are the device's (libdevice), not
+  the CPU's libm: some differ in the last bit;
+* the device compiler contracts ``a * b + c`` into one fused multiply-add (numba-cuda
+  has no switch for it): one rounding instead of two;
+* a division by zero does not raise (numba-cuda's error model gives inf or nan);
+* a kernel stop (``raise KernelError``) is not reported on the device: the thread ends
+  there, its ctx row holding the code in ``EN_STOP`` (and ``EN_ERR_VALUE``); under the
+  simulator the exception ends the whole launch instead (numba re-raises it).
+
+Chaotic trajectories therefore leave the CPU's after some hundreds of impacts, while
+their statistics agree (measured: docs/design.md, "numba-cuda"; ``bench/gpu_check.py``).
+Under the simulator the kernels run as Python on numpy floats (the device functions
+are the plain functions: see :class:`_Device`): the rows are the CPU's, bit for bit
+(tested). A launch compiles the kernel it calls on its first call, per process (8-11 s
+for ``advance`` on an H200; not cached on disk).
+"""
+
+from __future__ import annotations
+
+import importlib.util
+import threading
+from collections.abc import Sequence
+from types import ModuleType
+from typing import Any
+
+import numpy as np
+
+from billiard.engine.ctx import state_vector
+from billiard.geometry.wall_functions import WALL_SLOTS
+from billiard.kernels import layout as L
+from billiard.kernels import twin
+
+__all__ = [
+    "INSTALL",
+    "PACKAGE",
+    "THREADS",
+    "advance",
+    "available",
+    "device_kernels",
+    "device_module",
+    "launch",
+    "run_rows_gpu",
+]
+
+#: how to install the GPU backend
+INSTALL = 'pip install "realworld-billiard[gpu]"'
+#: the device twins' package names: this and a number per curve
+PACKAGE = "billiard.kernels_cuda"
+#: threads per block of a launch (the kernels use many registers per thread)
+THREADS = 64
+#: the rows (f, f', f'') of wall functions a device twin calls
+_WALL_ROWS = ("f", "df", "d2f")
+
+#: numba.cuda once :func:`_cuda` has imported it: a module global, so that numba's
+#: simulator can swap it for its own in the kernels defined here
+cuda: Any = None
+_lock = threading.Lock()
+#: curve key (its wall functions) -> package name of its device twin
+_twins: dict[tuple[Any, ...], str] = {}
+#: package name -> the advance kernel compiled for its twin
+_advance: dict[str, Any] = {}
+
+
+def available() -> str | None:
+    """None when the GPU backend can run (numba-cuda installed and a CUDA GPU found, or
+    numba's CUDA simulator enabled by ``NUMBA_ENABLE_CUDASIM=1``), else why not, in
+    one line."""
+    if importlib.util.find_spec("numba_cuda") is None:
+        return f"no CUDA GPU: numba-cuda is not installed ({INSTALL})"
+    try:
+        found = _cuda().is_available()
+    except Exception as exc:  # a broken driver or toolkit: its first line says what
+        lines = str(exc).strip().splitlines() or [type(exc).__name__]
+        return f"no CUDA GPU: numba-cuda could not start ({lines[0]})"
+    if not found:
+        return "no CUDA GPU: numba-cuda found no CUDA GPU"
+    return None
+
+
+def simulated() -> bool:
+    """True when numba's CUDA simulator stands for the GPU (``NUMBA_ENABLE_CUDASIM=1``
+    when numba.cuda was first imported)."""
+    import numba
+
+    return bool(getattr(numba.config, "ENABLE_CUDASIM", 0))
+
+
+def _cuda() -> Any:
+    """numba.cuda (numba-cuda's), imported on first use."""
+    global cuda
+    if cuda is None:
+        from numba import cuda as module
+
+        cuda = module
+    return cuda
+
+
+class _Device:
+    """What a device twin's decorators read (``DEVICE`` on its package,
+    :mod:`billiard.kernels.decorators`): the compiler and the curve's wall functions."""
+
+    def __init__(self, walls: Any):
+        self._simulated = simulated()
+        #: rows (f, f', f''), one device function per wall slot
+        self.walls = tuple(tuple(self.jit(fn, False) for fn in row) for row in walls)
+
+    def jit(self, fn: Any, inline: bool) -> Any:
+        """``fn`` as a device function (``inline``: inlined into its device callers)."""
+        if self._simulated:
+            # the simulator's device function calls fn with numba.cuda swapped for its
+            # own in fn's module, under a lock per call: the kernels do not use
+            # numba.cuda, and threads of a block wait on each other's locks for
+            # seconds per impact, so they are called as they are
+            return fn
+        return _cuda().jit(device=True, forceinline=inline)(fn)
+
+
+def _curve_walls(sim: Any) -> tuple[tuple[Any, ...], ...]:
+    """(f, f', f'') of the curve's walls, one generated function per wall slot (a
+    curve with fewer walls has its last wall's repeated: never called).
+
+    Raises:
+        ValueError: the curve has more walls than the twin's branches cover.
+    """
+    walls = sim.boundary.walls
+    if len(walls) > WALL_SLOTS:
+        raise ValueError(
+            f"the GPU kernels take curves of at most {WALL_SLOTS} walls; "
+            f"{sim.scene.boundary.curve!r} has {len(walls)}"
+        )
+    rows = tuple(tuple(getattr(w, name) for w in walls) for name in _WALL_ROWS)
+    return tuple(row + row[-1:] * (WALL_SLOTS - len(row)) for row in rows)
+
+
+def device_kernels(sim: Any) -> ModuleType:
+    """The device twin of :mod:`billiard.kernels` for the curve of ``sim`` (a
+    :class:`billiard.engine.simulation.Simulation`): its package, made once per curve and
+    process. Its modules load by name (:func:`device_module`); they compile on the first
+    launch of a kernel that calls them."""
+    walls = _curve_walls(sim)
+    with _lock:
+        name = _twins.get(walls)
+        if name is None:
+            name = f"{PACKAGE}_{len(_twins)}"
+            twin.load_package(name, {"DEVICE": _Device(walls)})
+            _twins[walls] = name
+    return twin.load_package(name)
+
+
+def device_module(sim: Any, name: str) -> ModuleType:
+    """The module ``name`` of ``billiard/kernels`` (``"loop"``, ``"locate"``, any other)
+    in the device twin of the curve of ``sim``."""
+    package = device_kernels(sim)
+    return twin.load_module(package.__name__, name)
+
+
+def launch(kernel: Any, n: int, *args: Any, back: Sequence[int] = (), threads: int = THREADS):
+    """Run ``kernel`` (a ``@cuda.jit`` kernel) over ``n`` threads, ``threads`` per block:
+    its numpy array arguments are copied to the device, the others passed as they are;
+    the arrays at the positions ``back`` are copied back into the numpy arrays given."""
+    gpu = _cuda()
+    threads = max(1, min(threads, n))
+    blocks = (n + threads - 1) // threads
+    device = [gpu.to_device(a) if isinstance(a, np.ndarray) else a for a in args]
+    kernel[blocks, threads](*device)
+    for i in back:
+        device[i].copy_to_host(args[i])
+    gpu.synchronize()
+
+
+def advance(sim: Any) -> Any:
+    """The kernel ``advance(ctxs, params, out, impacts, ends)`` of the curve of ``sim``:
+    thread ``i`` runs :func:`billiard.kernels.loop.run_chunk` on ``ctxs[i]`` with the
+    curve parameters ``params[i]``, up to ``impacts`` rows into ``out[i]`` (``impacts *
+    NCOL`` floats), and writes (status, rows written) into ``ends[i]``; a thread that
+    stops leaves ``ends[i]`` as it was and its code in ``ctxs[i, EN_STOP]``."""
+    package = device_kernels(sim).__name__
+    with _lock:
+        kernel = _advance.get(package)
+        if kernel is None:
+            kernel = _advance[package] = _advance_kernel(twin.load_module(package, "loop"))
+    return kernel
+
+
+def _advance_kernel(loop: ModuleType) -> Any:
+    run_chunk = loop.run_chunk
+
+    def advance(ctxs, params, out, impacts, ends):
+        i = cuda.grid(1)
+        if i < ctxs.shape[0]:
+            status, rows = run_chunk(ctxs[i], params[i], 0, out[i], impacts)
+            ends[i, 0] = status
+            ends[i, 1] = rows
+
+    return _cuda().jit(advance)
+
+
+def run_rows_gpu(
+    sims: Sequence[Any], impacts: int, *, threads: int = THREADS
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Advance each simulation of ``sims`` (one curve, method ``event``, the impacts
+    model; each its own initial state and parameters) by up to ``impacts`` impacts on
+    the GPU, one thread each.
+
+    Returns:
+        ``(rows, ends, ctxs)``: ``rows[i, r]`` the NCOL columns of impact ``r`` of
+        trajectory ``i`` (the columns of collisions.csv, codes for regime and wall);
+        ``ends[i]`` its (status, rows written) as ``run_chunk`` returns them, or
+        (-1, -1) where it stopped (its ``E_*`` code in ``ctxs[i, EN_STOP]``); ``ctxs``
+        the state vectors after the run.
+
+    Raises:
+        ValueError: a simulation the kernels cannot run this way, or of another curve.
+    """
+    if not sims:
+        raise ValueError("no simulations to run")
+    walls = _curve_walls(sims[0])
+    for sim in sims:
+        if sim.method != "event" or sim.phases:
+            raise ValueError("the GPU kernels run method 'event' with the impacts model only")
+        if _curve_walls(sim) != walls:
+            raise ValueError("the simulations of one launch share one curve")
+    ctxs = np.array([state_vector(sim) for sim in sims], dtype=np.float64)
+    params = np.array([sim.boundary.walls[0].p for sim in sims], dtype=np.float64)
+    ctxs[:, L.EN_TARGET] = ctxs[:, L.EN_IMPACTS] + impacts
+    out = np.zeros((len(sims), impacts * L.NCOL), dtype=np.float64)
+    ends = np.full((len(sims), 2), -1, dtype=np.int64)
+    launch(advance(sims[0]), len(sims), ctxs, params, out, impacts, ends, back=(0, 2, 4),
+           threads=threads)  # fmt: skip
+    return out.reshape(len(sims), impacts, L.NCOL), ends, ctxs

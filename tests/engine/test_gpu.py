@@ -1,0 +1,147 @@
+"""The GPU backend (:mod:`billiard.engine.gpu`): under numba's CUDA simulator
+(``NUMBA_ENABLE_CUDASIM=1``, in a fresh interpreter, so that numba.cuda is the simulator
+there and nowhere else) the device twin advanced by the ``advance`` kernel writes the
+rows of the CPU's ``run_chunk``, impact by impact, bit for bit (the simulator runs the
+kernels as Python on numpy floats); and :func:`available` says in one line why the
+backend cannot run."""
+
+from __future__ import annotations
+
+import importlib.util
+import json
+import os
+import subprocess
+import sys
+from types import SimpleNamespace
+
+import numpy as np
+import pytest
+
+from billiard.engine import gpu
+from billiard.engine.ctx import state_vector
+from billiard.engine.simulation import Simulation
+from billiard.geometry.wall_functions import wall_functions
+from billiard.kernels import layout as L
+from billiard.kernels.loop import run_chunk
+from billiard.scene.scene import load_scene, with_values
+
+#: impacts per trajectory
+IMPACTS = 40
+#: per scene, the trajectories: scene values changed (initial position, m; a curve
+#: parameter, which goes to the kernel per trajectory)
+CASES = {
+    "wedge-6.6hz": [
+        {"initial.q1": -0.01, "initial.q2": 0.05},
+        {"initial.q1": 0.012, "initial.q2": 0.05},
+        {"initial.q1": 0.02, "initial.q2": 0.08, "boundary.parameters.b": 1.7},
+    ],
+    "parabola-5.4hz": [
+        {"initial.q1": 0.0, "initial.q2": 0.05},
+        {"initial.q1": -0.015, "initial.q2": 0.07},
+        {"initial.q1": 0.01, "initial.q2": 0.06, "boundary.parameters.a": 24.0},
+    ],
+}
+
+_SIMULATED = """
+import json, sys
+import numpy as np
+from billiard.engine import gpu
+from billiard.engine.simulation import Simulation
+from billiard.scene.scene import load_scene, with_values
+assert gpu.simulated() and gpu.available() is None
+cases, impacts, folder = json.loads(sys.argv[1]), int(sys.argv[2]), sys.argv[3]
+for name, changes in cases.items():
+    sims = [Simulation(with_values(load_scene(name), values)) for values in changes]
+    rows, ends, ctxs = gpu.run_rows_gpu(sims, impacts)
+    np.savez(f"{folder}/{name}.npz", rows=rows, ends=ends, ctxs=ctxs)
+"""
+
+needs_numba_cuda = pytest.mark.skipif(
+    importlib.util.find_spec("numba_cuda") is None,
+    reason=f"numba-cuda is not installed ({gpu.INSTALL})",
+)
+
+
+def _sims(name: str) -> list[Simulation]:
+    return [Simulation(with_values(load_scene(name), values)) for values in CASES[name]]
+
+
+def _cpu_rows(sim: Simulation) -> tuple[np.ndarray, tuple[int, int], np.ndarray]:
+    """run_chunk's rows, (status, rows) and ctx after IMPACTS impacts of ``sim``."""
+    ctx = np.array(state_vector(sim), dtype=np.float64)
+    ctx[L.EN_TARGET] = IMPACTS
+    out = np.zeros(IMPACTS * L.NCOL)
+    p = np.array(sim.boundary.walls[0].p, dtype=np.float64)
+    status, rows = run_chunk(ctx, p, wall_functions(sim), out, IMPACTS)
+    return out.reshape(IMPACTS, L.NCOL), (int(status), int(rows)), ctx
+
+
+def _bits(a: np.ndarray) -> np.ndarray:
+    return np.ascontiguousarray(a, dtype=np.float64).view(np.uint64)
+
+
+@pytest.fixture(scope="module")
+def simulated(tmp_path_factory) -> dict[str, dict[str, np.ndarray]]:
+    """The rows, ends and ctxs of every case, advanced by the simulated GPU."""
+    folder = tmp_path_factory.mktemp("gpu")
+    env = dict(os.environ, NUMBA_ENABLE_CUDASIM="1")
+    subprocess.run(
+        [sys.executable, "-c", _SIMULATED, json.dumps(CASES), str(IMPACTS), str(folder)],
+        env=env,
+        check=True,
+    )
+    return {name: dict(np.load(folder / f"{name}.npz")) for name in CASES}
+
+
+@needs_numba_cuda
+@pytest.mark.parametrize("name", CASES)
+def test_simulated_gpu_rows_are_the_cpu_rows(simulated, name):
+    got = simulated[name]
+    for i, sim in enumerate(_sims(name)):
+        rows, ends, ctx = _cpu_rows(sim)
+        assert ends == (L.DONE, IMPACTS)
+        assert tuple(got["ends"][i]) == ends
+        for r in range(IMPACTS):  # impact by impact: the first that differs is named
+            assert np.array_equal(_bits(got["rows"][i, r]), _bits(rows[r])), (i, r)
+        # the whole state after the last impact: warm starts, clock, counters
+        assert np.array_equal(_bits(got["ctxs"][i]), _bits(ctx))
+        assert got["ctxs"][i, L.EN_STOP] == 0.0
+
+
+def test_available_without_numba_cuda(monkeypatch):
+    real = importlib.util.find_spec
+
+    def find_spec(name, *args):
+        return None if name == "numba_cuda" else real(name, *args)
+
+    monkeypatch.setattr(gpu.importlib.util, "find_spec", find_spec)
+    assert gpu.available() == (
+        'no CUDA GPU: numba-cuda is not installed (pip install "realworld-billiard[gpu]")'
+    )
+
+
+@needs_numba_cuda
+def test_available_without_a_gpu(monkeypatch):
+    monkeypatch.setattr(gpu, "cuda", SimpleNamespace(is_available=lambda: False))
+    assert gpu.available() == "no CUDA GPU: numba-cuda found no CUDA GPU"
+
+    def broken():
+        raise RuntimeError("CUDA driver library cannot be found\nsecond line")
+
+    monkeypatch.setattr(gpu, "cuda", SimpleNamespace(is_available=broken))
+    assert gpu.available() == (
+        "no CUDA GPU: numba-cuda could not start (CUDA driver library cannot be found)"
+    )
+    monkeypatch.setattr(gpu, "cuda", SimpleNamespace(is_available=lambda: True))
+    assert gpu.available() is None
+
+
+def test_one_launch_takes_one_curve_and_the_impacts_model():
+    wedge, parabola = _sims("wedge-6.6hz")[0], _sims("parabola-5.4hz")[0]
+    with pytest.raises(ValueError, match="share one curve"):
+        gpu.run_rows_gpu([wedge, parabola], 10)
+    phases = Simulation(with_values(load_scene("wedge-6.6hz"), {"contact.model": "phases"}))
+    with pytest.raises(ValueError, match="impacts model only"):
+        gpu.run_rows_gpu([phases], 10)
+    with pytest.raises(ValueError, match="no simulations"):
+        gpu.run_rows_gpu([], 10)
