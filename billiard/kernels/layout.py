@@ -220,7 +220,6 @@ EN_FAULT = _ctx("EN_FAULT", "fault", 1, "", "1.0: a collapse after the last impa
 # next impact is searched for)
 EN_ERR_VALUE = _ctx("EN_ERR_VALUE", "error_value", 1, "", "the value a stop names")
 EN_EVENT_T = _ctx("EN_EVENT_T", "event_t", 1, "s", "time of the impact being made")
-EN_STOP = _ctx("EN_STOP", "stop", 1, "", "the code of the last kernel stop (0: none)")
 COUNTS = _ctx("COUNTS", "counts", 4, "", "impacts: stick, slip, elastic, resting")
 # landing (contact.model = "phases"): after an impact on a wall whose rebound settles, the
 # chunk ends (status LAND) so that the engine can put the ball in contact; the test
