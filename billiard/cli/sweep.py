@@ -70,6 +70,7 @@ def cmd_sweep(args: argparse.Namespace) -> int:
             resume=args.resume is not None,
             plots=not args.no_plot,
             yes=args.yes,
+            device=args.device,
         )
     except SweepError as exc:
         raise UserError(str(exc)) from None
@@ -164,6 +165,14 @@ def _add_sweep_parser(sub: argparse._SubParsersAction) -> None:
     )
     p.add_argument(
         "--workers", type=int, metavar="N", help="local worker processes (default: all cores)"
+    )
+    p.add_argument(
+        "--device",
+        choices=("cpu", "gpu"),
+        default="cpu",
+        help="where the points' trajectories run: cpu (default: the worker processes) or "
+        'gpu (an NVIDIA GPU through numba-cuda, pip install "realworld-billiard[gpu]"; '
+        "the same physics, not the same bits: docs/sweeps.md)",
     )
     p.add_argument(
         "--dask",

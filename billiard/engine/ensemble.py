@@ -94,6 +94,7 @@ class EnsembleSetup:
     at_rest: np.ndarray
     rest_position: tuple[float, float]
     t: float
+    sim: Any = None
 
 
 def prepare(scene: Any) -> EnsembleSetup:
@@ -141,6 +142,7 @@ def prepare(scene: Any) -> EnsembleSetup:
         at_rest=at_rest_ctx,
         rest_position=(float(sim.initial.q1), float(sim.initial.q2)),
         t=float(scene.initial.t),
+        sim=sim,
     )
 
 

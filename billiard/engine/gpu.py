@@ -61,10 +61,13 @@ __all__ = [
     "INSTALL",
     "PACKAGE",
     "THREADS",
+    "BATCH",
     "advance",
+    "advance_ensemble",
     "available",
     "device_kernels",
     "device_module",
+    "ensemble_kernel",
     "launch",
     "run_rows_gpu",
 ]
@@ -255,3 +258,90 @@ def run_rows_gpu(
     launch(advance(sims[0]), len(sims), ctxs, params, out, impacts, ends, back=(0, 2, 4),
            threads=threads)  # fmt: skip
     return out.reshape(len(sims), impacts, L.NCOL), ends, ctxs
+
+
+#: package name -> the ensemble kernel compiled for its twin
+_measure: dict[str, Any] = {}
+#: trajectories per launch batch of :func:`advance_ensemble` (their state vectors and
+#: rings on the device: about 24 kB each with a ring of 256 impacts)
+BATCH = 1 << 18
+
+
+def ensemble_kernel(sim: Any) -> Any:
+    """The kernel ``measure(ctxs, params, rows, rings, stats, consts, transient, total,
+    target)`` of the curve of ``sim``: thread ``i`` runs
+    :func:`billiard.kernels.ensemble.measure` on its rows of the arrays (the CPU
+    ensemble's per-trajectory function, from the same source)."""
+    package = device_kernels(sim).__name__
+    with _lock:
+        kernel = _measure.get(package)
+        if kernel is None:
+            kernel = _measure[package] = _measure_kernel(twin.load_module(package, "ensemble"))
+    return kernel
+
+
+def _measure_kernel(ensemble: ModuleType) -> Any:
+    measure = ensemble.measure
+
+    def run(ctxs, params, rows, rings, stats, consts, transient, total, target):
+        i = cuda.grid(1)
+        if i < ctxs.shape[0]:
+            measure(ctxs[i], params[i], 0, rows[i], rings[i], stats[i], consts[i], transient,
+                    total, target)  # fmt: skip
+
+    return _cuda().jit(run)
+
+
+def advance_ensemble(
+    sim: Any,
+    ctxs: np.ndarray,
+    params: np.ndarray,
+    consts: np.ndarray,
+    *,
+    transient: int,
+    impacts: int,
+    width: int,
+    rounds: int = 2000,
+    progress: Any = None,
+    threads: int = THREADS,
+) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`billiard.engine.ensemble.advance` on the GPU: every trajectory (rows of
+    ``ctxs``, of the curve of ``sim``; advanced in place) to ``transient + impacts``
+    impacts, in launches of ``rounds`` impacts per trajectory over batches of
+    :data:`BATCH` trajectories (the arrays stay on the device between the launches of
+    a batch; Ctrl-C is seen between launches). A thread that stops in a kernel stop
+    leaves ST_STATUS at RUN_PENDING (its code in ``ctxs[i, EN_STOP]``): it is reported
+    as RUN_FAILED with ST_CODE that code. Returns (stats, rings)."""
+    from billiard.kernels import ensemble as E
+
+    gpu = _cuda()
+    kernel = ensemble_kernel(sim)
+    n = ctxs.shape[0]
+    params = np.array(np.broadcast_to(params, (n, params.shape[-1])), order="C")
+    consts = np.array(np.broadcast_to(consts, (n, E.NCONST)), order="C")
+    stats = np.zeros((n, E.NSTAT))
+    stats[:, E.ST_STATUS] = E.RUN_PENDING
+    rings = np.empty((n, width, E.RCOL))
+    total = transient + impacts
+    for lo in range(0, n, BATCH):
+        hi = min(n, lo + BATCH)
+        count = hi - lo
+        device = [
+            gpu.to_device(np.ascontiguousarray(a[lo:hi]))
+            for a in (ctxs, params, np.zeros((count, L.NCOL)), rings, stats, consts)
+        ]
+        blocks = (count + threads - 1) // threads
+        target = 0
+        while target < total:
+            target = min(total, target + rounds)
+            kernel[blocks, threads](*device[:6], transient, total, target)
+            gpu.synchronize()
+            if progress is not None:
+                progress(lo, count, target)
+        ctxs[lo:hi] = device[0].copy_to_host()
+        rings[lo:hi] = device[3].copy_to_host()
+        stats[lo:hi] = device[4].copy_to_host()
+    stopped = stats[:, E.ST_STATUS] == E.RUN_PENDING
+    stats[stopped, E.ST_STATUS] = E.RUN_FAILED
+    stats[stopped, E.ST_CODE] = ctxs[stopped, L.EN_STOP]
+    return stats, rings

@@ -69,9 +69,10 @@ def _groups(sweep: Any, indices: Any) -> dict[Any, list[tuple[int, dict[str, Any
 
 
 def measure_batch(
-    sweep: Any, indices: Any, settings: dict[str, Any]
+    sweep: Any, indices: Any, settings: dict[str, Any], device: str = "cpu"
 ) -> tuple[dict[str, np.ndarray] | None, list[int]]:
-    """Measure the points ``indices`` of ``sweep`` that the ensemble kernel takes.
+    """Measure the points ``indices`` of ``sweep`` that the ensemble kernel takes, on
+    this core or (``device = "gpu"``) on the GPU.
 
     Returns:
         (columns, rest): the columns of the points measured here (``billiard.sweep.
@@ -96,7 +97,7 @@ def measure_batch(
             continue
         duration = settings["duration"] if settings["duration"] is not None else None
         duration = scene.run.duration if duration is None else duration
-        part, left = _measure_group(scene, points, duration, settings, keep)
+        part, left = _measure_group(scene, points, duration, settings, keep, device)
         rest += left
         if part is not None:
             parts.append(part)
@@ -112,6 +113,7 @@ def _measure_group(
     duration: float | None,
     settings: dict[str, Any],
     keep: int,
+    device: str = "cpu",
 ) -> tuple[dict[str, np.ndarray] | None, list[int]]:
     init = scene.initial
     base = {"q1": init.q1, "q2": init.q2, "v1": init.v1, "v2": init.v2}
@@ -167,10 +169,19 @@ def _measure_group(
         return None, left
     if run.size < len(rows):
         ctxs = ctxs[run]
-    stats, rings = EN.advance(
-        ctxs, setup.params, setup.walls, consts, transient=transient, impacts=impacts,
-        width=max(WINDOW, keep, 1), threads=1,
-    )  # fmt: skip
+    width = max(WINDOW, keep, 1)
+    if device == "gpu":
+        from billiard.engine import gpu
+
+        stats, rings = gpu.advance_ensemble(
+            setup.sim, ctxs, setup.params, consts, transient=transient, impacts=impacts,
+            width=width,
+        )  # fmt: skip
+    else:
+        stats, rings = EN.advance(
+            ctxs, setup.params, setup.walls, consts, transient=transient, impacts=impacts,
+            width=width, threads=1,
+        )  # fmt: skip
     columns = measured_columns(
         stats, rings, np.ones(run.size, dtype=bool), setup.rest_height, settings["rest_band"], scene
     )

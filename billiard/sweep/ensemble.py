@@ -24,7 +24,7 @@ import numpy as np
 
 from billiard.sweep.attractor import CLASSES
 
-__all__ = ["EnsembleResult", "classes_of", "run_ensemble"]
+__all__ = ["DEVICES", "EnsembleResult", "check_device", "classes_of", "run_ensemble"]
 
 #: what the measured columns hold, with their units (``EnsembleResult.columns``)
 COLUMN_UNITS = {
@@ -150,13 +150,16 @@ def run_ensemble(
     rest_band: float = 0.01,
     threads: int | None = None,
     progress: Callable[[int], None] | None = None,
+    device: str = "cpu",
 ) -> EnsembleResult:
     """Run one trajectory per start (arrays broadcast together: positions in m,
     velocities in m/s, spin in rad/s, all at time t in s) of ``scene`` (a scene or a
     built-in name): ``transient`` impacts, then ``impacts`` measured ones, at most
     ``duration`` s each. ``keep``: the last impacts' heights and times of flight kept
     per start. ``tolerance`` (m), ``max_period`` (impacts) and ``rest_band`` (m) are
-    the sweep's period test and resting band (docs/sweeps.md).
+    the sweep's period test and resting band (docs/sweeps.md). ``device``: ``"cpu"``
+    (all cores, or ``threads``) or ``"gpu"`` (an NVIDIA GPU through numba-cuda: the
+    same physics, not the same bits; docs/sweeps.md, "GPU").
 
     Raises:
         ValueError: a scene the ensemble kernel does not take (contact phases, method
@@ -170,6 +173,7 @@ def run_ensemble(
     scene = _scene(scene)
     if impacts < 1 or transient < 0 or keep < 0:
         raise ValueError("impacts must be >= 1, transient and keep >= 0")
+    check_device(device)
     began = time.perf_counter()
     setup = EN.prepare(scene)
     starts = (q1, q2, v1, v2, omega)
@@ -186,10 +190,18 @@ def run_ensemble(
     rings = np.full((n, width, E.RCOL), np.nan)
     if run.size:
         sub = np.ascontiguousarray(ctxs[run])
-        s, r = EN.advance(
-            sub, setup.params, setup.walls, consts, transient=transient, impacts=impacts,
-            width=width, threads=threads, progress=progress,
-        )  # fmt: skip
+        if device == "gpu":
+            from billiard.engine import gpu
+
+            s, r = gpu.advance_ensemble(
+                setup.sim, sub, setup.params, consts, transient=transient, impacts=impacts,
+                width=width,
+            )  # fmt: skip
+        else:
+            s, r = EN.advance(
+                sub, setup.params, setup.walls, consts, transient=transient, impacts=impacts,
+                width=width, threads=threads, progress=progress,
+            )  # fmt: skip
         stats[run], rings[run], ctxs[run] = s, r, sub
     columns = measured_columns(stats, rings, valid, setup.rest_height, rest_band, scene)
     columns = {"q1_start": arrays[0].ravel(), "q2_start": arrays[1].ravel()} | columns
@@ -209,8 +221,26 @@ def run_ensemble(
         last_tof=last_tof.reshape(*shape, keep),
         final=final,
         seconds=time.perf_counter() - began,
+        device=device,
         ctxs=ctxs,
     )
+
+
+#: the devices an ensemble runs on
+DEVICES = ("cpu", "gpu")
+
+
+def check_device(device: str) -> None:
+    """Raise ValueError (one line) for a device that is not there: an unknown name, or
+    ``gpu`` without numba-cuda or a CUDA GPU."""
+    if device not in DEVICES:
+        raise ValueError(f"device {device!r}: choose from {', '.join(DEVICES)}")
+    if device == "gpu":
+        from billiard.engine import gpu
+
+        problem = gpu.available()
+        if problem is not None:
+            raise ValueError(f"--device gpu: {problem}")
 
 
 def measured_columns(

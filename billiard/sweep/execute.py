@@ -41,6 +41,7 @@ from billiard.engine import ensemble
 from billiard.sweep.attractor import CLASSES
 from billiard.sweep.columns import STATUSES, ChunkResult, empty_columns, record_of_row
 from billiard.sweep.definition import Sweep, SweepError, read_sweep_file, sweep_to_toml
+from billiard.sweep.ensemble import check_device
 from billiard.sweep.measure import ChunkTask, measure_chunk
 from billiard.sweep.netcdf import RESULT_NAME, write_result
 from billiard.sweep.progress import SweepProgress
@@ -785,6 +786,11 @@ def _finished(directory: Path, sweep: Sweep) -> bytearray:
     return done
 
 
+#: points per chunk on the GPU: enough threads to fill a GPU (a chunk's state vectors
+#: and rings, about 24 kB a point, stay on the device while it runs)
+GPU_CHUNK = 1 << 17
+
+
 def chunk_size(points: int, workers: int) -> int:
     """Points per chunk: up to MAX_CHUNK, but at least CHUNKS_PER_WORKER chunks per
     worker while there are points enough (every worker busy to the end)."""
@@ -808,6 +814,7 @@ def run_sweep(
     plots: bool = True,
     yes: bool = False,
     chunk: int | None = None,
+    device: str = "cpu",
 ) -> SweepOutcome:
     """Run (or, with ``resume=True`` and ``sweep=None``, continue) a sweep in ``directory``.
 
@@ -828,6 +835,9 @@ def run_sweep(
             MAX_BYTES_UNCONFIRMED bytes of output files (``--yes``).
         chunk: points per chunk (default: :func:`chunk_size` of the points to compute
             and the workers); the results do not depend on it.
+        device: ``"cpu"`` or ``"gpu"``: where the trajectories the ensemble kernel takes
+            run. On the GPU one local worker process drives the device, chunks of up to
+            GPU_CHUNK points (the GPU's results are the same physics, not the same bits).
 
     Raises:
         SweepError: bad input, reported before any point runs.
@@ -846,6 +856,16 @@ def run_sweep(
         raise SweepError(f"--workers {workers}: needs at least 1 worker")
     if chunk is not None and chunk < 1:
         raise SweepError(f"chunk {chunk}: needs at least 1 point")
+    if device == "gpu":
+        if dask:
+            raise SweepError("--device gpu runs on this machine's GPU: leave out --dask")
+        try:
+            check_device(device)
+        except ValueError as exc:
+            raise SweepError(str(exc)) from None
+        workers = 1  # one process drives the GPU
+    elif device != "cpu":
+        raise SweepError(f"--device {device!r}: choose cpu or gpu")
     invalid = prepare(sweep, skip_invalid=skip_invalid or sweep.skip_invalid)  # nothing written
     try:
         done = _finished(directory, sweep) if resume else bytearray(sweep.size)
@@ -876,10 +896,13 @@ def run_sweep(
             progress = SweepProgress(sweep.size, done=store.count)
         if todo and pool is not None:
             started = time.perf_counter()
-            size = chunk or chunk_size(todo, pool.threads())
-            store.log(f"start: {todo} of {sweep.size} points on {where}, {size} per chunk")
+            size = chunk or (
+                min(todo, GPU_CHUNK) if device == "gpu" else chunk_size(todo, pool.threads())
+            )
+            on = f"{where} (trajectories on the GPU)" if device == "gpu" else where
+            store.log(f"start: {todo} of {sweep.size} points on {on}, {size} per chunk")
             try:
-                tasks = _chunks(sweep, store.done, size)
+                tasks = _chunks(sweep, store.done, size, device)
                 _drive(pool, tasks, store, progress, on_point, computed, sweep)
             except (KeyboardInterrupt, StopSweep):
                 progress.close()
@@ -974,7 +997,7 @@ def _records(directory: Path, sweep: Sweep) -> list[dict[str, Any]]:
     ]
 
 
-def _chunks(sweep: Sweep, done: bytearray, size: int) -> Iterator[ChunkTask]:
+def _chunks(sweep: Sweep, done: bytearray, size: int, device: str = "cpu") -> Iterator[ChunkTask]:
     """The points still to compute, in index order, ``size`` at a time, each chunk made
     when a worker can take it (nothing is held per point beyond the chunk's indices)."""
     flags = np.frombuffer(done, dtype=np.uint8)
@@ -992,16 +1015,16 @@ def _chunks(sweep: Sweep, done: bytearray, size: int) -> Iterator[ChunkTask]:
             pending.append(take)
             count += len(take)
             if count == size:
-                yield _task(sweep, np.concatenate(pending))
+                yield _task(sweep, np.concatenate(pending), device)
                 pending, count = [], 0
     if count:
-        yield _task(sweep, np.concatenate(pending))
+        yield _task(sweep, np.concatenate(pending), device)
 
 
-def _task(sweep: Sweep, indices: np.ndarray) -> ChunkTask:
+def _task(sweep: Sweep, indices: np.ndarray, device: str = "cpu") -> ChunkTask:
     start, stop = int(indices[0]), int(indices[-1]) + 1
     whole = stop - start == len(indices)
-    return ChunkTask(sweep, start, stop, None if whole else indices.astype(np.int64))
+    return ChunkTask(sweep, start, stop, None if whole else indices.astype(np.int64), device)
 
 
 def _drive(

@@ -33,12 +33,14 @@ class ChunkTask:
         start, stop: the chunk's points are indices in [start, stop) of the sweep.
         indices: the points to measure, sorted, within [start, stop) (int64); None for
             every point of the range (points already stored or invalid are left out).
+        device: where the ensemble kernel runs the points it takes (``cpu``, ``gpu``).
     """
 
     sweep: Any
     start: int
     stop: int
     indices: np.ndarray | None = None
+    device: str = "cpu"
 
     def points(self) -> np.ndarray:
         """The indices of the points to measure (int64)."""
@@ -61,7 +63,7 @@ def measure_chunk(task: ChunkTask) -> ChunkResult:
     from billiard.sweep.batch import measure_batch
 
     indices = task.points()
-    batch, rest = measure_batch(task.sweep, indices, task.sweep.settings())
+    batch, rest = measure_batch(task.sweep, indices, task.sweep.settings(), task.device)
     if batch is None:
         return _measure_points(task, indices)
     if not rest:

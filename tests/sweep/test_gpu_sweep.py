@@ -1,0 +1,78 @@
+"""The GPU path of ensembles and sweeps under numba's CUDA simulator
+(``NUMBA_ENABLE_CUDASIM=1``, in a fresh interpreter: numba.cuda is the simulator there
+and nowhere else). The simulator runs the device twin as Python on numpy floats, so its
+results are the CPU's bit for bit: the same sweep file, byte for byte, and the same
+ensemble measurements. Without a GPU, ``--device gpu`` is a one-line error."""
+
+from __future__ import annotations
+
+import importlib.util
+import os
+import subprocess
+import sys
+
+import pytest
+
+from billiard.cli import main
+from billiard.engine import gpu
+
+needs_numba_cuda = pytest.mark.skipif(
+    importlib.util.find_spec("numba_cuda") is None, reason="numba-cuda is not installed"
+)
+
+SWEEP = [
+    "sweep", "wedge-6.6hz", "--vary", "initial.q1=-0.01:0.01:2", "--vary", "initial.q2=0.07,0.09",
+    "--impacts", "12", "--transient", "6", "--keep", "4", "--no-plot", "--workers", "1",
+]  # fmt: skip
+
+_ENSEMBLE = """
+import sys
+import numpy as np
+import billiard
+from billiard.engine import gpu
+assert gpu.simulated() and gpu.available() is None
+q1, q2 = np.array([-0.01, 0.0, 0.012]), np.array([0.06, 0.08, 0.1])
+kw = dict(q1=q1, q2=q2, impacts=15, transient=10, keep=15)
+g = billiard.run_ensemble("wedge-6.6hz", device="gpu", **kw)
+c = billiard.run_ensemble("wedge-6.6hz", **kw)
+for name in c.columns:
+    assert np.array_equal(g.columns[name], c.columns[name]), name
+assert np.array_equal(g.last_height, c.last_height) and np.array_equal(g.last_tof, c.last_tof)
+assert all(np.array_equal(g.final[k], c.final[k]) for k in c.final)
+print("same", g.device, c.device)
+"""
+
+
+def _simulated(args: list[str], cwd) -> subprocess.CompletedProcess:
+    env = {**os.environ, "NUMBA_ENABLE_CUDASIM": "1"}
+    return subprocess.run(
+        [sys.executable, *args], env=env, cwd=cwd, capture_output=True, text=True, timeout=600
+    )
+
+
+@needs_numba_cuda
+def test_a_gpu_ensemble_under_the_simulator_is_the_cpu_ensemble(tmp_path):
+    done = _simulated(["-c", _ENSEMBLE], tmp_path)
+    assert done.returncode == 0, done.stderr[-3000:]
+    assert done.stdout.split() == ["same", "gpu", "cpu"]
+
+
+@needs_numba_cuda
+def test_a_gpu_sweep_under_the_simulator_writes_the_cpu_sweeps_bytes(tmp_path, capsys):
+    gpu_out, cpu_out = tmp_path / "gpu", tmp_path / "cpu"
+    done = _simulated(
+        ["-m", "billiard.cli", *SWEEP, "--device", "gpu", "--out", str(gpu_out)], tmp_path
+    )
+    assert done.returncode == 0, done.stderr[-3000:]
+    assert "trajectories on the GPU" in (gpu_out / "sweep.log").read_text()
+    assert main([*SWEEP, "--out", str(cpu_out)]) == 0
+    assert (gpu_out / "sweep.nc").read_bytes() == (cpu_out / "sweep.nc").read_bytes()
+
+
+def test_device_gpu_without_a_gpu_is_one_line(tmp_path, capsys, monkeypatch):
+    monkeypatch.setattr(gpu, "available", lambda: "no CUDA GPU: numba-cuda found no CUDA GPU")
+    code = main([*SWEEP, "--device", "gpu", "--out", str(tmp_path / "out")])
+    err = capsys.readouterr().err
+    assert code == 2
+    assert err == "billiard: error: --device gpu: no CUDA GPU: numba-cuda found no CUDA GPU\n"
+    assert not (tmp_path / "out").exists()
