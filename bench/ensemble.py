@@ -25,6 +25,7 @@ import statistics
 import tempfile
 import time
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -87,106 +88,208 @@ def kernel_rates(starts: int, impacts: int, repeats: int, threads: list[int]) ->
     return rows
 
 
-def gpu_row(starts: int, impacts: int, repeats: int) -> dict | None:
-    """The GPU's impacts per second (None without one), and the share of starts of a
-    basin map whose attractor class and period agree with the CPU's."""
+def gpu_rate(starts: int, impacts: int, repeats: int) -> dict:
+    """Impacts per second of the GPU ensemble (wedge, ``starts`` trajectories), the
+    whole call (set-up, copies both ways) and the device's name."""
+    import billiard
+    from billiard.engine import gpu
+
+    q1, q2 = _starts(starts)
+    billiard.run_ensemble(SCENE, q1=q1[:256], q2=q2[:256], impacts=10, device="gpu")  # compile
+    walls = []
+    done = 0
+    for _ in range(repeats):
+        result = billiard.run_ensemble(SCENE, q1=q1, q2=q2, impacts=impacts, device="gpu")
+        walls.append(result.seconds)
+        done = int(result.columns["total_impacts"].sum())
+    cuda = gpu._cuda()
+    name = cuda.get_current_device().name
+    name = name.decode() if isinstance(name, bytes) else str(name)
+    return {
+        "device": name,
+        "starts": int(result.columns["total_impacts"].size),
+        "impacts": done,
+        "walls": walls,
+        "impacts_per_s": done / statistics.median(walls),
+    }
+
+
+def gpu_agreement(scene: str, side: int, transient: int, impacts: int) -> dict:
+    """The share of a ``side`` x ``side`` basin map's valid starts whose attractor (class;
+    for periodic ones also the period and the mean height within 1 mm) is the same on
+    the GPU as on the CPU (all cores)."""
+    import billiard
+
+    q1, q2 = np.meshgrid(np.linspace(-0.04, 0.04, side), np.linspace(0.02, 0.12, side))
+    kw = dict(q1=q1, q2=q2, impacts=impacts, transient=transient)
+    cpu = billiard.run_ensemble(scene, **kw)
+    gpu = billiard.run_ensemble(scene, device="gpu", **kw)
+    a, b = cpu.columns, gpu.columns
+    valid = a["attractor"] != "invalid"
+    same = a["attractor"] == b["attractor"]
+    periodic = a["attractor"] == "periodic"
+    same &= ~periodic | (
+        (a["period"] == b["period"]) & (np.abs(a["height_mean"] - b["height_mean"]) <= 1e-3)
+    )
+    names, counts = np.unique(a["attractor"][valid], return_counts=True)
+    return {
+        "scene": scene,
+        "starts": int(valid.sum()),
+        "transient": transient,
+        "impacts": impacts,
+        "agree": float(same[valid].mean()),
+        "classes": {str(k): int(v) for k, v in zip(names, counts, strict=True)},
+        "cpu_seconds": cpu.seconds,
+        "gpu_seconds": gpu.seconds,
+    }
+
+
+def gpu_row(quick: bool) -> dict | None:
+    """The GPU section, or why there is none."""
     try:
         from billiard.engine import gpu
-    except ImportError:
-        return None
-    if gpu.available() is not None:
-        return {"missing": gpu.available()}
-    return gpu.bench(SCENE, starts, impacts, repeats)
+    except ImportError as exc:  # pragma: no cover - the package has the module
+        return {"missing": str(exc)}
+    problem = gpu.available()
+    if problem is not None or gpu.simulated():
+        return {"missing": problem or "numba's CUDA simulator is not a GPU"}
+    starts, side = (10**5, 200) if quick else (10**6, 500)
+    print(f"bench.ensemble: GPU, {starts:,} trajectories ...", flush=True)
+    rate = gpu_rate(starts, 1000, 2 if quick else 3)
+    print(f"bench.ensemble: GPU {rate['impacts_per_s']:,.0f} impacts/s; agreement ...", flush=True)
+    agree = [gpu_agreement(name, side, 500, 500) for name in ("hyperbola-4.5hz", SCENE)]
+    return {"rate": rate, "agreement": agree}
 
 
-def measure(quick: bool) -> dict:
+def measure(quick: bool, save: Any = None) -> dict:
+    """Every measurement of the section; ``save(results)`` is called after each part, so
+    that an interrupted run keeps what it measured."""
     starts, impacts, repeats = SIZES[quick]
     cores = os.cpu_count() or 1
     threads = sorted({1, cores} | ({2, 4, 8, 16} & set(range(1, cores + 1))))
-    load = ", ".join(f"{x:.1f}" for x in os.getloadavg())
-    print(f"bench.ensemble: kernel on {threads} threads ...", flush=True)
-    rates = kernel_rates(starts, impacts, repeats, threads)
-    result = {
+    result: dict[str, Any] = {
         "command": "billiard bench --only ensemble" + (" --quick" if quick else ""),
         "date": time.strftime("%Y-%m-%d %H:%M"),
         "machine": f"Python {platform.python_version()}, {cores} CPUs, {platform.processor()}",
-        "load": load,
+        "load": ", ".join(f"{x:.1f}" for x in os.getloadavg()),
         "scene": SCENE,
-        "kernel": rates,
-        "peak_rss_mib": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024,
     }
-    print("bench.ensemble: sweep overhead and workers ...", flush=True)
-    result["sweep"] = sweep_costs(quick, [w for w in threads if w <= cores])
-    gpu = gpu_row(10**5 if quick else 10**6, 1000, repeats)
-    if gpu is not None:
-        result["gpu"] = gpu
+    result["gpu"] = gpu_row(quick)
+    _save(save, result)
+    print(f"bench.ensemble: kernel on {threads} threads ...", flush=True)
+    result["kernel"] = kernel_rates(starts, impacts, repeats, threads)
+    _save(save, result)
+    print("bench.ensemble: the sweep's cost per point ...", flush=True)
+    result["overhead"] = sweep_overhead(quick)
+    _save(save, result)
+    pair = sorted({1, min(cores, 16)})
+    print(f"bench.ensemble: a sweep on {pair} workers ...", flush=True)
+    result["scaling"] = sweep_scaling(quick, pair)
+    result["peak_rss_mib"] = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
+    _save(save, result)
     return result
 
 
-def sweep_costs(quick: bool, workers: list[int]) -> dict:
-    """The fixed cost of a sweep point (a basin map of 1-impact points: CPU time of the
-    parent and its workers per point, bytes per point) and the wall time of one basin
-    map on each worker count."""
+def _save(save: Any, result: dict) -> None:
+    if save is not None:
+        save(result)
+
+
+class _Silent:
+    def write(self, text: str) -> int:
+        return len(text)
+
+    def flush(self) -> None:
+        pass
+
+
+def _basin_sweep(side: int, transient: int, impacts: int, workers: int, keep: int = 10) -> dict:
+    """A ``side`` x ``side`` wedge basin map through run_sweep (plots excluded): wall
+    time, CPU seconds of this process and its workers, points computed, file sizes."""
     from billiard.scene.scene import load_scene
     from billiard.sweep import Sweep, parse_vary, run_sweep
     from billiard.sweep.progress import SweepProgress
 
-    class Silent:
-        def write(self, text: str) -> int:
-            return len(text)
+    sweep = Sweep(
+        load_scene(SCENE),
+        (parse_vary(f"initial.q1=-0.04:0.04:{side}"), parse_vary(f"initial.q2=0.02:0.12:{side}")),
+        impacts=impacts,
+        transient=transient,
+        keep=keep,
+    )
+    with tempfile.TemporaryDirectory() as tmp:
+        cpu0 = _cpu()
+        began = time.perf_counter()
+        progress = SweepProgress(sweep.size, stream=_Silent())
+        outcome = run_sweep(sweep, Path(tmp) / "s", workers=workers, progress=progress, plots=False)
+        wall = time.perf_counter() - began
+        cpu = _cpu() - cpu0
+        sizes = {p.name: p.stat().st_size for p in outcome.directory.iterdir() if p.is_file()}
+    return {
+        "side": side,
+        "points": sweep.size,
+        "computed": len(outcome.computed),
+        "impacts_per_point": transient + impacts,
+        "workers": workers,
+        "wall": wall,
+        "cpu": cpu,
+        "files": sizes,
+        "keep": keep,
+    }
 
-        def flush(self) -> None:
-            pass
 
-    scene = load_scene(SCENE)
-    side = 100 if quick else 200
+def sweep_overhead(quick: bool) -> dict:
+    """The fixed cost of a point: two basin maps of one-impact points on one worker;
+    the difference of their CPU seconds (parent and worker) over the difference of
+    their points is the cost of one more point (the sweep's start-up cancels out)."""
+    from billiard.sweep.columns import disk_dtype
 
-    def run(impacts: int, transient: int, n_workers: int) -> dict:
-        sweep = Sweep(
-            scene,
-            (
-                parse_vary(f"initial.q1=-0.04:0.04:{side}"),
-                parse_vary(f"initial.q2=0.02:0.12:{side}"),
-            ),
-            impacts=impacts,
-            transient=transient,
-            keep=10,
-            skip_invalid=True,
-        )
-        with tempfile.TemporaryDirectory() as tmp:
-            cpu0 = _cpu()
-            began = time.perf_counter()
-            progress = SweepProgress(sweep.size, stream=Silent())
-            outcome = run_sweep(
-                sweep, Path(tmp) / "s", workers=n_workers, progress=progress, plots=False
-            )
-            wall = time.perf_counter() - began
-            cpu = _cpu() - cpu0
-            sizes = {p.name: p.stat().st_size for p in outcome.directory.iterdir() if p.is_file()}
-        return {"points": sweep.size, "wall": wall, "cpu": cpu, "files": sizes}
+    small, large = (60, 150) if quick else (100, 300)
+    a = _basin_sweep(small, 0, 1, 1)
+    b = _basin_sweep(large, 0, 1, 1)
+    per_point = (b["cpu"] - a["cpu"]) / (b["points"] - a["points"])
+    size = b["files"]["points.npy"]
+    row = disk_dtype(b["keep"]).itemsize
+    return {
+        "runs": [a, b],
+        "cpu_us_per_point": per_point * 1e6,
+        "bytes_per_point": row - 16 * b["keep"],
+        "points_npy": size,
+    }
 
-    overhead = run(1, 0, 1)
-    runs = {}
-    for w in workers:
-        runs[str(w)] = run(200, 0, w)
-    return {"overhead": overhead, "keep": 10, "scaling": runs}
+
+def sweep_scaling(quick: bool, workers: list[int]) -> dict:
+    """One basin map of 1000-impact points on each worker count (start-up included)."""
+    side = 120 if quick else 300
+    runs = [_basin_sweep(side, 500, 500, w) for w in workers]
+    return {"runs": runs, "speedup": runs[0]["wall"] / runs[-1]["wall"]}
 
 
 def _cpu() -> float:
     """CPU seconds of this process and its finished children."""
-    me, children = resource.getrusage(resource.RUSAGE_SELF), resource.getrusage(
-        resource.RUSAGE_CHILDREN
+    me, children = (
+        resource.getrusage(resource.RUSAGE_SELF),
+        resource.getrusage(resource.RUSAGE_CHILDREN),
     )
     return me.ru_utime + me.ru_stime + children.ru_utime + children.ru_stime
 
 
+def _verdict(value: float, target: float, more: bool) -> str:
+    met = value >= target if more else value <= target
+    return "met" if met else "**missed**"
+
+
 def render(results: dict) -> str:
+    """The section of docs/sweeps.md."""
     lines = [
         BEGIN,
-        "### Measured: the ensemble kernel, the sweep's cost per point, workers and GPU",
+        "### Measured",
         "",
-        f"Measured by `{results['command']}` ({results['date']}; {results['machine']}; "
-        f"load average {results['load']} at the start), {results['scene']}.",
+        f"Measured by `{results['command']}` on {results['date']} ({results['machine']}; "
+        f"load average {results['load']} at the start), scene {results['scene']}; times are "
+        "wall-clock medians of the runs listed.",
+        "",
+        "**The ensemble kernel on the CPU** (`billiard.run_ensemble`, threads of one process):",
         "",
         "| threads | impacts/s | ratio to 1 thread | runs (s) |",
         "| --- | --- | --- | --- |",
@@ -197,6 +300,85 @@ def render(results: dict) -> str:
         lines.append(
             f"| {row['threads']} | {row['impacts_per_s']:,.0f} | "
             f"{row['impacts_per_s'] / one:.2f}x | {walls} |"
+        )
+    o = results["overhead"]
+    a, b = o["runs"]
+    lines += [
+        "",
+        f"**A sweep's cost per point** (`billiard sweep`, one worker): basin maps of "
+        f"{a['points']:,} and {b['points']:,} one-impact points took {a['cpu']:.2f} s and "
+        f"{b['cpu']:.2f} s of CPU (parent and worker); one more point costs "
+        f"**{o['cpu_us_per_point']:.1f} us of CPU** (checking its start, its chunk's "
+        "set-up, measuring, storing), and "
+        f"**{o['bytes_per_point']:.0f} bytes** in `points.npy` beyond the kept impacts.",
+        "",
+    ]
+    sc = results["scaling"]
+    runs = sc["runs"]
+    lines += [
+        f"**Workers** (`billiard sweep --workers N`, a {runs[0]['side']} x {runs[0]['side']} "
+        f"basin map, {runs[0]['computed']:,} points of {runs[0]['impacts_per_point']} "
+        "impacts; wall time from the call to the result file, worker start-up included):",
+        "",
+        "| workers | wall (s) | impacts/s | ratio to 1 worker |",
+        "| --- | --- | --- | --- |",
+    ]
+    for r in runs:
+        rate = r["computed"] * r["impacts_per_point"] / r["wall"]
+        ratio = runs[0]["wall"] / r["wall"]
+        lines.append(f"| {r['workers']} | {r['wall']:.1f} | {rate:,.0f} | {ratio:.2f}x |")
+    g = results.get("gpu") or {}
+    lines.append("")
+    if "rate" in g:
+        rate = g["rate"]
+        walls = ", ".join(f"{w:.2f}" for w in rate["walls"])
+        lines += [
+            f'**GPU** ({rate["device"]}, `billiard.run_ensemble(..., device="gpu")`): '
+            f"{rate['starts']:,} wedge trajectories of 1000 impacts in {walls} s (the whole "
+            "call: set-up of the starts on the CPU, copies both ways, the kernel): "
+            f"**{rate['impacts_per_s']:,.0f} impacts/s**.",
+            "",
+            "| scene | starts | classes (CPU) | CPU, all cores (s) | GPU (s) | same attractor |",
+            "| --- | --- | --- | --- | --- | --- |",
+        ]
+        for r in g["agreement"]:
+            classes = ", ".join(f"{k} {v:,}" for k, v in r["classes"].items())
+            lines.append(
+                f"| {r['scene']} | {r['starts']:,} | {classes} | {r['cpu_seconds']:.1f} | "
+                f"{r['gpu_seconds']:.1f} | {100 * r['agree']:.2f} % |"
+            )
+        lines.append("")
+    else:
+        lines += [
+            f"No GPU where this was measured ({g.get('missing', 'not measured')}); on a "
+            "machine with one, `billiard bench --only ensemble` adds its rows.",
+            "",
+        ]
+    lines += ["| target | measured | verdict |", "| --- | --- | --- |"]
+    lines.append(
+        f"| <= {TARGETS['point_cpu_us']:.0f} us of CPU per point | "
+        f"{o['cpu_us_per_point']:.1f} us | "
+        f"{_verdict(o['cpu_us_per_point'], TARGETS['point_cpu_us'], False)} |"
+    )
+    lines.append(
+        f"| <= {TARGETS['point_bytes']:.0f} bytes per point beyond the kept impacts | "
+        f"{o['bytes_per_point']:.0f} | "
+        f"{_verdict(o['bytes_per_point'], TARGETS['point_bytes'], False)} |"
+    )
+    if runs[-1]["workers"] >= 16:
+        lines.append(
+            f"| 16 workers >= {TARGETS['scaling_16']:.0f}x one worker | {sc['speedup']:.1f}x | "
+            f"{_verdict(sc['speedup'], TARGETS['scaling_16'], True)} |"
+        )
+    if "rate" in g:
+        lines.append(
+            f"| GPU >= 1e8 impacts/s | {g['rate']['impacts_per_s']:.3g} | "
+            f"{_verdict(g['rate']['impacts_per_s'], TARGETS['gpu_impacts_per_s'], True)} |"
+        )
+        worst = min(r["agree"] for r in g["agreement"])
+        lines.append(
+            f"| GPU attractors = CPU's on >= 99 % of a basin map | {100 * worst:.2f} % | "
+            f"{_verdict(worst, 0.99, True)} |"
         )
     lines.append("")
     return "\n".join(lines + [END]) + "\n"
@@ -230,6 +412,13 @@ def publish(docs: Path, results: dict | None = None) -> bool:
     return True
 
 
+def _partial(docs: Path, results: dict) -> None:
+    """Keep what is measured so far (``bench.json.partial``)."""
+    saved = saved_results(docs)
+    saved.parent.mkdir(parents=True, exist_ok=True)
+    saved.with_suffix(".json.partial").write_text(json.dumps(results, indent=1))
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(prog="python -m bench.ensemble", description=__doc__)
     parser.add_argument("--quick", action="store_true", help="small sizes, under a minute")
@@ -241,7 +430,10 @@ def main(argv: list[str] | None = None) -> int:
     )
     args = parser.parse_args(argv)
     docs = Path(args.docs or ("runs/bench-quick" if args.quick else "docs"))
-    publish(docs, None if args.render else measure(args.quick))
+    if args.render:
+        publish(docs)
+    else:
+        publish(docs, measure(args.quick, save=lambda r: _partial(docs, r)))
     print(f"bench.ensemble: wrote the ensemble section of {docs / 'sweeps.md'}")
     return 0
 

@@ -36,7 +36,9 @@ __all__ = [
     "prepare",
     "start",
     "start_at_rest",
+    "start_verdicts",
     "supports",
+    "VERDICTS",
 ]
 
 #: the scene keys of a start: what may differ between the trajectories of one set-up
@@ -193,6 +195,34 @@ def start(
     ctxs[:, L.EN_UNTIL] = math.inf if duration is None else t + duration
     ok = (py <= setup.lid_level + _OVERLAP) & (py < setup.escape_level) & (gaps >= -_OVERLAP)
     return ctxs, ok
+
+
+#: what :func:`start_verdicts` finds wrong with a start, by its code
+VERDICTS = ("", "into the lid", "above the escape height", "into the wall")
+
+
+def start_verdicts(setup: EnsembleSetup, q1: Any, q2: Any, t: float = 0.0) -> np.ndarray:
+    """Per start (m, at time t in s) 0 where a run's set-up accepts it, else the code of
+    :data:`VERDICTS` it fails on first (the lid, the escape height, a wall: the order of
+    the set-up's checks). Made in blocks: no state vector is kept."""
+    q1, q2 = (np.ravel(np.asarray(x, dtype=np.float64)) for x in np.broadcast_arrays(q1, q2))
+    codes = np.zeros(q1.size, dtype=np.int8)
+    block = 4096  # state vectors of 9 kB each
+    out = np.empty((min(block, q1.size), setup.template.size))
+    for lo in range(0, q1.size, block):
+        hi = min(q1.size, lo + block)
+        _, ok = start(setup, q1[lo:hi], q2[lo:hi], t=t, out=out[: hi - lo])
+        bad = np.nonzero(~ok)[0]
+        if not bad.size:
+            continue
+        py = q2[lo:hi][bad]
+        if not setup.drive.horizontal:
+            py = py - setup.drive.amplitude * math.sin(setup.drive.angle(t))
+        code = np.full(bad.size, 3, dtype=np.int8)
+        code[py >= setup.escape_level] = 2
+        code[py > setup.lid_level + _OVERLAP] = 1
+        codes[lo + bad] = code
+    return codes
 
 
 def start_at_rest(

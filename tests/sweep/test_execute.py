@@ -8,6 +8,7 @@ starting worker processes.
 from __future__ import annotations
 
 import io
+import re
 import sys
 
 import numpy as np
@@ -408,5 +409,8 @@ def test_basin_map_starts_are_checked_as_the_engine_checks_them():
             Simulation(with_values(sweep.scene, sweep.point_values(index)))
         except ValueError as exc:
             expected[index] = " ".join(str(exc).split())
-    assert invalid == expected
+    # the same starts, and the engine's words without how deep (a root search per start)
+    assert invalid.keys() == expected.keys()
+    for index, message in expected.items():
+        assert invalid[index] == re.sub(r"puts the ball \S+ m into", "puts the ball into", message)
     assert 0 < len(invalid) < sweep.size
