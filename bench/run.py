@@ -26,6 +26,7 @@ from bench import (
     throughput,
     workprecision,
 )
+from bench import ensemble as ensemble_bench
 from bench import sweep as sweep_bench
 from bench.common import Config, start_scene
 from bench.version import code_version
@@ -176,7 +177,7 @@ def main(
     starts = Starts(cfg)
     command = "billiard bench --quick" if cfg.quick else "billiard bench"
     for section in only:
-        if section == "sweep":
+        if section in ("sweep", "ensemble"):
             continue  # measured after the page is written, into its own section
         began = time.perf_counter()
         print(f"bench: {section} ...", flush=True)
@@ -194,4 +195,7 @@ def main(
     (out / page.TABLES).write_text(report.render_tables(results, command))
     # the page is written whole: put the sweep section back (measured again if asked)
     sweep_bench.publish(out, sweep_bench.measure(cfg.quick) if "sweep" in only else None)
+    # and the ensemble section of sweeps.md (docs/sweeps.md, beside the page)
+    if "ensemble" in only:
+        ensemble_bench.publish(out, ensemble_bench.measure(cfg.quick))
     return path

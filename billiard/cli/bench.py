@@ -36,6 +36,7 @@ SECTIONS = (
     "contact",
     "io",
     "sweep",
+    "ensemble",
 )
 _PROJECT = "realworld-billiard"
 #: Set in the environment of the command started again in a checkout (see
