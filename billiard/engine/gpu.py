@@ -326,10 +326,9 @@ def advance_ensemble(
     for lo in range(0, n, BATCH):
         hi = min(n, lo + BATCH)
         count = hi - lo
-        device = [
-            gpu.to_device(np.ascontiguousarray(a[lo:hi]))
-            for a in (ctxs, params, np.zeros((count, L.NCOL)), rings, stats, consts)
-        ]
+        device = [gpu.to_device(np.ascontiguousarray(a[lo:hi])) for a in (ctxs, params)]
+        device.append(gpu.device_array((count, L.NCOL)))  # each thread's scratch row
+        device += [gpu.to_device(np.ascontiguousarray(a[lo:hi])) for a in (rings, stats, consts)]
         blocks = (count + threads - 1) // threads
         target = 0
         while target < total:

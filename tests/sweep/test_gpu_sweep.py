@@ -31,6 +31,7 @@ import numpy as np
 import billiard
 from billiard.engine import gpu
 assert gpu.simulated() and gpu.available() is None
+gpu.BATCH = 2  # three trajectories in two launch batches
 q1, q2 = np.array([-0.01, 0.0, 0.012]), np.array([0.06, 0.08, 0.1])
 kw = dict(q1=q1, q2=q2, impacts=15, transient=10, keep=15)
 g = billiard.run_ensemble("wedge-6.6hz", device="gpu", **kw)
