@@ -28,7 +28,9 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+from matplotlib.colors import LogNorm
 
+from billiard.analysis.bins import bin_counts
 from billiard.sweep.attractor import CONTACT_CLASSES
 from billiard.sweep.basins import attractor_labels
 from billiard.sweep.categories import (
@@ -39,7 +41,7 @@ from billiard.sweep.categories import (
 )
 from billiard.sweep.container import POSITION_KEYS, lid_height, wall_outline
 from billiard.sweep.definition import Sweep
-from billiard.sweep.units import axis_label, variable_name
+from billiard.sweep.units import axis_label, key_unit, variable_name
 
 __all__ = ["plot_sweep"]
 
@@ -58,6 +60,9 @@ _CLASS_COLOURS = {
 _DOWN = ("resting", *CONTACT_CLASSES.values())
 #: Relative spread under which a map's values are one value (rounding, not physics).
 _ROUNDING = 1e-9
+#: a bifurcation diagram of more impacts than this is drawn as counts per bin (as
+#: billiard.plot.density draws a run's large clouds)
+DENSITY_ABOVE = 50_000
 
 
 def plot_sweep(sweep: Sweep, data: Mapping[str, Any], directory: Path) -> list[Path]:
@@ -118,7 +123,13 @@ def bifurcation_figure(sweep: Sweep, data: Mapping[str, Any]) -> Any:
     with_lyap = bool(np.isfinite(lyap).any())
     rows = 3 if with_lyap else 2
     fig, axes = plt.subplots(rows, 1, sharex=True, figsize=(7.5, 2.4 * rows + 0.9), dpi=110)
-    for name, colour in _CLASS_COLOURS.items():
+    points = int(np.isfinite(heights).sum())
+    dense = points > DENSITY_ABOVE
+    if dense:
+        # a million points as dots cover one another: counts per bin, one column of bins
+        # per swept value (up to 600), the classes' counts in the title
+        _bifurcation_density(axes[:2], x, heights, tofs, axis.key)
+    for name, colour in ({} if dense else _CLASS_COLOURS).items():
         mask = attractor == name
         if not mask.any():
             continue
@@ -150,7 +161,7 @@ def bifurcation_figure(sweep: Sweep, data: Mapping[str, Any]) -> Any:
         )
     axes[0].set_ylabel("impact height q2 (m)")
     axes[1].set_ylabel("time of flight (s)")
-    if np.isfinite(tofs).any() and np.nanmin(tofs) > 0.0:
+    if not dense and np.isfinite(tofs).any() and np.nanmin(tofs) > 0.0:
         axes[1].set_yscale("log")
     if with_lyap:
         axes[2].plot(x, lyap, "o-", ms=3, color="black")
@@ -159,8 +170,49 @@ def bifurcation_figure(sweep: Sweep, data: Mapping[str, Any]) -> Any:
     axes[-1].set_xlabel(axis_label(axis.key))
     if axes[0].get_legend_handles_labels()[0]:
         axes[0].legend(loc="best", fontsize=7, markerscale=4)
-    axes[0].set_title(f"{_title(sweep, 80)}; last {sweep.keep} impacts", fontsize=9)
+    title = f"{_title(sweep, 80)}; last {sweep.keep} impacts"
+    if dense:
+        names, counts = np.unique(attractor[status == "ok"], return_counts=True)
+        classes = ", ".join(f"{n} {c:,}" for n, c in zip(names, counts, strict=True))
+        title += f" of each point ({points:,} impacts; points: {classes})"
+    axes[0].set_title(textwrap.fill(title, 100), fontsize=9)
     return fig
+
+
+def _bifurcation_density(
+    axes: Any, x: np.ndarray, heights: np.ndarray, tofs: np.ndarray, key: str
+) -> None:
+    """The last impacts' heights and times of flight against the swept value as density
+    images (impacts per bin, logarithmic colour scale)."""
+    values = np.unique(x[np.isfinite(x)])
+    lo, hi = float(values[0]), float(values[-1])
+    if hi == lo:
+        lo, hi = lo - 0.5, hi + 0.5
+    else:  # each value in the middle of its column of bins
+        step = (hi - lo) / max(len(values) - 1, 1)
+        lo, hi = lo - step / 2, hi + step / 2
+    columns = min(len(values), 600)
+    xs = np.repeat(x, heights.shape[-1])
+    unit = key_unit(key)
+    for ax, ys, what in ((axes[0], heights, "m"), (axes[1], tofs, "s")):
+        ys = ys.ravel()
+        finite = ys[np.isfinite(ys)]
+        if not finite.size:
+            continue
+        y0, y1 = float(finite.min()), float(finite.max())
+        if y1 == y0:
+            y0, y1 = y0 - 1e-3 * max(abs(y0), 1e-3), y1 + 1e-3 * max(abs(y1), 1e-3)
+        counts = bin_counts(xs, ys, (lo, hi), (y0, y1), (columns, 300)).astype(float)
+        counts[counts == 0] = np.nan  # empty bins transparent
+        image = ax.imshow(
+            counts, origin="lower", extent=(lo, hi, y0, y1), aspect="auto",
+            interpolation="none", cmap="viridis",
+            norm=LogNorm(vmin=1.0, vmax=max(2.0, float(np.nanmax(counts)))),
+        )  # fmt: skip
+        bins = f"{(hi - lo) / columns:.2g} {unit} x {(y1 - y0) / 300:.2g} {what}"
+        ax.figure.colorbar(image, ax=ax, label=f"impacts per bin\n{bins}", pad=0.02)
+        ax.set_xlim(lo, hi)
+        ax.set_ylim(y0, y1)
 
 
 def _edges(values: Any) -> np.ndarray:

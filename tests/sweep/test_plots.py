@@ -258,3 +258,25 @@ def test_many_orbits_still_get_colours_of_their_own():
     mesh = fig.axes[0].collections[0]
     drawn = {tuple(c) for c in mesh.to_rgba(mesh.get_array().ravel())}
     assert len(drawn) == sweep.size == 100  # more orbits than any one palette has colours
+
+
+def test_a_large_bifurcation_diagram_is_drawn_as_counts_per_bin():
+    """80,000 impacts (400 values x 200 kept): images of counts, every impact counted
+    once, the classes' counts in the title; a small one stays dots."""
+    one = Sweep(
+        load_scene("parabola-5.4hz"), (parse_vary("drive.frequency=5.0:5.8:400"),), keep=200
+    )
+    rng = np.random.default_rng(0)
+    heights = 0.07 + 0.01 * rng.random((400, 200))
+    heights[:10, :50] = np.nan  # a shorter tail
+    data = _data(one, last_height=heights, last_tof=0.09 + 0.01 * rng.random((400, 200)))
+    fig = bifurcation_figure(one, data)
+    images = fig.axes[0].get_images()
+    assert len(images) == 1
+    counts = np.nan_to_num(np.asarray(images[0].get_array(), dtype=float))
+    assert counts.sum() == np.isfinite(heights).sum() == 80_000 - 500
+    assert "periodic 400" in fig.axes[0].get_title().replace("\n", " ")
+    assert fig.axes[1].get_images()
+    small = Sweep(one.scene, (parse_vary("drive.frequency=5.0:5.8:4"),), keep=200)
+    fig = bifurcation_figure(small, _data(small, last_height=heights[:4], last_tof=heights[:4]))
+    assert not fig.axes[0].get_images() and fig.axes[0].collections
