@@ -170,7 +170,11 @@ def measure(quick: bool, save: Any = None) -> dict:
     result: dict[str, Any] = {
         "command": "billiard bench --only ensemble" + (" --quick" if quick else ""),
         "date": time.strftime("%Y-%m-%d %H:%M"),
-        "machine": f"Python {platform.python_version()}, {cores} CPUs, {platform.processor()}",
+        "machine": ", ".join(
+            x
+            for x in (f"Python {platform.python_version()}", f"{cores} CPUs", platform.processor())
+            if x
+        ),
         "load": ", ".join(f"{x:.1f}" for x in os.getloadavg()),
         "scene": SCENE,
     }
