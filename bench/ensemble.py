@@ -29,6 +29,8 @@ from typing import Any
 
 import numpy as np
 
+from bench.markdown import write_section
+
 BEGIN, END = "<!-- ensemble-bench -->", "<!-- /ensemble-bench -->"
 SCENE = "wedge-6.6hz"
 #: the issue's targets
@@ -388,17 +390,6 @@ def render(results: dict) -> str:
     return "\n".join(lines + [END]) + "\n"
 
 
-def write_section(doc: Path, section: str) -> None:
-    text = doc.read_text() if doc.exists() else ""
-    if BEGIN in text and END in text:
-        head, rest = text.split(BEGIN, 1)
-        tail = rest.split(END, 1)[1].lstrip("\n")
-        text = head + section + ("\n" + tail if tail else "")
-    else:
-        text = text.rstrip("\n") + "\n\n" + section
-    doc.write_text(text)
-
-
 def saved_results(docs: Path) -> Path:
     return docs / "figures" / "ensemble" / "bench.json"
 
@@ -412,7 +403,7 @@ def publish(docs: Path, results: dict | None = None) -> bool:
         saved.write_text(json.dumps(results, indent=1))
     elif not saved.exists():
         return False
-    write_section(docs / "sweeps.md", render(json.loads(saved.read_text())))
+    write_section(docs / "sweeps.md", render(json.loads(saved.read_text())), BEGIN, END)
     return True
 
 

@@ -26,6 +26,7 @@ import tempfile
 import time
 from pathlib import Path
 
+from bench.markdown import write_section
 from billiard import load_scene
 from billiard.sweep import Sweep, parse_vary, run_sweep
 from billiard.sweep.progress import SweepProgress
@@ -224,17 +225,6 @@ def render(results: dict) -> str:
     return "\n".join(lines) + "\n"
 
 
-def write_section(doc: Path, section: str) -> None:
-    text = doc.read_text() if doc.exists() else ""
-    if BEGIN in text and END in text:
-        head, rest = text.split(BEGIN, 1)
-        tail = rest.split(END, 1)[1].lstrip("\n")
-        text = head + section + ("\n" + tail if tail else "")
-    else:
-        text = text.rstrip("\n") + "\n\n" + section
-    doc.write_text(text)
-
-
 def measure(quick: bool) -> dict:
     """All the sweep measurements (throughput on 1 and 2 workers, the 10^6-impact sweep,
     memory per impact)."""
@@ -273,7 +263,7 @@ def publish(docs: Path, results: dict | None = None) -> bool:
         saved.write_text(json.dumps(results, indent=1))
     elif not saved.exists():
         return False
-    write_section(docs / "performance.md", render(json.loads(saved.read_text())))
+    write_section(docs / "performance.md", render(json.loads(saved.read_text())), BEGIN, END)
     return True
 
 

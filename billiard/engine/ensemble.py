@@ -33,6 +33,7 @@ __all__ = [
     "BALL_KEYS",
     "EnsembleSetup",
     "advance",
+    "advance_setup",
     "prepare",
     "start",
     "start_at_rest",
@@ -344,3 +345,30 @@ def advance(
         if pool is not None:
             pool.shutdown(wait=True, cancel_futures=True)
     return stats, rings
+
+
+def advance_setup(
+    setup: EnsembleSetup,
+    ctxs: np.ndarray,
+    consts: np.ndarray,
+    *,
+    transient: int,
+    impacts: int,
+    width: int,
+    device: str = "cpu",
+    threads: int | None = None,
+    progress: Callable[[int], None] | None = None,
+) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`advance` of trajectories of ``setup`` on ``device``: ``"cpu"`` (``threads``
+    threads) or ``"gpu"`` (:func:`billiard.engine.gpu.advance_ensemble`)."""
+    if device == "gpu":
+        from billiard.engine import gpu
+
+        return gpu.advance_ensemble(
+            setup.sim, ctxs, setup.params, consts, transient=transient, impacts=impacts,
+            width=width,
+        )  # fmt: skip
+    return advance(
+        ctxs, setup.params, setup.walls, consts, transient=transient, impacts=impacts,
+        width=width, threads=threads, progress=progress,
+    )  # fmt: skip

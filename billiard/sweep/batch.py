@@ -170,18 +170,10 @@ def _measure_group(
     if run.size < len(rows):
         ctxs = ctxs[run]
     width = max(WINDOW, keep, 1)
-    if device == "gpu":
-        from billiard.engine import gpu
-
-        stats, rings = gpu.advance_ensemble(
-            setup.sim, ctxs, setup.params, consts, transient=transient, impacts=impacts,
-            width=width,
-        )  # fmt: skip
-    else:
-        stats, rings = EN.advance(
-            ctxs, setup.params, setup.walls, consts, transient=transient, impacts=impacts,
-            width=width, threads=1,
-        )  # fmt: skip
+    stats, rings = EN.advance_setup(
+        setup, ctxs, consts, transient=transient, impacts=impacts, width=width, device=device,
+        threads=1,
+    )  # fmt: skip
     columns = measured_columns(
         stats, rings, np.ones(run.size, dtype=bool), setup.rest_height, settings["rest_band"], scene
     )

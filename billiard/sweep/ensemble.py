@@ -24,7 +24,14 @@ import numpy as np
 
 from billiard.sweep.attractor import CLASSES
 
-__all__ = ["DEVICES", "EnsembleResult", "check_device", "classes_of", "run_ensemble"]
+__all__ = [
+    "DEVICES",
+    "EnsembleResult",
+    "as_scene",
+    "check_device",
+    "classes_of",
+    "run_ensemble",
+]
 
 #: what the measured columns hold, with their units (``EnsembleResult.columns``)
 COLUMN_UNITS = {
@@ -124,7 +131,8 @@ class EnsembleResult:
         return xr.Dataset(data, attrs={"scene": self.scene.name})
 
 
-def _scene(scene: Any) -> Any:
+def as_scene(scene: Any) -> Any:
+    """A scene, or a built-in scene's name or a scene file's path loaded."""
     if isinstance(scene, str):
         from billiard.scene.scene import load_scene
 
@@ -170,7 +178,7 @@ def run_ensemble(
     from billiard.engine import ensemble as EN
     from billiard.kernels import ensemble as E
 
-    scene = _scene(scene)
+    scene = as_scene(scene)
     if impacts < 1 or transient < 0 or keep < 0:
         raise ValueError("impacts must be >= 1, transient and keep >= 0")
     check_device(device)
@@ -190,18 +198,10 @@ def run_ensemble(
     rings = np.full((n, width, E.RCOL), np.nan)
     if run.size:
         sub = np.ascontiguousarray(ctxs[run])
-        if device == "gpu":
-            from billiard.engine import gpu
-
-            s, r = gpu.advance_ensemble(
-                setup.sim, sub, setup.params, consts, transient=transient, impacts=impacts,
-                width=width,
-            )  # fmt: skip
-        else:
-            s, r = EN.advance(
-                sub, setup.params, setup.walls, consts, transient=transient, impacts=impacts,
-                width=width, threads=threads, progress=progress,
-            )  # fmt: skip
+        s, r = EN.advance_setup(
+            setup, sub, consts, transient=transient, impacts=impacts, width=width,
+            device=device, threads=threads, progress=progress,
+        )  # fmt: skip
         stats[run], rings[run], ctxs[run] = s, r, sub
     columns = measured_columns(stats, rings, valid, setup.rest_height, rest_band, scene)
     columns = {"q1_start": arrays[0].ravel(), "q2_start": arrays[1].ravel()} | columns

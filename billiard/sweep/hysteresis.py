@@ -194,15 +194,6 @@ def start_grid(scene: Any, setup: Any, count: int) -> tuple[np.ndarray, np.ndarr
     raise ValueError(f"found no {count} valid starts in the container")
 
 
-def _scene(scene: Any) -> Any:
-    """A scene, or a built-in scene's name or a scene file's path loaded."""
-    if isinstance(scene, str):
-        from billiard.scene.scene import load_scene
-
-        return load_scene(scene)
-    return scene
-
-
 def run_hysteresis(
     scene: Any,
     key: str,
@@ -233,9 +224,9 @@ def run_hysteresis(
     from billiard.engine import ensemble as EN
     from billiard.kernels import ensemble as E
     from billiard.scene.scene import with_values
-    from billiard.sweep.ensemble import measured_columns
+    from billiard.sweep.ensemble import as_scene, measured_columns
 
-    scene = _scene(scene)
+    scene = as_scene(scene)
     began = time.perf_counter()
     if key.startswith("initial."):
         raise ValueError(f"{key}: a key of the ball's start cannot be swept up and down")

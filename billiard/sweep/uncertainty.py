@@ -181,15 +181,6 @@ def _draw(
     return q1, q2, last + 1, dropped
 
 
-def _scene(scene: Any) -> Any:
-    """A scene, or a built-in scene's name or a scene file's path loaded."""
-    if isinstance(scene, str):
-        from billiard.scene.scene import load_scene
-
-        return load_scene(scene)
-    return scene
-
-
 def run_uncertainty(
     scene: Any,
     q1: tuple[float, float],
@@ -219,9 +210,9 @@ def run_uncertainty(
     """
     from billiard.engine import ensemble as EN
     from billiard.sweep.basins import attractor_labels
-    from billiard.sweep.ensemble import measured_columns
+    from billiard.sweep.ensemble import as_scene, measured_columns
 
-    scene = _scene(scene)
+    scene = as_scene(scene)
     began = time.perf_counter()
     eps = np.sort(np.asarray(eps, dtype=np.float64))
     for name, (lo, hi) in (("q1", q1), ("q2", q2)):

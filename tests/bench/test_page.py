@@ -8,8 +8,10 @@ import json
 import re
 from pathlib import Path
 
+from bench import ensemble as ensemble_bench
 from bench import page, report
 from bench import sweep as sweep_bench
+from bench.markdown import write_section
 
 DOCS = Path(__file__).resolve().parents[2] / "docs"
 COMMAND = "billiard bench"
@@ -24,8 +26,11 @@ def test_the_committed_pages_are_the_generator_s(tmp_path):
     doc = tmp_path / "performance.md"
     doc.write_text(page.render(results, COMMAND))
     saved = json.loads(sweep_bench.saved_results(DOCS).read_text())
-    sweep_bench.write_section(doc, sweep_bench.render(saved))
+    write_section(doc, sweep_bench.render(saved), sweep_bench.BEGIN, sweep_bench.END)
     assert doc.read_text() == (DOCS / "performance.md").read_text()
+    # the ensemble section of sweeps.md is the generator's too
+    saved = json.loads(ensemble_bench.saved_results(DOCS).read_text())
+    assert ensemble_bench.render(saved) in (DOCS / "sweeps.md").read_text()
     tables = report.render_tables(results, COMMAND)
     assert tables == (DOCS / page.TABLES).read_text()
 
