@@ -108,8 +108,8 @@ class EnsembleResult:
     def __repr__(self) -> str:
         names, counts = np.unique(self.attractor, return_counts=True)
         classes = ", ".join(f"{c} {k}" for c, k in zip(names, counts, strict=True))
-        shape = " x ".join(str(n) for n in self.shape)
-        return f"<EnsembleResult {self.scene.name!r}: {shape} starts on {self.device}: {classes}>"
+        shape = " x ".join(str(n) for n in self.shape) + " starts" if self.shape else "1 start"
+        return f"<EnsembleResult {self.scene.name!r}: {shape} on {self.device}: {classes}>"
 
     def to_pandas(self) -> Any:
         """One row per start, the measured columns (``pip install pandas``)."""
