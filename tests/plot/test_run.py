@@ -148,7 +148,9 @@ def check_format_of(path: Path, fmt: str) -> None:
         assert head.startswith(MAGIC[fmt])
 
 
-@pytest.mark.parametrize("fmt", ["png", "svg", pytest.param("pdf", marks=pytest.mark.slow)])
+@pytest.mark.parametrize(
+    "fmt", ["png", *(pytest.param(f, marks=pytest.mark.slow) for f in ("svg", "pdf"))]
+)
 def test_each_format_writes_files_of_that_format(bounce_run, tmp_path, fmt):
     written = plot.plot_run(bounce_run, tmp_path, format=fmt, dpi=30, gif=False)
     assert [p.name for p in written] == list(figure_names(fmt)[:4])
