@@ -190,6 +190,7 @@ def capture_figures(monkeypatch) -> dict[str, dict]:
     return seen
 
 
+@pytest.mark.slow  # also in test_figure_options, test_density
 def test_dpi_sets_the_png_size_and_titles_are_drawn(bounce_run, tmp_path, monkeypatch):
     seen = capture_figures(monkeypatch)
     written = plot.plot_run(bounce_run, tmp_path, dpi=40, gif=False)
@@ -203,6 +204,7 @@ def test_dpi_sets_the_png_size_and_titles_are_drawn(bounce_run, tmp_path, monkey
     assert any("impacts" in t for t in seen["trajectory.png"]["axes titles"])
 
 
+@pytest.mark.slow  # also in test_figure_options, test_density
 def test_no_title_removes_the_titles(bounce_run, tmp_path, monkeypatch):
     seen = capture_figures(monkeypatch)
     written = plot.plot_run(bounce_run, tmp_path, title=False, dpi=20, gif=False)
@@ -224,6 +226,7 @@ def test_bad_format_or_dpi_is_refused_before_drawing(bounce_run, tmp_path, optio
     assert not (tmp_path / "out").exists()
 
 
+@pytest.mark.slow  # also in test_figure_options, test_density
 def test_large_clouds_are_density_images_small_ones_points(bounce_run, tmp_path, monkeypatch):
     # 159 pairs in the maps are above a threshold of 158; 113 normalized phase points
     # (those with E0 > 0) are below it
@@ -244,6 +247,7 @@ def test_large_clouds_are_density_images_small_ones_points(bounce_run, tmp_path,
 # --- billiard plot -------------------------------------------------------------------------
 
 
+@pytest.mark.slow  # also in test_figure_options, test_density
 def test_command_line(bounce_run, tmp_path, capsys):
     out = tmp_path / "o"
     args = ["plot", str(bounce_run), "--out", str(out), "--frame-interval", "1/30"]

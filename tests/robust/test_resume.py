@@ -200,6 +200,7 @@ def test_repeated_interruptions(tmp_path, monkeypatch):
     assert same_run(ref, out)
 
 
+@pytest.mark.slow  # long runs; SIGINT and resume also in tests/engine
 def test_resume_from_every_kind_of_checkpoint(tmp_path, monkeypatch):
     """Checkpoint after every impact, and resume from copies of the run directory taken
     at many of them: mid-run states with drag (step-size memory), rk4 (warm starts) and
@@ -260,6 +261,7 @@ def long_reference(tmp_path_factory) -> Path:
     return reference(tmp_path_factory.mktemp("long"), load_scene("parabola-5.4hz"), "event", LONG)
 
 
+@pytest.mark.slow  # long runs; SIGINT and resume also in tests/engine
 def test_sigint_mid_run_keeps_rows_and_says_how_to_resume(tmp_path, long_reference):
     out = tmp_path / "run"
     proc = start_cli(

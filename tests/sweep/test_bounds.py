@@ -478,7 +478,10 @@ def _interrupted(tmp_path: Path) -> Path:
 
 @pytest.mark.parametrize(
     ("name", "old", "new"),
-    [("sweep.toml", "impacts = 40", "impacts = 41"), ("scene.toml", "0.393", "0.394")],
+    [
+        pytest.param("sweep.toml", "impacts = 40", "impacts = 41", marks=pytest.mark.slow),
+        ("scene.toml", "0.393", "0.394"),
+    ],
 )
 def test_resume_refuses_an_edited_definition(tmp_path, capsys, name, old, new):
     directory = _interrupted(tmp_path)
