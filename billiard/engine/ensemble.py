@@ -34,6 +34,7 @@ __all__ = [
     "EnsembleSetup",
     "advance",
     "advance_setup",
+    "at_rest_scene",
     "prepare",
     "start",
     "start_at_rest",
@@ -82,7 +83,7 @@ class EnsembleSetup:
         lid_level, escape_level: the highest centre height under the lid, the escape
             height (m; inf: none).
         at_rest: the state vector of a run whose ball starts at rest on the bottom (no
-            ``initial.q1``, ``initial.q2``) at time ``t``, at ``rest_position`` (m).
+            ``initial.q1``, ``initial.q2``) at time ``t`` (s).
     """
 
     scene: Any
@@ -95,9 +96,21 @@ class EnsembleSetup:
     lid_level: float
     escape_level: float
     at_rest: np.ndarray
-    rest_position: tuple[float, float]
     t: float
     sim: Any = None
+
+
+def at_rest_scene(scene: Any) -> Any:
+    """``scene`` with the ball at rest on the bottom (no start position, no velocity) and
+    no end in time: what a Simulation needs to give the resting height and the state
+    vector of a ball that starts on the bottom."""
+    from billiard.scene.scene import with_values
+
+    return with_values(
+        scene,
+        {"initial.q1": None, "initial.q2": None, "initial.v1": 0.0, "initial.v2": 0.0}
+        | {"initial.omega": 0.0, "run.duration": None},
+    )
 
 
 def prepare(scene: Any) -> EnsembleSetup:
@@ -110,17 +123,11 @@ def prepare(scene: Any) -> EnsembleSetup:
     from billiard.engine.kernel_engine import supports as kernel_supports
     from billiard.engine.simulation import Simulation
     from billiard.geometry.wall_functions import wall_functions
-    from billiard.scene.scene import with_values
 
     why = supports(scene)
     if why is not None:
         raise ValueError(f"the ensemble kernel does not take this scene: {why}")
-    at_rest = with_values(
-        scene,
-        {"initial.q1": None, "initial.q2": None, "initial.v1": 0.0, "initial.v2": 0.0}
-        | {"initial.omega": 0.0, "run.duration": None},
-    )
-    sim = Simulation(at_rest)
+    sim = Simulation(at_rest_scene(scene))
     why = kernel_supports(sim)
     if why is not None:
         raise ValueError(f"the ensemble kernel does not take this scene: {why}")
@@ -143,10 +150,19 @@ def prepare(scene: Any) -> EnsembleSetup:
         lid_level=math.inf if boundary.lid is None else float(boundary.lid.level),
         escape_level=math.inf if boundary.escape is None else float(boundary.escape.level),
         at_rest=at_rest_ctx,
-        rest_position=(float(sim.initial.q1), float(sim.initial.q2)),
         t=float(scene.initial.t),
         sim=sim,
     )
+
+
+def _boundary_frame(
+    setup: EnsembleSetup, q1: np.ndarray, q2: np.ndarray, t: float
+) -> tuple[np.ndarray, np.ndarray]:
+    """The centres (m) relative to the boundary at time t (s), as
+    Drive.to_boundary_frame computes them."""
+    drive = setup.drive
+    d = drive.amplitude * math.sin(drive.angle(t))
+    return (q1 - d, q2) if drive.horizontal else (q1, q2 - d)
 
 
 def start(
@@ -175,11 +191,8 @@ def start(
         *(np.asarray(x, dtype=np.float64) for x in (q1, q2, v1, v2, omega))
     )
     n = q1.size
-    drive = setup.drive
-    theta = drive.angle(t)
-    # the boundary-frame centre as Drive.to_boundary_frame computes it
-    d = drive.amplitude * math.sin(theta)
-    px, py = (q1 - d, q2) if drive.horizontal else (q1, q2 - d)
+    theta = setup.drive.angle(t)
+    px, py = _boundary_frame(setup, q1, q2, t)
     balls = np.empty((n, 7))
     balls[:, 0] = t
     balls[:, 1] = theta
@@ -216,9 +229,7 @@ def start_verdicts(setup: EnsembleSetup, q1: Any, q2: Any, t: float = 0.0) -> np
         bad = np.nonzero(~ok)[0]
         if not bad.size:
             continue
-        py = q2[lo:hi][bad]
-        if not setup.drive.horizontal:
-            py = py - setup.drive.amplitude * math.sin(setup.drive.angle(t))
+        py = _boundary_frame(setup, q1[lo:hi][bad], q2[lo:hi][bad], t)[1]
         code = np.full(bad.size, 3, dtype=np.int8)
         code[py >= setup.escape_level] = 2
         code[py > setup.lid_level + _OVERLAP] = 1

@@ -80,18 +80,8 @@ def return_map(
         shown.append(seen)
     label = f"model: all {q2.size} impacts"
     mx, my = x[~with_lid], y[~with_lid]
-    lines: list[Artist]
-    if use_density(mx.size, density):
-        lo, hi = square_range(shown)
-        lines = [density_image(ax, mx, my, (lo, hi), (lo, hi), unit="mm")]
-        density_handle(ax, f"{label} (density)")
-        size = _OVER_DENSITY
-    else:
-        size = marker_size(x, y)
-        lines = [dots(ax, mx, my, label, MODEL_COLOR, size)]
-    if seen is not None:
-        lines.append(rings(ax, seen[:-1], seen[1:], camera_label(interval, seen.size), size))
-        rasterize_if_large(lines[-1], seen.size)
+    view = square_range(shown) if use_density(mx.size, density) else None
+    lines, size = _pairs(ax, mx, my, view, "mm", label, density, (x, y), seen, interval)
     if with_lid.any():
         height = float(np.median(q2[lid]))
         (lid_line,) = ax.plot(
@@ -163,17 +153,7 @@ def time_map(
         lo, hi = square_range(shown)
         lo = max(lo, -0.02 * hi)
     label = f"model: all {tof.size} impacts"
-    lines: list[Artist]
-    if use_density(x.size, density):
-        lines = [density_image(ax, x, y, (lo, hi), (lo, hi), unit="s", log=log)]
-        density_handle(ax, f"{label} (density)")
-        size = _OVER_DENSITY
-    else:
-        size = marker_size(x, y)
-        lines = [dots(ax, x, y, label, MODEL_COLOR, size)]
-    if seen is not None:
-        lines.append(rings(ax, seen[:-1], seen[1:], camera_label(interval, seen.size), size))
-        rasterize_if_large(lines[-1], seen.size)
+    lines, _ = _pairs(ax, x, y, (lo, hi), "s", label, density, (x, y), seen, interval, log)
     if log:
         ax.set_xscale("log")
         ax.set_yscale("log")
@@ -186,3 +166,33 @@ def time_map(
     ax.grid(True, linewidth=0.3, alpha=0.5)
     uniform_legend_markers(ax.legend(loc="upper right", fontsize=8))
     return lines
+
+
+def _pairs(
+    ax: Axes,
+    x: np.ndarray,
+    y: np.ndarray,
+    view: tuple[float, float] | None,
+    unit: str,
+    label: str,
+    density: bool | None,
+    sized: tuple[np.ndarray, np.ndarray],
+    seen: np.ndarray | None,
+    interval: float | None,
+    log: bool = False,
+) -> tuple[list[Artist], float]:
+    """The model's pairs (x, y): a density image over ``view`` x ``view`` (in ``unit``)
+    or dots sized for the pairs ``sized``; then the camera's pairs of ``seen`` as rings
+    when a frame interval is given. Returns the artists drawn and the marker size."""
+    lines: list[Artist]
+    if use_density(x.size, density):
+        lines = [density_image(ax, x, y, view, view, unit=unit, log=log)]
+        density_handle(ax, f"{label} (density)")
+        size = _OVER_DENSITY
+    else:
+        size = marker_size(*sized)
+        lines = [dots(ax, x, y, label, MODEL_COLOR, size)]
+    if seen is not None:
+        lines.append(rings(ax, seen[:-1], seen[1:], camera_label(interval, seen.size), size))
+        rasterize_if_large(lines[-1], seen.size)
+    return lines, size

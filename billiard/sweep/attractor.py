@@ -52,7 +52,14 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["CLASSES", "CONTACT_CLASSES", "classify", "contact_class", "find_period"]
+__all__ = [
+    "CLASSES",
+    "CONTACT_CLASSES",
+    "PERIOD_WINDOW",
+    "classify",
+    "contact_class",
+    "find_period",
+]
 
 #: Attractor classes, in the order of their codes in the result file (new ones are added
 #: at the end, so that a class keeps its code).
@@ -72,6 +79,8 @@ CLASSES = (
 CONTACT_CLASSES = {"roll": "rolling", "slide": "sliding", "held": "held"}
 
 _L = 0.01  # m
+#: post-transient impacts the period test looks at (the last ones)
+PERIOD_WINDOW = 256
 
 
 def scaled_states(
@@ -107,7 +116,7 @@ def find_period(
     g: float,
     tolerance: float,
     max_period: int,
-    window: int = 256,
+    window: int = PERIOD_WINDOW,
 ) -> int:
     """The smallest k <= max_period for which the last ``window`` post-impact states
     (with the drive phase) repeat every k impacts within ``tolerance``; 0 if none."""

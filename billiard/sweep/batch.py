@@ -23,7 +23,7 @@ from typing import Any
 import numpy as np
 
 from billiard.engine import ensemble as EN
-from billiard.sweep.attractor import CLASSES
+from billiard.sweep.attractor import CLASSES, PERIOD_WINDOW
 from billiard.sweep.columns import MODES, RUN_STATUSES, STATUSES
 from billiard.sweep.ensemble import last_impacts, measured_columns
 
@@ -32,16 +32,8 @@ __all__ = ["measure_batch"]
 #: the set-ups a worker keeps for its next chunks (one per parameter set)
 _SETUPS: OrderedDict[Any, Any] = OrderedDict()
 _KEEP_SETUPS = 64
-#: the period test's window (impacts), as the per-point path's
-WINDOW = 256
-_BALL = {
-    "initial.q1": "q1",
-    "initial.q2": "q2",
-    "initial.v1": "v1",
-    "initial.v2": "v2",
-    "initial.omega": "omega",
-    "initial.t": "t",
-}
+#: a start's keys -> their names in the starts (q1, q2, v1, v2, omega, t)
+_BALL = {key: key.removeprefix("initial.") for key in EN.BALL_KEYS}
 
 
 def _setup(scene: Any) -> Any:
@@ -77,7 +69,7 @@ def measure_batch(
     Returns:
         (columns, rest): the columns of the points measured here (``billiard.sweep.
         columns``, ``index`` first; None when there are none) and the indices left to
-        the per-point path, in the order given.
+        the per-point path (in groups of parameter sets).
     """
     from billiard.scene.scene import with_values
 
@@ -95,7 +87,7 @@ def measure_batch(
         if EN.supports(scene) is not None:
             rest += [i for i, _ in points]
             continue
-        duration = settings["duration"] if settings["duration"] is not None else None
+        duration = settings["duration"]
         duration = scene.run.duration if duration is None else duration
         part, left = _measure_group(scene, points, duration, settings, keep, device)
         rest += left
@@ -159,7 +151,7 @@ def _measure_group(
             duration=duration,
         )
     transient, impacts = int(settings["transient"]), int(settings["impacts"])
-    consts = EN.constants(scene, settings["tolerance"], settings["max_period"], WINDOW)
+    consts = EN.constants(scene, settings["tolerance"], settings["max_period"], PERIOD_WINDOW)
     from billiard.kernels import ensemble as E
 
     # invalid starts (refused before the sweep ran, so rare here) go to the per-point path
@@ -169,13 +161,13 @@ def _measure_group(
         return None, left
     if run.size < len(rows):
         ctxs = ctxs[run]
-    width = max(WINDOW, keep, 1)
+    width = max(PERIOD_WINDOW, keep, 1)
     stats, rings = EN.advance_setup(
         setup, ctxs, consts, transient=transient, impacts=impacts, width=width, device=device,
         threads=1,
     )  # fmt: skip
     columns = measured_columns(
-        stats, rings, np.ones(run.size, dtype=bool), setup.rest_height, settings["rest_band"], scene
+        stats, np.ones(run.size, dtype=bool), setup.rest_height, settings["rest_band"], scene
     )
     # a run that stopped early, or one without a measured impact: measured again one by
     # one, for the engine's words of why

@@ -22,7 +22,8 @@ from typing import Any
 
 import numpy as np
 
-from billiard.sweep.attractor import CLASSES
+from billiard.kernels import layout as L
+from billiard.sweep.attractor import CLASSES, PERIOD_WINDOW
 
 __all__ = [
     "DEVICES",
@@ -188,14 +189,13 @@ def run_ensemble(
     arrays = np.broadcast_arrays(*(np.asarray(x, dtype=np.float64) for x in starts))
     shape = arrays[0].shape
     ctxs, valid = EN.start(setup, *(a.ravel() for a in arrays), t=t, duration=duration)
-    window = 256
-    width = max(window, keep, 1)
-    consts = EN.constants(scene, tolerance, max_period, window)
+    width = max(PERIOD_WINDOW, keep, 1)
+    consts = EN.constants(scene, tolerance, max_period, PERIOD_WINDOW)
     n = ctxs.shape[0]
     run = np.nonzero(valid)[0]
     stats = np.zeros((n, E.NSTAT))
     stats[:, E.ST_STATUS] = E.RUN_FAILED
-    rings = np.full((n, width, E.RCOL), np.nan)
+    rings = np.empty((n, width, E.RCOL))  # a slot is read only once written
     if run.size:
         sub = np.ascontiguousarray(ctxs[run])
         s, r = EN.advance_setup(
@@ -203,11 +203,9 @@ def run_ensemble(
             device=device, threads=threads, progress=progress,
         )  # fmt: skip
         stats[run], rings[run], ctxs[run] = s, r, sub
-    columns = measured_columns(stats, rings, valid, setup.rest_height, rest_band, scene)
+    columns = measured_columns(stats, valid, setup.rest_height, rest_band, scene)
     columns = {"q1_start": arrays[0].ravel(), "q2_start": arrays[1].ravel()} | columns
     last_height, last_tof = last_impacts(stats, rings, keep)
-    from billiard.kernels import layout as L
-
     final = {
         name: ctxs[:, slot].reshape(shape)
         for name, slot in (("t", L.EN_T), ("q1", L.EN_Q1), ("q2", L.EN_Q2))
@@ -245,7 +243,6 @@ def check_device(device: str) -> None:
 
 def measured_columns(
     stats: np.ndarray,
-    rings: np.ndarray,
     valid: np.ndarray,
     rest_height: Any,
     rest_band: float,

@@ -294,17 +294,15 @@ def check_starts(scene: Any, q1s: np.ndarray, q2s: np.ndarray) -> dict[int, str]
         ValueError: the scene cannot be set up (its geometry is invalid).
     """
     from billiard.run.simulate import Simulation
-    from billiard.scene.scene import with_values
 
-    at_rest = with_values(scene, {"initial.q1": None, "initial.q2": None, "run.duration": None})
-    simulation = Simulation(at_rest)
-    boundary, warm = simulation.boundary, simulation.warm
-    theta = simulation.drive.angle(scene.initial.t)
     if ensemble.supports(scene) is None:
         # the ensemble kernel's start check, compiled (the engine's own, with fresh warm
         # starts), and a short reason (the engine's names how deep: a root search per
         # start, 0.2 ms, for each of a basin map's hundreds of thousands of outside pixels)
         return _refused_starts(scene, q1s, q2s)
+    simulation = Simulation(ensemble.at_rest_scene(scene))
+    boundary, warm = simulation.boundary, simulation.warm
+    theta = simulation.drive.angle(scene.initial.t)
     reasons: dict[int, str] = {}
     for position in range(len(q1s)):
         try:

@@ -224,6 +224,7 @@ def run_hysteresis(
     from billiard.engine import ensemble as EN
     from billiard.kernels import ensemble as E
     from billiard.scene.scene import with_values
+    from billiard.sweep.attractor import PERIOD_WINDOW
     from billiard.sweep.ensemble import as_scene, measured_columns
 
     scene = as_scene(scene)
@@ -271,7 +272,7 @@ def run_hysteresis(
         "tof_mean": np.full(shape, np.nan),
         "run_status": np.full(shape, "", dtype=object),
     }
-    window = 256
+    window = PERIOD_WINDOW
     order = [(0, i) for i in range(count)] + [(1, i) for i in reversed(range(count))]
     for step, (direction, i) in enumerate(order):
         if progress is not None:
@@ -290,19 +291,16 @@ def run_hysteresis(
             consts[:, E.C_PHASE] = drive_phases(ctxs, scenes[i].drive.frequency)
             stats = np.zeros((ctxs.shape[0], E.NSTAT))
             stats[:, E.ST_STATUS] = E.RUN_FAILED
-            rings = np.full((ctxs.shape[0], window, E.RCOL), np.nan)
             run = np.nonzero(alive[part])[0]
             if run.size:
                 sub = np.ascontiguousarray(ctxs[run])
-                s, r = EN.advance(
+                s, _ = EN.advance(
                     sub, setup.params, setup.walls, consts[run], transient=transient,
                     impacts=impacts, width=window, threads=threads,
                 )  # fmt: skip
-                stats[run], rings[run], ctxs[run] = s, r, sub
+                stats[run], ctxs[run] = s, sub
             valid = ~invalid[part]
-            measured = measured_columns(
-                stats, rings, valid, setup.rest_height, rest_band, scenes[i]
-            )
+            measured = measured_columns(stats, valid, setup.rest_height, rest_band, scenes[i])
             for name in columns:
                 columns[name][direction, i, part] = measured[name]
             # a run that stopped is not continued

@@ -124,14 +124,9 @@ def _rest_height(scene: Any) -> float:
     The engine places a ball without a start position at rest on the bottom when it is
     set up; nothing is simulated (a run from rest under ``contact.model = "phases"`` may
     roll for ever, and the set-up gives the same height a one-impact run reports)."""
-    from billiard.scene.scene import with_values
+    from billiard.engine.ensemble import at_rest_scene
 
-    at_rest = with_values(
-        scene,
-        {"initial.q1": None, "initial.q2": None, "initial.v1": 0.0, "initial.v2": 0.0}
-        | {"initial.omega": 0.0, "run.duration": None},
-    )
-    return _rest_height_of(at_rest)
+    return _rest_height_of(at_rest_scene(scene))
 
 
 @functools.lru_cache(maxsize=256)

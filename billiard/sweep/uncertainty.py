@@ -209,6 +209,7 @@ def run_uncertainty(
             the ensemble kernel does not take, or no valid starts in the box.
     """
     from billiard.engine import ensemble as EN
+    from billiard.sweep.attractor import PERIOD_WINDOW
     from billiard.sweep.basins import attractor_labels
     from billiard.sweep.ensemble import as_scene, measured_columns
 
@@ -238,7 +239,7 @@ def run_uncertainty(
     all1 = (c1[None, :] + shifts[:, None]).ravel()  # centres, then +eps_k, then -eps_k
     all2 = np.tile(c2, shifts.size)
     ini = scene.initial
-    window = 256
+    window = PERIOD_WINDOW
     consts = EN.constants(scene, tolerance, max_period, window)
     records: list[dict[str, Any]] = []
     total = all1.size
@@ -251,7 +252,7 @@ def run_uncertainty(
             ctxs, setup.params, setup.walls, consts, transient=transient, impacts=impacts,
             width=window, threads=threads,
         )  # fmt: skip
-        cols = measured_columns(stats, rings, ok, setup.rest_height, rest_band, scene)
+        cols = measured_columns(stats, ok, setup.rest_height, rest_band, scene)
         records += [
             {"attractor": a, "period": p, "height_mean": h}
             for a, p, h in zip(cols["attractor"], cols["period"], cols["height_mean"], strict=True)
