@@ -24,7 +24,16 @@ from billiard.kernels import layout as L
 from billiard.kernels.rules import COLLAPSE_COUNT
 from billiard.models.flight import AdaptiveFlight, ExactFlight, RK4Flight
 
-__all__ = ["COUNT_KEYS", "RING", "engine_state", "state_vector", "write_ball", "write_state"]
+__all__ = [
+    "COUNT_KEYS",
+    "RING",
+    "engine_state",
+    "read_motion",
+    "state_vector",
+    "write_ball",
+    "write_motion",
+    "write_state",
+]
 
 #: slots of the collapse window's ring
 RING = COLLAPSE_COUNT + 1
@@ -147,3 +156,32 @@ def engine_state(ctx: Any, regimes: Sequence[str], walls: int) -> EngineState:
         locator={},
         phase_time={"roll": 0.0, "slide": 0.0, "held": 0.0},
     )
+
+
+def write_motion(ctx: Any, state: EngineState) -> None:
+    """Put the motion state of ``state`` (contact phases: the mode, the contact, the
+    time in finished phases, the last impact) into ``ctx``'s machine slots, no phase
+    under way (:mod:`billiard.kernels.machine`)."""
+    ctx[L.MC_MODE] = float(L.MOTION_NAMES.index(state.mode))
+    contact = tuple(state.contact) + (0.0,) * (6 - len(state.contact))
+    for i, value in enumerate(contact):
+        ctx[L.MC_CONTACT + i] = float(value)
+    for i, key in enumerate(L.MOTION_NAMES[1:]):
+        ctx[L.MC_PHASE_TIME + i] = float(state.phase_time.get(key, 0.0))
+    last = state.ball.t if state.last_impact is None else state.last_impact
+    ctx[L.MC_LAST_IMPACT] = float(last)
+    ctx[L.MC_PHASE_ON] = 0.0
+
+
+def read_motion(ctx: Any) -> dict[str, Any]:
+    """The motion state in ``ctx``'s machine slots, as the fields of an
+    :class:`EngineState` (``mode``, ``contact``, ``phase_time``, ``last_impact``)."""
+    mode = L.MOTION_NAMES[int(ctx[L.MC_MODE])]
+    contact = () if mode == "flight" else tuple(float(ctx[L.MC_CONTACT + i]) for i in range(6))
+    phase_time = {key: float(ctx[L.MC_PHASE_TIME + i]) for i, key in enumerate(L.MOTION_NAMES[1:])}
+    return {
+        "mode": mode,
+        "contact": contact,
+        "phase_time": phase_time,
+        "last_impact": float(ctx[L.MC_LAST_IMPACT]),
+    }

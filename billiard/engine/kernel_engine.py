@@ -23,6 +23,7 @@ which reproduces the state after impact K bit for bit (the run is deterministic)
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import time
 from collections.abc import Callable
@@ -31,15 +32,22 @@ from typing import Any
 import numpy as np
 
 from billiard import jit as _jit
-from billiard.engine.ctx import COUNT_KEYS, engine_state, state_vector, write_ball, write_state
+from billiard.engine.ctx import (
+    COUNT_KEYS,
+    engine_state,
+    read_motion,
+    state_vector,
+    write_ball,
+    write_state,
+)
 from billiard.engine.interrupt import RunInterrupted, StopRequest
 from billiard.engine.progress import report_time
-from billiard.errors import SimulationError
+from billiard.errors import BallAtRest, SimulationError
 from billiard.kernels import layout as L
 from billiard.kernels.interpreted import stop_text
 from billiard.models.rk4_locator import answer_foot
 from billiard.runfile.npystream import NpyRecorder
-from billiard.runfile.record import MemoryRecorder, record_of
+from billiard.runfile.record import ContactRecord, MemoryRecorder, record_of
 from billiard.runfile.rows import as_block
 from billiard.runfile.stream import CsvRecorder
 from billiard.status import Status
@@ -49,6 +57,8 @@ __all__ = ["FIRST_CHUNK", "LAST_CHUNK", "KernelEngine", "rows_sink", "supports"]
 #: impacts of the first chunk of a run, and of the longest
 FIRST_CHUNK = 64
 LAST_CHUNK = 4096
+#: contact rows of a chunk of the state machine (contact.model = "phases")
+CONTACT_ROWS = 4096
 #: the fixed-step detection's memory between flights: the departures in a row, the feet
 _FIXED_MEMORY = (
     slice(L.RK_DEPARTURES, L.RK_DEPARTURES + 1),
@@ -109,6 +119,11 @@ class KernelEngine:
             # a chunk ends after an impact that settles: the engine lands the ball (the
             # landing test reads the law's restitution and elastic_below, IM_E and IM_EB)
             self.ctx[L.EN_LAND_ON] = 1.0
+        #: the whole trajectory on the state machine (:mod:`billiard.kernels.machine`):
+        #: contact phases with the event locator
+        self.machine = bool(sim.phases) and sim.method == "event"
+        if self.machine:
+            self._machine_constants()
         self.offsets = len(sim.boundary.offsets)
         #: when the next checkpoint is due (time.monotonic), as the latest run left it
         self.next_save = math.inf
@@ -119,6 +134,19 @@ class KernelEngine:
         self._walls: Any = None
         self._nears: Any = None
         self._entry: Any = None
+        self._contacts: Any = None
+
+    def _machine_constants(self) -> None:
+        """The contact phases' constants (as the contact model's own ``ctx`` holds
+        them), the contact span, the container's range of x and the walls' intervals."""
+        sim, ctx = self.sim, self.ctx
+        phase = sim.contact_model.new_ctx()
+        ctx[L.PH_M : L.PH_RTOL + 1] = phase[L.PH_M : L.PH_RTOL + 1]
+        ctx[L.MC_SPAN] = float(sim.scene.run.contact_span)
+        ctx[L.MC_X_LO], ctx[L.MC_X_HI] = (float(x) for x in sim.boundary.x_range)
+        for wall in sim.boundary.walls:
+            ctx[L.MC_WALL_LO + wall.index] = float(wall.lo)
+            ctx[L.MC_WALL_HI + wall.index] = float(wall.hi)
 
     # ------------------------------------------------------------------ state
 
@@ -129,7 +157,10 @@ class KernelEngine:
         write_state(self.ctx, state)
 
     def state(self) -> Any:
-        return engine_state(self.ctx, self.sim.impact.regimes, self.offsets)
+        state = engine_state(self.ctx, self.sim.impact.regimes, self.offsets)
+        if self.machine:
+            return dataclasses.replace(state, **read_motion(self.ctx))
+        return state
 
     @property
     def impacts(self) -> int:
@@ -152,6 +183,11 @@ class KernelEngine:
         from billiard.kernels.rules import COLLAPSE_COUNT, COLLAPSE_SPAN, ZERO_FLIGHT_LIMIT
 
         n, t = int(ctx[L.EN_IMPACTS]), float(ctx[L.EN_T])
+        if ctx[L.EN_FAULT] == 2.0:
+            return SimulationError(
+                f"contact phases of zero duration piled up at t = {float(ctx[L.MC_FINAL]):.9g} s",
+                Status.COLLAPSE,
+            )
         if ctx[L.EN_RCOUNT] > COLLAPSE_COUNT:
             return SimulationError(
                 f"inelastic collapse: {COLLAPSE_COUNT} impacts within "
@@ -192,9 +228,19 @@ class KernelEngine:
     # ------------------------------------------------------------------ calls
 
     def _prepare(self) -> None:
-        from billiard.geometry.wall_functions import near_functions, wall_functions
+        from billiard.geometry.wall_functions import (
+            near_functions,
+            phase_wall_functions,
+            wall_functions,
+        )
 
         _jit.notice()
+        if self.machine:
+            self._walls = phase_wall_functions(self.sim)
+            # arrays also interpreted: the machine hands run_chunk a view of the rows
+            self._buffer = np.empty(LAST_CHUNK * L.NCOL, dtype=np.float64)
+            self._contacts = np.empty(CONTACT_ROWS * L.CCOL, dtype=np.float64)
+            return
         self._walls = wall_functions(self.sim)
         if self.fixed:
             self._nears = near_functions(self.sim)
@@ -214,18 +260,30 @@ class KernelEngine:
             if self._walls is None:
                 self._prepare()
             self._entry = run_chunk_fixed if self.fixed else run_chunk
+            if self.machine:
+                from billiard.kernels.machine import run_machine
+
+                self._entry = run_machine
         out = self._rows_from(first)
         try:
             if first_call:
                 with _jit.compiling(self._entry):
-                    return self._entry(*self._arguments(out, rows))
-            return self._entry(*self._arguments(out, rows))
+                    return self._result(self._entry(*self._arguments(out, rows)))
+            return self._result(self._entry(*self._arguments(out, rows)))
         finally:
             if out is not self._buffer and isinstance(out, list):
                 # interpreted, the rows went into a copy of the list's tail
                 self._buffer[first * L.NCOL :] = out
 
+    def _result(self, result: Any) -> tuple[int, int]:
+        """(status, impact rows written) of a kernel call."""
+        if self.machine:
+            return int(result), int(self.ctx[L.MC_ROW])
+        return result
+
     def _arguments(self, out: Any, rows: int) -> tuple:
+        if self.machine:
+            return (self.ctx, self.params, self._walls, out, rows, self._contacts, CONTACT_ROWS)
         if self.fixed:
             return (self.ctx, self.params, self._walls, self._nears, out, rows)
         return (self.ctx, self.params, self._walls, out, rows)
@@ -280,6 +338,8 @@ class KernelEngine:
                 Status.NUMERICAL_FAULT,
             )
         code = exc.args[0]
+        if self.machine and ctx[L.MC_FLYING] == 0.0:
+            return self._phase_stop(code)
         if code == L.E_NON_FINITE:
             from billiard.engine.event_step import check_finite
 
@@ -303,6 +363,43 @@ class KernelEngine:
         if math.isnan(t):
             return SimulationError(f"{text} after impact {n} (t = {t_last:.9g} s)")
         return SimulationError(f"{text} at impact {n + 1} (t = {t:.9g} s)")
+
+    def _phase_stop(self, code: int) -> SimulationError:
+        """The stop out of the state machine's contact logic, worded as the engine's
+        contact phases word it (:mod:`billiard.engine.contact_phases`)."""
+        ctx, sim = self.ctx, self.sim
+        n, t = int(ctx[L.EN_IMPACTS]), float(ctx[L.MC_FINAL])
+        if code == L.E_AT_REST:
+            held = ctx[L.MC_MODE] == L.M_HELD
+            since = float(ctx[L.VX_RSINCE] if held else ctx[L.PH_RSINCE])
+            sim.final_time = float(ctx[L.EN_T]) + since
+            return BallAtRest(since)
+        if code == L.E_PHASE_STEPS:
+            return SimulationError(
+                "the contact phase's step-size control failed (60 rejected steps)",
+                Status.SOLVER_FAILED,
+            )
+        if code == L.E_PHASE_NON_FINITE:
+            return SimulationError(
+                "non-finite state at the end of a contact phase "
+                f"(t = {float(ctx[L.EN_ERR_VALUE]):.9g} s)",
+                Status.NON_FINITE,
+            )
+        if code == L.E_LEFT:
+            xl, xr = sim.boundary.x_range
+            return SimulationError(
+                f"the ball left the container's range x in [{xl:.6g}, {xr:.6g}] m at "
+                f"x = {float(ctx[L.EN_ERR_VALUE]):.6g} m, t = {t:.9g} s, after impact {n}",
+                Status.ESCAPED,
+            )
+        if code == L.E_ESCAPED:
+            escape = sim.scene.boundary.escape_height
+            return SimulationError(
+                f"ball escaped above escape_height = {escape!r} m "
+                f"at t = {float(ctx[L.EN_EVENT_T]):.9g} s after impact {n}",
+                Status.ESCAPED,
+            )
+        return SimulationError(stop_text(code, float(ctx[L.EN_ERR_VALUE])))
 
     # ------------------------------------------------------------------ step and run
 
@@ -406,6 +503,119 @@ class KernelEngine:
                 progress(self.impacts, collisions)
         return status, reason
 
+    def run_phases(
+        self,
+        collisions: int,
+        recorder: Any,
+        progress: Callable[[int, int], None] | None,
+        checkpoint: Callable[[Any], None] | None,
+        request: StopRequest,
+        until: float,
+        on_record: Callable[[int], None] | None,
+        *,
+        interval: float = 1.0,
+    ) -> tuple[Status, str | None]:
+        """``Simulation.run`` under contact phases on the state machine
+        (:func:`billiard.kernels.machine.run_machine`), in chunks as :meth:`run`; the
+        finished and cut phases go to the simulation's ``on_contact`` and
+        ``on_contact_cut`` in the order the engine made them. Returns (status, stop
+        reason); the simulation's ``final_time`` follows the run."""
+        sim, ctx = self.sim, self.ctx
+        sink = rows_sink(recorder)
+        monotonic = time.monotonic
+        interval = interval if checkpoint is not None else math.inf
+        next_save = monotonic() + interval
+        fast = min(_FAST_CHUNK, interval)
+        rows = FIRST_CHUNK if fast > 0.0 else 1
+        status, reason = Status.COMPLETE, None
+        shown = monotonic()
+        try:
+            while self.impacts < collisions:
+                if request.signum:
+                    if ctx[L.MC_PHASE_ON] != 0.0:
+                        self._cut_phase(until)
+                    raise RunInterrupted(request.signum)
+                fault = self.pending_stop()
+                if fault is not None:
+                    raise fault
+                start = self.impacts
+                saved = ctx.copy()
+                began = monotonic()
+                code, done, error = self._chunk(rows, min(collisions, start + rows), until)
+                elapsed = monotonic() - began
+                if error is None or not isinstance(error, BallAtRest):
+                    sim.final_time = float(ctx[L.MC_FINAL])
+                cut = self._hand_out(
+                    recorder, sink, start, done, collisions, progress, on_record, request,
+                    contacts=int(ctx[L.MC_CROW]),
+                )  # fmt: skip
+                if cut is not None:
+                    # a stop request after impact start + cut: back to the chunk's start
+                    # and up to there again, so that the state matches the records
+                    ctx[:] = saved
+                    self._sync_out()
+                    again, written, error = self._chunk(rows, start + cut, until)
+                    assert error is None and written == cut, (again, written, error)
+                    sim.final_time = float(ctx[L.MC_FINAL])
+                    raise RunInterrupted(request.signum)
+                if error is not None:
+                    raise error
+                if code == L.TIME_LIMIT:
+                    status = Status.TIME_LIMIT
+                    sim.final_time = until
+                    break
+                if code == L.IN_CONTACT:
+                    span = sim.scene.run.contact_span
+                    raise SimulationError(
+                        f"no impact for run.contact_span = {span:g} s "
+                        f"(t = {sim.final_time:.9g} s): the ball stays in contact",
+                        Status.IN_CONTACT,
+                    )
+                if code == L.PAUSED:
+                    # a long phase: progress about ten times a second
+                    if progress is not None and monotonic() - shown >= 0.1:
+                        shown = monotonic()
+                        report_time(progress, float(ctx[L.EN_T] + ctx[L.PH_TAU]))
+                        progress(self.impacts, collisions)
+                    continue
+                if checkpoint is not None and monotonic() >= next_save:
+                    checkpoint(sim.state)
+                    next_save = monotonic() + interval
+                fault = self.pending_stop()
+                if fault is not None:
+                    raise fault
+                if elapsed < fast and rows < LAST_CHUNK:
+                    rows *= 2
+        except SimulationError as exc:
+            # a ball at rest ends the run complete: a status, not a stop reason
+            status, reason = exc.status, None if exc.status.finished else str(exc)
+        return status, reason
+
+    def _cut_phase(self, until: float) -> None:
+        """A stop request inside a phase: its row, cut where it is (``end`` = ``cut``),
+        goes to ``on_contact_cut``; the engine's state stays at the phase's start."""
+        ctx = self.ctx
+        ctx[L.MC_PHASE_ON] = 3.0  # machine.PHASE_CUT
+        self._chunk(1, int(ctx[L.EN_IMPACTS]) + 1, until)
+        self._hand_contacts(0, int(ctx[L.MC_CROW]))
+        self.sim.final_time = float(self._contacts[3])  # t_end of the cut row
+
+    def _hand_contacts(self, first: int, stop: int) -> None:
+        """Contact rows ``first`` to ``stop`` as records, to the simulation's hooks."""
+        sim = self.sim
+        surfaces = sim.boundary.surfaces
+        rows = self._contacts[first * L.CCOL : stop * L.CCOL].reshape(-1, L.CCOL).tolist()
+        for row in rows:
+            a, b = int(row[4]), int(row[5])
+            label = surfaces[a].label if b < 0 else f"{surfaces[a].label}+{surfaces[b].label}"
+            record = ContactRecord(
+                row[2], row[3], label, L.MOTION_NAMES[int(row[6])], L.END_NAMES[int(row[7])],
+                row[8], *row[9:19],
+            )  # fmt: skip
+            hook = sim.on_contact if row[0] == 0.0 else sim.on_contact_cut
+            if hook is not None:
+                hook(record)
+
     def _hand_out(
         self,
         recorder: Any,
@@ -416,11 +626,14 @@ class KernelEngine:
         progress: Callable[[int, int], None] | None,
         on_record: Callable[[int], None] | None,
         request: StopRequest,
+        contacts: int = 0,
     ) -> int | None:
         """Give the chunk's rows to the recorder and the hooks, in the order the
         one-impact loop calls them; returns the row after which a stop was requested
-        (by a hook, before the chunk's last row), else None."""
+        (by a hook, before the chunk's last row), else None. ``contacts``: contact rows
+        of the state machine, each handed out before the first impact after it."""
         buffer = self._buffer
+        handed = 0
         i = 0
         while i < done:
             if on_record is not None:
@@ -431,6 +644,14 @@ class KernelEngine:
                 )
             else:
                 j = done
+            if contacts:
+                # the phases that ended before impact start + j
+                last = handed
+                cbuf = self._contacts
+                while last < contacts and cbuf[last * L.CCOL + 1] < start + j:
+                    last += 1
+                self._hand_contacts(handed, last)
+                handed = last
             block = as_block(buffer, i, j)
             if sink is not None:
                 sink(block)
@@ -446,4 +667,6 @@ class KernelEngine:
             if request.signum and j < done:
                 return j
             i = j
+        if handed < contacts:
+            self._hand_contacts(handed, contacts)
         return None

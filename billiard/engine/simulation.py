@@ -29,6 +29,7 @@ from billiard.engine.contact_phases import (
     ZERO_FLIGHT_LIMIT,
     ContactPhases,
 )
+from billiard.engine.ctx import write_motion
 from billiard.engine.event_step import EventStep
 from billiard.engine.interrupt import RunInterrupted, StopRequest
 from billiard.engine.kernel_engine import KernelEngine, supports
@@ -258,15 +259,24 @@ class Simulation(ContactPhases, EventStep):
             return dataclasses.replace(self._kernel.state(), **self._held_state())
         return self._python_state()
 
-    def _held_state(self) -> dict[str, Any]:
-        """The parts of the engine state the Python objects hold in either engine."""
+    def _object_state(self) -> dict[str, Any]:
+        """The parts of the engine state the Python objects hold in every engine (the
+        state machine holds the motion state itself)."""
         return {
             "walls": tuple((w[0], w[1]) for w in self.warm[: len(self.boundary.offsets)]),
             "flight": self.flight.memory(),
             "locator": self.locator.memory(),
+            "samples": self._samples,
+        }
+
+    def _held_state(self) -> dict[str, Any]:
+        """The parts of the engine state the Python objects hold in either engine."""
+        if self._kernel is not None and self._kernel.machine:
+            return self._object_state()
+        return {
+            **self._object_state(),
             "mode": self._mode,
             "contact": self._contact,
-            "samples": self._samples,
             "phase_time": dict(self._phase_time),
             "last_impact": self._last_impact if self.phases else None,
         }
@@ -431,6 +441,11 @@ class Simulation(ContactPhases, EventStep):
         flights = self._flights
         if flights is not None and (self.on_sample is not None or self.impact is not flights.law):
             flights = None
+        if flights is not None and flights.machine:
+            self._request = self._pause = None
+            return self._run_machine(
+                flights, collisions, recorder, progress, checkpoint, request, until, on_record
+            )
         try:
             while self._impacts < collisions:
                 # a signal arrived: stop here, where the state matches the records exactly
@@ -496,6 +511,49 @@ class Simulation(ContactPhases, EventStep):
             return False
 
         return pause
+
+    # ------------------------------------------------------------------ the state machine
+    def _run_machine(
+        self,
+        machine: Any,
+        collisions: int,
+        recorder: Any,
+        progress: Progress | None,
+        checkpoint: Callable[[EngineState], None] | None,
+        request: StopRequest,
+        until: float,
+        on_record: Callable[[int], None] | None,
+    ) -> str | None:
+        """:meth:`run` under contact phases on the compiled state machine
+        (:meth:`billiard.engine.kernel_engine.KernelEngine.run_phases`): the engine
+        state goes into its state vector, and back when the run ends."""
+        if self._fault is not None:
+            # a stop detected before (the next step raises it)
+            fault = self._fault
+            self.status = fault.status
+            return None if fault.status.finished else str(fault)
+        state = self._python_state()
+        machine.restore(state)
+        write_motion(machine.ctx, state)
+        machine.ctx[L.MC_FINAL] = self.final_time
+        # while the machine runs, the engine's state is its (hooks and checkpoints see it)
+        self._kernel = machine
+        try:
+            status, reason = machine.run_phases(
+                collisions, recorder, progress, checkpoint, request, until, on_record,
+                interval=CHECKPOINT_INTERVAL,
+            )  # fmt: skip
+        finally:
+            self._kernel = None
+            state = dataclasses.replace(machine.state(), **self._object_state())
+            fault, final_time = machine.pending_stop(), self.final_time
+            self.restore(state)
+            self._fault, self.final_time = fault, final_time
+            if progress is not None:
+                report_time(progress, self.final_time)
+                progress(self._impacts, collisions)
+        self.status = status
+        return reason
 
     # ------------------------------------------------------------------ flights on the kernels
     def _fly(

@@ -16,6 +16,7 @@ __all__ = [
     "WallFunction",
     "WallTable",
     "near_functions",
+    "phase_wall_functions",
     "plain_wall_functions",
     "wall_functions",
 ]
@@ -82,6 +83,12 @@ def WallFunction(fn: Any, args: int = 1) -> Any:  # noqa: N802  (a factory stand
 def wall_functions(sim: Any) -> tuple[tuple[Any, ...], ...]:
     """(f, df, d2f): one tuple per function, one entry per wall of the curve."""
     return _table(sim.boundary.walls, ("f", "df", "d2f"), 1)
+
+
+def phase_wall_functions(sim: Any) -> tuple[tuple[Any, ...], ...]:
+    """(f, df, d2f, d3f): the rows a contact phase reads (its equations need the third
+    derivative)."""
+    return _table(sim.boundary.walls, ("f", "df", "d2f", "d3f"), 1)
 
 
 def near_functions(sim: Any) -> tuple[tuple[Any, ...], ...]:

@@ -391,6 +391,31 @@ CTX.begin("stop")
 EN_STOP = _ctx("EN_STOP", "code", 1, "", "E_* code of the stop that ended the kernel (0: none)")
 CTX.end()
 
+# --- the trajectory state machine (contact.model = "phases", kernels: machine.py) -----
+# The motion state and what the engine carries with it: the contact (as
+# EngineState.contact: roll/slide: surface, s, s_dot, slip sign, start, settle; held:
+# the two surfaces, the centre in the boundary's frame, start, settle), the time spent
+# in finished phases, the last impact's time, the run's end so far; the container's
+# range of x and each wall's interval (where a phase ends with wall-end), the contact
+# span; and a phase under way between two calls.
+CTX.begin("machine")
+MC_MODE = _ctx("MC_MODE", "mode", 1, "", "M_FLIGHT, M_ROLL, M_SLIDE or M_HELD")
+MC_CONTACT = _ctx("MC_CONTACT", "contact", 6, "", "the contact (see EngineState.contact)")
+MC_PHASE_TIME = _ctx("MC_PHASE_TIME", "phase_time", 3, "s", "finished phases: roll, slide, held")
+MC_LAST_IMPACT = _ctx("MC_LAST_IMPACT", "last_impact", 1, "s", "time of the last impact")
+MC_FINAL = _ctx("MC_FINAL", "final_time", 1, "s", "the time the run has reached")
+MC_SPAN = _ctx("MC_SPAN", "contact_span", 1, "s", "run.contact_span")
+MC_X_LO = _ctx("MC_X_LO", "x_lo", 1, "m", "the container's range of x: start ...")
+MC_X_HI = _ctx("MC_X_HI", "x_hi", 1, "m", "... and end")
+MC_WALL_LO = _ctx("MC_WALL_LO", "wall_lo", MAX_SURFACES, "m", "each wall's interval: start")
+MC_WALL_HI = _ctx("MC_WALL_HI", "wall_hi", MAX_SURFACES, "m", "... end")
+MC_PHASE_ON = _ctx("MC_PHASE_ON", "phase_on", 1, "", "a phase under way: 0 none, 1 on, 2 paused")
+MC_STOP_AT = _ctx("MC_STOP_AT", "stop_at", 1, "s", "the phase under way: its contact span's end")
+MC_ROW = _ctx("MC_ROW", "row", 1, "", "impact rows written in this call")
+MC_CROW = _ctx("MC_CROW", "contact_row", 1, "", "contact rows written in this call")
+MC_FLYING = _ctx("MC_FLYING", "flying", 1, "", "1.0 while the flights run (a stop is theirs)")
+CTX.end()
+
 SIZE = CTX.size
 
 
@@ -414,6 +439,31 @@ FULL = 1  # the chunk's rows are full
 TIME_LIMIT = 2  # the next impact comes after EN_UNTIL
 COLLAPSE = 3  # an inelastic collapse after the last row
 LAND = 4  # the last row's impact settles on a wall (EN_LAST_J, EN_LAST_S, EN_LAST_WN)
+# ... and of the state machine (machine.run_machine)
+PAUSED = 5  # a long phase paused between two steps (it goes on at the next call)
+IN_CONTACT = 6  # no impact for run.contact_span (MC_FINAL: the time)
+CONTACTS_FULL = 7  # the contact rows are full
+
+# --- motion states (MC_MODE) --------------------------------------------------------
+M_FLIGHT = 0.0
+M_ROLL = 1.0
+M_SLIDE = 2.0
+M_HELD = 3.0
+MOTION_NAMES = ("flight", "roll", "slide", "held")
+
+# --- contact rows (machine.py): one per finished or cut phase -----------------------
+# kind (0 finished, 1 cut), the impacts before it, t_start, t_end, surface, second
+# surface (-1: none), mode, end, t_settle, the lab state at the start and at the end
+# (q1, q2, u1, u2, u3 each)
+CCOL = 19
+END_NAMES = ("lift-off", "slip", "roll", "wall-end", "impact", "release", "cut")
+END_LIFT_OFF = 0.0
+END_SLIP = 1.0
+END_ROLL = 2.0
+END_WALL_END = 3.0
+END_IMPACT = 4.0
+END_RELEASE = 5.0
+END_CUT = 6.0
 
 # --- contact phase statuses (contact.advance) --------------------------------------
 PHASE_END = 0  # a transition ends the phase: PH_END_T, PH_END_I, PH_END_Y
@@ -437,6 +487,8 @@ E_PHASE_STEPS = 9  # a contact phase's step-size control failed
 E_AT_REST = 10  # at rest relative to the boundary for good: from PH_RSINCE (a hold: VX_RSINCE)
 E_DEPARTURES = 11  # rk4: DEPARTURE_LIMIT departures in a row (the step, s, in EN_ERR_VALUE)
 E_FOOT = 12  # rk4: Newton failed from both starts: the global nearest point at RK_ASK
+E_PHASE_NON_FINITE = 13  # a non-finite state at a phase's end (MC_FINAL: the time)
+E_LEFT = 14  # a phase left the container's range of x (EN_ERR_VALUE: s; MC_FINAL: t)
 
 
 class KernelError(Exception):

@@ -1,7 +1,7 @@
-"""Contact phases with the flights between them on the kernels
-(:meth:`billiard.engine.simulation.Simulation._fly`): the same records, phases, times
-and engine state as the one-event step on the classes, and interrupted runs that resume
-to the same bytes."""
+"""Contact phases on the compiled state machine (:mod:`billiard.kernels.machine`,
+:meth:`billiard.engine.simulation.Simulation._run_machine`): the same records, phases,
+cut phases, times, final time and engine state as the one-event step on the classes,
+interpreted as compiled, and interrupted runs that resume to the same bytes."""
 
 from __future__ import annotations
 
@@ -31,6 +31,113 @@ def run(scene, impacts: int, *, kernels: bool, checkpoints: list | None = None):
     sim.run(impacts, records, checkpoint=None if checkpoints is None else checkpoints.append)
     rows = [repr(tuple(record)) for record in records]
     return rows, [repr(tuple(c)) for c in contacts], sim.mode_times(), sim.state, sim.status
+
+
+def run_ends(scene, impacts: int, *, kernels: bool) -> dict:
+    """Everything a run reports, its cut phases and how it ended included."""
+    sim = Simulation(scene)
+    if not kernels:
+        sim._flights = None
+    contacts: list = []
+    cuts: list = []
+    sim.on_contact = contacts.append
+    sim.on_contact_cut = cuts.append
+    records: list = []
+    reason = sim.run(impacts, records)
+    return {
+        "rows": [repr(tuple(record)) for record in records],
+        "contacts": [repr(tuple(c)) for c in contacts],
+        "cuts": [repr(tuple(c)) for c in cuts],
+        "times": sim.mode_times(),
+        "state": sim.state,
+        "status": sim.status,
+        "reason": reason,
+        "final_time": repr(sim.final_time),
+        "mode": sim.mode,
+    }
+
+
+def _bench_cases() -> dict:
+    from bench.contact import cases
+
+    return {case.name: case for case in cases()}
+
+
+def _vertical_wedge(elastic_below: float | None = None):
+    changes = {"drive.direction": "vertical", "drive.frequency": 9.25, "run.duration": 2.0}
+    if elastic_below is not None:
+        changes["contact.elastic_below"] = elastic_below
+    return with_values(phases("wedge-6.6hz"), changes)
+
+
+@pytest.mark.parametrize(
+    "case",
+    ["bowl at rest", "vertex at rest", "bowl rolling", "floor drop", "steep wall slide",
+     "shaken table"],
+)  # fmt: skip
+def test_the_state_machine_is_the_engine_on_the_closed_form_cases(case):
+    # rest, chatter, long rolling phases cut by the run's end, a hold in the vertex
+    scene = with_values(_bench_cases()[case].build("phases"), {"run.duration": 0.6})
+    machine = run_ends(scene, 2000, kernels=True)
+    classes = run_ends(scene, 2000, kernels=False)
+    assert machine == classes
+
+
+@pytest.mark.parametrize(
+    "scene",
+    [
+        pytest.param(_vertical_wedge(), id="vertical-wedge"),
+        pytest.param(_vertical_wedge(0.0), id="vertical-wedge-eb0"),
+        pytest.param(
+            with_values(phases("wedge-6.6hz"), {"contact.elastic_below": 0.0, "run.duration": 1.5}),
+            id="wedge-eb0",
+        ),  # fmt: skip
+        pytest.param(
+            with_values(phases("parabola-5.4hz"), {"drive.amplitude": 0.005}), id="in-contact"
+        ),
+    ],
+)
+def test_the_state_machine_is_the_engine_at_corners_and_ends(scene):
+    # holds and releases in the vertex, summed chatter series, the contact span's end
+    machine = run_ends(scene, 3000, kernels=True)
+    classes = run_ends(scene, 3000, kernels=False)
+    assert machine["contacts"] and machine == classes
+
+
+_INTERPRETED_MACHINE = """
+import sys
+from billiard import jit
+from billiard.scene.scene import load_scene, with_values
+from billiard.run.simulate import simulate
+assert not jit.ENABLED
+scene = with_values(load_scene("wedge-6.6hz"), {"contact.model": "phases"})
+simulate(scene, collisions=300, out_dir=sys.argv[1])
+"""
+
+
+def test_the_interpreted_state_machine_writes_the_compiled_bytes(tmp_path):
+    import os
+    import subprocess
+    import sys
+
+    from billiard import jit
+
+    if not jit.ENABLED:
+        pytest.skip("numba unavailable: both runs would be interpreted")
+    # the paper's wedge: rolling, sliding, lift-offs and impacts from contact
+    scene = with_values(load_scene("wedge-6.6hz"), {"contact.model": "phases"})
+    simulate(scene, collisions=300, out_dir=tmp_path / "compiled")
+    env = dict(os.environ, NUMBA_DISABLE_JIT="1")
+    subprocess.run(
+        [sys.executable, "-c", _INTERPRETED_MACHINE, str(tmp_path / "interpreted")],
+        env=env,
+        check=True,
+    )
+    for name in FILES:
+        a = (tmp_path / "interpreted" / name).read_bytes()
+        b = (tmp_path / "compiled" / name).read_bytes()
+        assert a == b, name
+    assert (tmp_path / "compiled" / "contacts.csv").read_text().count("\n") > 20
 
 
 @pytest.mark.parametrize(
@@ -81,3 +188,20 @@ def test_interrupt_and_resume_with_flights_on_the_kernels_is_byte_identical(k, t
     resume(out)
     for name in FILES:
         assert (out / name).read_bytes() == (ref / name).read_bytes(), name
+
+
+def _unsampled_hold_cases() -> list:
+    from tests.kernels.test_contact import _hold_cases
+
+    return [case for case in _hold_cases() if case[4] is None]
+
+
+@pytest.mark.parametrize("index", range(len(_unsampled_hold_cases())))
+def test_the_state_machine_is_the_engine_in_the_vertex(index):
+    # the hold cases of the kernels' tests: at rest, spinning, released, held again
+    scene, until, impacts, *_ = _unsampled_hold_cases()[index]
+    if until != float("inf"):
+        scene = with_values(scene, {"run.duration": until})
+    machine = run_ends(scene, impacts, kernels=True)
+    classes = run_ends(scene, impacts, kernels=False)
+    assert machine == classes

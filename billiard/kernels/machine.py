@@ -1,0 +1,935 @@
+"""The trajectory state machine of ``contact.model = "phases"``: one compiled loop that
+takes a ball through flight, impact, landing (the chatter series summed), rolling,
+sliding and being held by two walls, lift-off and back to flight, writing a row per
+impact (``out``, the columns of collisions.csv) and a row per finished or cut contact
+phase (``cout``, :data:`~billiard.kernels.layout.CCOL` floats: contacts.csv), and
+returning to Python only when a buffer is full, the run's impact count or time limit is
+reached, a long phase pauses (every :data:`PAUSE_STEPS` steps, so that a stop request
+is seen), a status ends the run, or a documented stop raises ``KernelError``.
+
+It is the engine's contact-phase logic (:mod:`billiard.engine.contact_phases`, which
+runs it interpreted for trajectory samples and the rk4 method) over the state vector:
+every operation the same, in the same order, so both give the same bits. The flights
+between phases are :func:`billiard.kernels.loop.run_chunk`, a phase
+:func:`billiard.kernels.contact.run_phase`, a hold :func:`billiard.kernels.vertex.run_hold`:
+compiled functions of their own, which this loop calls (and numba compiles once).
+
+The engine state lives in ``ctx``: the ball and clock (``EN_*``), the motion state and
+its contact (``MC_MODE``, ``MC_CONTACT``), the time in finished phases, the last
+impact's time, the run's end so far (``MC_*``), and a phase under way between two calls
+(``MC_PHASE_ON``: its integration state in the ``PH_*`` slots). The ball's state is
+that at the phase's start until the phase ends: a run stopped inside a phase redoes it.
+"""
+
+from __future__ import annotations
+
+import math
+
+from .ball import contact_velocity, energy, frame_velocity
+from .contact import pmax, pmin, run_phase
+from .contact_equations import centre_state, roll_spin, s_dot_of_velocity, slip_velocity
+from .contact_forces import forces
+from .decorators import inline, jit
+from .impact import CHATTER_TAIL, chatter_period, kane_levinson, rebound_settles
+from .layout import (
+    AMP,
+    CCOL,
+    COLLAPSE,
+    CONTACTS_FULL,
+    COUNTS,
+    CURVED,
+    DONE,
+    E_ESCAPED,
+    E_LEFT,
+    E_PHASE_NON_FINITE,
+    ELASTIC,
+    EN_CLOCK,
+    EN_CLOCK_ERR,
+    EN_ERR_VALUE,
+    EN_EVENT_T,
+    EN_FAULT,
+    EN_IMPACTS,
+    EN_LAST_J,
+    EN_LAST_REGIME,
+    EN_LAST_S,
+    EN_LAST_WN,
+    EN_Q1,
+    EN_Q2,
+    EN_Q3,
+    EN_RCOUNT,
+    EN_RHEAD,
+    EN_SETTLES,
+    EN_STOP,
+    EN_T,
+    EN_TARGET,
+    EN_THETA,
+    EN_U1,
+    EN_U2,
+    EN_U3,
+    EN_UNTIL,
+    EN_ZERO,
+    END_CUT,
+    END_IMPACT,
+    END_LIFT_OFF,
+    END_RELEASE,
+    END_ROLL,
+    END_SLIP,
+    END_WALL_END,
+    ESCAPE,
+    FULL,
+    HORIZ,
+    IM_E,
+    IM_EB,
+    IM_K,
+    IM_M,
+    IM_R,
+    IN_CONTACT,
+    LAND,
+    LID,
+    LID_LABEL,
+    LINE,
+    M_FLIGHT,
+    M_HELD,
+    M_ROLL,
+    M_SLIDE,
+    MC_CONTACT,
+    MC_CROW,
+    MC_FINAL,
+    MC_FLYING,
+    MC_LAST_IMPACT,
+    MC_MODE,
+    MC_PHASE_ON,
+    MC_PHASE_TIME,
+    MC_ROW,
+    MC_SPAN,
+    MC_STOP_AT,
+    MC_WALL_HI,
+    MC_WALL_LO,
+    MC_X_HI,
+    MC_X_LO,
+    NCOL,
+    OMEGA,
+    PAUSED,
+    PH_END_I,
+    PH_END_T,
+    PH_END_Y,
+    PH_HI,
+    PH_LIMIT,
+    PH_LO,
+    PH_M,
+    PH_MODE,
+    PH_MUS,
+    PH_NEXT,
+    PH_PAUSE,
+    PH_PAUSE_T,
+    PH_R,
+    PH_RSINCE,
+    PH_SGN,
+    PH_STEPS,
+    PH_SURF,
+    PH_TAU,
+    PH_THETA0,
+    PH_WALL,
+    PH_Y,
+    PHASE_LIMIT,
+    PHASE_PAUSE,
+    RECENT,
+    ROLL,
+    S_KIND,
+    S_SLOPE,
+    S_SLOPE_AT,
+    S_WALL,
+    S_WS,
+    SLIDE,
+    SURF,
+    SURF_STRIDE,
+    TIME_LIMIT,
+    VX_END_T,
+    VX_KEEPS,
+    VX_LIMIT,
+    VX_NEXT,
+    VX_THETA0,
+    VX_W,
+    VX_W_END,
+    VX_ZA,
+    VX_ZB,
+    G,
+    KernelError,
+)
+from .loop import RING, compensated_add, run_chunk
+from .rules import COLLAPSE_COUNT, COLLAPSE_SPAN, ZERO_FLIGHT_LIMIT
+from .surfaces import contact
+from .vertex import holds, run_hold
+
+#: Normal speed (m/s) a ball leaving a wall is given (see
+#: :data:`billiard.engine.contact_phases.LIFT_OFF_SPEED`).
+LIFT_OFF_SPEED = 1e-6
+#: accepted steps of a phase between two returns to Python (a stop request is looked
+#: at, progress reported): some milliseconds
+PAUSE_STEPS = 1000.0
+#: the largest error of a summed chatter series' end accepted, as a fraction of the
+#: drive period (:data:`billiard.models.chatter.CHATTER_TOL`)
+CHATTER_TOL = 1e-8
+#: MC_PHASE_ON: no phase under way, one under way, one paused (its pause answered at
+#: the next call), one to cut where it is (a stop request: the next call writes its
+#: cut row and returns)
+PHASE_OFF = 0.0
+PHASE_ON = 1.0
+PHASE_PAUSED = 2.0
+PHASE_CUT = 3.0
+#: a summed chatter series that may not be summed
+NOT_SUMMED = -1.0
+
+
+# ---------------------------------------------------------------------- kinematics
+
+
+@inline
+def drive_offset(ctx, theta):
+    """(d, v): the boundary's displacement (m) and velocity (m/s) along the drive's axis
+    at drive angle theta (as :class:`billiard.geometry.drive.Drive` computes them)."""
+    a = ctx[AMP]
+    return a * math.sin(theta), a * ctx[OMEGA] * math.cos(theta)
+
+
+@inline
+def boundary_velocity(ctx, theta):
+    """(vb1, vb2): the boundary's lab-frame velocity (m/s)."""
+    v = ctx[AMP] * ctx[OMEGA] * math.cos(theta)
+    if ctx[HORIZ] == 1.0:
+        return v, 0.0
+    return 0.0, v
+
+
+@inline
+def centre_in_boundary(ctx, theta, q1, q2):
+    """(px, py): the centre (m) in the boundary's frame."""
+    d = ctx[AMP] * math.sin(theta)
+    if ctx[HORIZ] == 1.0:
+        return q1 - d, q2
+    return q1, q2 - d
+
+
+@inline
+def lab_state(ctx, p, walls, w, theta, s, sd, u3, roll):
+    """(q1, q2, u1, u2, u3): the lab state of a ball on wall w at (s, s_dot) with spin
+    u3 (the no-slip spin when ``roll``), drive angle theta
+    (``ContactModel.lab_state``)."""
+    f0 = walls[0][w](s, p)
+    fp = walls[1][w](s, p)
+    f2 = walls[2][w](s, p)
+    d, v = drive_offset(ctx, theta)
+    if ctx[HORIZ] == 1.0:
+        d1, d2, vb1, vb2 = d, 0.0, v, 0.0
+    else:
+        d1, d2, vb1, vb2 = 0.0, d, 0.0, v
+    q1, q2, u1, u2 = centre_state(s, sd, f0, fp, f2, d1, d2, vb1, vb2, ctx[PH_R])
+    spin = roll_spin(sd, fp, f2, ctx[PH_R]) if roll else u3
+    return q1, q2, u1, u2, spin
+
+
+@inline
+def s_dot(ctx, p, walls, w, theta, s, u1, u2):
+    """ds/dt (m/s) of a centre at s with the lab velocity (u1, u2)."""
+    fp = walls[1][w](s, p)
+    f2 = walls[2][w](s, p)
+    vb1, vb2 = boundary_velocity(ctx, theta)
+    return s_dot_of_velocity(u1, u2, fp, f2, vb1, vb2, ctx[PH_R])
+
+
+@inline
+def set_forces(ctx, w, mode, sgn):
+    """The phase slots :func:`~billiard.kernels.contact_forces.forces` reads."""
+    ctx[PH_WALL] = float(w)
+    ctx[PH_MODE] = ROLL if mode == M_ROLL else SLIDE
+    ctx[PH_SGN] = sgn
+
+
+@inline
+def mode_for(ctx, p, walls, w, theta, s, sd, u3):
+    """(mode, slip sign) of a ball at (s, s_dot, u3) on wall w: rolling when the slip
+    vanishes (to rounding) and static friction can hold it, else sliding."""
+    fp = walls[1][w](s, p)
+    f2 = walls[2][w](s, p)
+    r = ctx[PH_R]
+    slip = slip_velocity(sd, u3, fp, f2, r)
+    scale = abs(sd) * math.sqrt(1.0 + fp * fp) + r * abs(u3)
+    if abs(slip) <= 1e-12 + 1e-9 * scale:
+        set_forces(ctx, w, M_ROLL, 0.0)
+        _, _, n, f = forces(ctx, p, walls, theta, s, sd)
+        if abs(f) <= ctx[PH_MUS] * n:
+            return M_ROLL, 0.0
+        return M_SLIDE, (-1.0 if f > 0.0 else 1.0)
+    return M_SLIDE, (1.0 if slip > 0.0 else -1.0)
+
+
+@inline
+def normal_force(ctx, p, walls, w, mode, sgn, theta, s, sd):
+    """N (N) of wall w on a ball in contact mode ``mode`` at (s, s_dot)."""
+    set_forces(ctx, w, mode, sgn)
+    return forces(ctx, p, walls, theta, s, sd)[2]
+
+
+@inline
+def contact_kept(ctx, p, walls, j, px):
+    """(s, z) of surface j's contact point for a centre at px, its warm start left as
+    it was (the engine asks with a copy of it)."""
+    base = SURF + j * SURF_STRIDE
+    ws, at, slope = ctx[base + S_WS], ctx[base + S_SLOPE_AT], ctx[base + S_SLOPE]
+    s, z = contact(ctx, p, walls, j, px)
+    ctx[base + S_WS] = ws
+    ctx[base + S_SLOPE_AT] = at
+    ctx[base + S_SLOPE] = slope
+    return s, z
+
+
+@inline
+def is_wall(ctx, j):
+    kind = ctx[SURF + j * SURF_STRIDE + S_KIND]
+    return kind == CURVED or kind == LINE
+
+
+@inline
+def wall_of(ctx, j):
+    return int(ctx[SURF + j * SURF_STRIDE + S_WALL])
+
+
+@inline
+def set_contact(ctx, mode, c0, c1, c2, c3, c4, c5):
+    ctx[MC_MODE] = mode
+    ctx[MC_CONTACT] = c0
+    ctx[MC_CONTACT + 1] = c1
+    ctx[MC_CONTACT + 2] = c2
+    ctx[MC_CONTACT + 3] = c3
+    ctx[MC_CONTACT + 4] = c4
+    ctx[MC_CONTACT + 5] = c5
+
+
+@inline
+def to_flight(ctx):
+    ctx[MC_MODE] = M_FLIGHT
+    for i in range(6):
+        ctx[MC_CONTACT + i] = 0.0
+
+
+# ---------------------------------------------------------------------- landing
+
+
+@inline
+def chatter_accel(ctx, p, walls, theta, s, sd, tau):
+    """The acceleration (m/s^2) with which the wall presses the ball tau seconds after
+    the impact (the forces' slots set for its contact mode)."""
+    return forces(ctx, p, walls, theta + ctx[OMEGA] * tau, s + sd * tau, sd)[2] / ctx[PH_M]
+
+
+@inline
+def bracket(v, e, a0, jerk, window):
+    """:func:`billiard.models.chatter.bracket`."""
+    if v == 0.0:
+        return 0.0, 0.0
+    spread = jerk * window
+    a_lo, a_hi = a0 - spread, a0 + spread
+    if not a_lo > 0.0:
+        return 0.0, math.inf
+    rho = math.sqrt(a_hi / a_lo)
+    if not e * rho < 1.0:
+        return 0.0, math.inf
+    lo = 2.0 * v / (a_hi * (1.0 - e / rho))
+    hi = 2.0 * v / (a_lo * (1.0 - e * rho))
+    if hi > window:
+        return 0.0, math.inf
+    return lo, hi
+
+
+@inline
+def summed(ctx, p, walls, theta, s, sd, v, e):
+    """:func:`billiard.models.chatter.summed` (NOT_SUMMED for None)."""
+    period = chatter_period(ctx[OMEGA])
+    a0 = chatter_accel(ctx, p, walls, theta, s, sd, 0.0)
+    if not a0 > 0.0:
+        return NOT_SUMMED
+    t0 = 2.0 * v / (a0 * (1.0 - e))
+    if t0 == 0.0:
+        return 0.0
+    if not t0 <= CHATTER_TAIL * period:
+        return NOT_SUMMED
+    window = 2.0 * t0
+    a1 = chatter_accel(ctx, p, walls, theta, s, sd, t0)
+    a2 = chatter_accel(ctx, p, walls, theta, s, sd, window)
+    jerk = 2.0 * pmax(abs(a1 - a0), abs(a2 - a1)) / t0
+    lo, hi = bracket(v, e, a0, jerk, window)
+    if hi - lo > CHATTER_TOL * period:
+        return NOT_SUMMED
+    return t0
+
+
+@inline
+def leave_wall(ctx, p, walls, w, s, theta):
+    """``ContactPhases._leave_wall``: a settling impact where the wall does not press
+    the ball leaves at least at LIFT_OFF_SPEED along the wall's normal."""
+    fp = walls[1][w](s, p)
+    c = 1.0 / math.sqrt(1.0 + fp * fp)
+    nx, ny = -fp * c, c
+    vb1, vb2 = boundary_velocity(ctx, theta)
+    vn = (ctx[EN_U1] - vb1) * nx + (ctx[EN_U2] - vb2) * ny
+    if vn >= LIFT_OFF_SPEED:
+        return
+    dv = LIFT_OFF_SPEED - vn
+    ctx[EN_U1] = ctx[EN_U1] + dv * nx
+    ctx[EN_U2] = ctx[EN_U2] + dv * ny
+
+
+@inline
+def land(ctx, p, walls, j, s, theta, u1, u2, u3, wn, elastic, tail, t):
+    """``ContactPhases._land`` after an impact at t on surface j at s, the speeds
+    (u1, u2, u3) after it, the normal speed wn before it; ``tail``: the free flight's
+    test of the chatter's tail (1 made and met, 0 made and not met, -1 not made)."""
+    e = ctx[IM_E]
+    slow = rebound_settles(e, ctx[IM_EB], wn, elastic)
+    if not is_wall(ctx, j) or e >= 1.0 or not (slow or tail != 0):
+        return
+    rebound = e * abs(wn)
+    w = wall_of(ctx, j)
+    sd = s_dot(ctx, p, walls, w, theta, s, u1, u2)
+    mode, sgn = mode_for(ctx, p, walls, w, theta, s, sd, u3)
+    n_force = normal_force(ctx, p, walls, w, mode, sgn, theta, s, sd)
+    if not n_force > 0.0:
+        if slow:
+            leave_wall(ctx, p, walls, w, s, theta)
+        return
+    if tail != 0:
+        tau = summed(ctx, p, walls, theta, s, sd, rebound, e)
+        if tau != NOT_SUMMED:
+            total, error = compensated_add(ctx[EN_CLOCK], ctx[EN_CLOCK_ERR], tau)
+            set_contact(ctx, mode, float(j), s, sd, sgn, total + error, total + error)
+            return
+    if not slow:
+        return
+    settle = t + 2.0 * rebound / (n_force / ctx[PH_M] * (1.0 - e))
+    set_contact(ctx, mode, float(j), s, sd, sgn, t, settle)
+
+
+@inline
+def end_chatter(ctx, p, walls, until):
+    """``ContactPhases._end_chatter`` (no samples): move a ball that landed at the end
+    of a summed chatter series there; False when that is after ``until``."""
+    t_start = ctx[MC_CONTACT + 4]
+    if t_start > until:
+        return False
+    w = wall_of(ctx, int(ctx[MC_CONTACT]))
+    tau = t_start - ctx[EN_T]
+    theta = (ctx[EN_THETA] + ctx[OMEGA] * tau) % (2.0 * math.pi)
+    u3 = ctx[EN_U3]
+    roll = ctx[MC_MODE] == M_ROLL
+    q1, q2, u1, u2, _ = lab_state(
+        ctx, p, walls, w, theta, ctx[MC_CONTACT + 1], ctx[MC_CONTACT + 2], u3, roll
+    )
+    ctx[EN_T] = t_start
+    ctx[EN_THETA] = theta
+    ctx[EN_Q1] = q1
+    ctx[EN_Q2] = q2
+    ctx[EN_U1] = u1
+    ctx[EN_U2] = u2
+    ctx[EN_Q3] = ctx[EN_Q3] + u3 * tau
+    ctx[EN_CLOCK] = t_start
+    ctx[EN_CLOCK_ERR] = 0.0
+    ctx[MC_FINAL] = t_start
+    return True
+
+
+# ---------------------------------------------------------------------- rows
+
+
+@inline
+def contact_row(ctx, cout, kind, t_start, t_end, a, b, mode, end, settle):
+    """Start contact row MC_CROW (its lab states follow: :func:`row_state`); returns
+    its offset in ``cout``."""
+    o = int(ctx[MC_CROW]) * CCOL
+    cout[o] = kind
+    cout[o + 1] = ctx[EN_IMPACTS]
+    cout[o + 2] = t_start
+    cout[o + 3] = t_end
+    cout[o + 4] = a
+    cout[o + 5] = b
+    cout[o + 6] = mode
+    cout[o + 7] = end
+    cout[o + 8] = settle
+    ctx[MC_CROW] += 1.0
+    return o
+
+
+@inline
+def row_state(cout, o, q1, q2, u1, u2, u3):
+    cout[o] = q1
+    cout[o + 1] = q2
+    cout[o + 2] = u1
+    cout[o + 3] = u2
+    cout[o + 4] = u3
+
+
+@inline
+def deadline(ctx, until):
+    """``ContactPhases._contact_deadline``: when a run without a time limit ends in
+    contact (s)."""
+    if math.isfinite(until):
+        return math.inf
+    return ctx[MC_LAST_IMPACT] + ctx[MC_SPAN]
+
+
+@inline
+def end_phase(ctx, mode, t_start, tau, total, error):
+    """``ContactPhases._end_phase``: the clock and tallies at a phase's end."""
+    t = total + error
+    ctx[EN_CLOCK] = total
+    ctx[EN_CLOCK_ERR] = error
+    k = MC_PHASE_TIME + int(mode) - 1
+    ctx[k] = ctx[k] + (t - t_start)
+    ctx[MC_FINAL] = t
+    ctx[EN_ZERO] = ctx[EN_ZERO] + 1.0 if tau == 0.0 else 0.0
+    if ctx[EN_ZERO] >= ZERO_FLIGHT_LIMIT:
+        ctx[EN_FAULT] = 2.0  # contact phases of zero duration piled up
+
+
+@inline
+def remember_impact(ctx, t):
+    """The collapse window after an impact at t (``loop.impact``'s ring)."""
+    count = int(ctx[EN_RCOUNT])
+    head = int(ctx[EN_RHEAD])
+    if count == RING:
+        head = (head + 1) % RING
+        count -= 1
+    ctx[RECENT + (head + count) % RING] = t
+    count += 1
+    while t - ctx[RECENT + head] >= COLLAPSE_SPAN:
+        head = (head + 1) % RING
+        count -= 1
+    ctx[EN_RCOUNT] = count
+    ctx[EN_RHEAD] = head
+
+
+# ---------------------------------------------------------------------- two walls
+
+
+@inline
+def enter_hold(ctx, a, b, t, settle):
+    """``ContactPhases._enter_hold``: the ball moves with the boundary, held by walls
+    a and b at its present centre."""
+    theta = ctx[EN_THETA]
+    px, py = centre_in_boundary(ctx, theta, ctx[EN_Q1], ctx[EN_Q2])
+    u1, u2 = boundary_velocity(ctx, theta)
+    ctx[EN_U1] = u1
+    ctx[EN_U2] = u2
+    set_contact(ctx, M_HELD, float(a), float(b), px, py, t, settle)
+
+
+@inline
+def hold_after(ctx, p, walls, index, j, theta, u3, wn, elastic, t):
+    """``ContactPhases._hold_after``: after an impact on wall j of a ball in contact
+    with wall ``index``, is it held by both (then held)?"""
+    if not is_wall(ctx, j) or not rebound_settles(ctx[IM_E], ctx[IM_EB], wn, elastic):
+        return False
+    px, _ = centre_in_boundary(ctx, theta, ctx[EN_Q1], ctx[EN_Q2])
+    z_index = contact_kept(ctx, p, walls, index, px)[1]
+    z_j = contact_kept(ctx, p, walls, j, px)[1]
+    if not holds(ctx, z_index, z_j, theta, u3):
+        return False
+    enter_hold(ctx, index, j, t, t)
+    return True
+
+
+@inline
+def continue_on(ctx, p, walls, j, px, theta, u3, t):
+    """``ContactPhases._continue_on``: released by the other wall, roll or slide on
+    wall j from rest relative to the boundary if it presses the ball."""
+    s = contact_kept(ctx, p, walls, j, px)[0]
+    w = wall_of(ctx, j)
+    mode, sgn = mode_for(ctx, p, walls, w, theta, s, 0.0, u3)
+    if normal_force(ctx, p, walls, w, mode, sgn, theta, s, 0.0) > 0.0:
+        set_contact(ctx, mode, float(j), s, 0.0, sgn, t, t)
+
+
+@inline
+def held_lab(ctx, theta, px, py):
+    """(q1, q2, u1, u2) of a ball held at (px, py) in the boundary's frame."""
+    d = ctx[AMP] * math.sin(theta)
+    if ctx[HORIZ] == 1.0:
+        q1, q2 = px + d, py
+    else:
+        q1, q2 = px, py + d
+    u1, u2 = boundary_velocity(ctx, theta)
+    return q1, q2, u1, u2
+
+
+@inline
+def hold_step(ctx, p, walls, cout, until):
+    """``ContactPhases._hold_step``: the held ball to a release (-1: the run goes on),
+    or the status that ends the run."""
+    a = int(ctx[MC_CONTACT])
+    b = int(ctx[MC_CONTACT + 1])
+    px, py = ctx[MC_CONTACT + 2], ctx[MC_CONTACT + 3]
+    t_start, settle = ctx[MC_CONTACT + 4], ctx[MC_CONTACT + 5]
+    za = contact_kept(ctx, p, walls, a, px)[1]
+    zb = contact_kept(ctx, p, walls, b, px)[1]
+    t0, theta0, u3_0 = ctx[EN_T], ctx[EN_THETA], ctx[EN_U3]
+    end_at = deadline(ctx, until)
+    if t0 >= end_at:
+        ctx[MC_FINAL] = t0
+        return IN_CONTACT
+    ctx[VX_ZA] = za
+    ctx[VX_ZB] = zb
+    ctx[VX_THETA0] = theta0
+    ctx[VX_LIMIT] = until - t0
+    ctx[VX_W] = u3_0
+    ctx[VX_NEXT] = math.inf
+    status = run_hold(ctx, True)
+    omega = ctx[OMEGA]
+    q1s, q2s, u1s, u2s = held_lab(ctx, theta0, px, py)
+    if status == PHASE_LIMIT:
+        tau = ctx[VX_LIMIT]
+        q1, q2, u1, u2 = held_lab(ctx, theta0 + omega * tau, px, py)
+        o = contact_row(ctx, cout, 1.0, t_start, t0 + tau, a, b, M_HELD, END_CUT, settle)
+        row_state(cout, o + 9, q1s, q2s, u1s, u2s, u3_0)
+        row_state(cout, o + 14, q1, q2, u1, u2, ctx[VX_W_END])
+        return TIME_LIMIT
+    tau = ctx[VX_END_T]
+    total, error = compensated_add(ctx[EN_CLOCK], ctx[EN_CLOCK_ERR], tau)
+    theta = (theta0 + omega * tau) % (2.0 * math.pi)
+    t = total + error
+    u3 = ctx[VX_W_END]
+    q1, q2, u1, u2 = held_lab(ctx, theta, px, py)
+    # the spin decays linearly in time on a static boundary: the trapezoid is exact
+    q3 = ctx[EN_Q3] + 0.5 * (u3_0 + u3) * tau
+    o = contact_row(ctx, cout, 0.0, t_start, t, a, b, M_HELD, END_RELEASE, settle)
+    row_state(cout, o + 9, q1s, q2s, u1s, u2s, u3_0)
+    row_state(cout, o + 14, q1, q2, u1, u2, u3)
+    ctx[EN_T] = t
+    ctx[EN_THETA] = theta
+    ctx[EN_Q1] = q1
+    ctx[EN_Q2] = q2
+    ctx[EN_U1] = u1
+    ctx[EN_U2] = u2
+    ctx[EN_U3] = u3
+    ctx[EN_Q3] = q3
+    end_phase(ctx, M_HELD, t_start, tau, total, error)
+    to_flight(ctx)
+    keeps = int(ctx[VX_KEEPS])
+    if keeps >= 0:
+        continue_on(ctx, p, walls, a if keeps == 0 else b, px, theta, u3, t)
+    if ctx[MC_MODE] == M_FLIGHT:
+        # leave both walls along the sum of their normals (see LIFT_OFF_SPEED)
+        nx, ny = -math.sin(za) - math.sin(zb), math.cos(za) + math.cos(zb)
+        norm = math.sqrt(nx * nx + ny * ny)
+        ctx[EN_U1] = u1 + LIFT_OFF_SPEED * nx / norm
+        ctx[EN_U2] = u2 + LIFT_OFF_SPEED * ny / norm
+    return -1
+
+
+# ---------------------------------------------------------------------- one wall
+
+
+@inline
+def impact_from_contact(ctx, p, walls, out, other, index, t, tau, theta, q3):
+    """``ContactPhases._impact_from_contact``: the ball in contact with wall ``index``
+    reaches surface ``other`` (numbered without ``index``): an impact, its row written
+    (True), or a contact without impulse (False: no row, nothing counted)."""
+    j = other if other < index else other + 1
+    base = SURF + j * SURF_STRIDE
+    kind = ctx[base + S_KIND]
+    if kind == ESCAPE:
+        ctx[EN_EVENT_T] = t
+        ctx[EN_STOP] = E_ESCAPED
+        raise KernelError(E_ESCAPED)
+    q1, q2 = ctx[EN_Q1], ctx[EN_Q2]
+    u1, u2, u3 = ctx[EN_U1], ctx[EN_U2], ctx[EN_U3]
+    px, _ = centre_in_boundary(ctx, theta, q1, q2)
+    s_o, z = contact(ctx, p, walls, j, px)
+    vb1, vb2 = boundary_velocity(ctx, theta)
+    # a ball that reaches a second wall or the lid lands, is held or reflects: under
+    # contact phases the low-velocity rule never relaunches it (that adds energy)
+    n1, n2, n3, rt, rn, regime, _ = kane_levinson(ctx, u1, u2, u3, z, vb1, vb2, False)
+    _, wn = contact_velocity(u1, u2, u3, z, vb1, vb2, ctx[IM_R])
+    elastic = regime == ELASTIC
+    if rn == 0.0 and rt == 0.0:
+        # no impulse: no impact (billiard.models.corner.is_impact)
+        if not hold_after(ctx, p, walls, index, j, theta, n3, wn, elastic, t):
+            land(ctx, p, walls, j, s_o, theta, n1, n2, n3, wn, elastic, -1, t)
+        return False
+    u4, un = frame_velocity(n1, n2, z)
+    e = energy(q2, n1, n2, n3, ctx[IM_M], ctx[IM_R], ctx[IM_K], ctx[G])
+    n = ctx[EN_IMPACTS] + 1.0
+    o = int(ctx[MC_ROW]) * NCOL
+    out[o] = n
+    out[o + 1] = t
+    out[o + 2] = q1
+    out[o + 3] = q2
+    out[o + 4] = n1
+    out[o + 5] = n2
+    out[o + 6] = n3
+    out[o + 7] = u4
+    out[o + 8] = un
+    out[o + 9] = tau
+    out[o + 10] = regime
+    out[o + 11] = z
+    out[o + 12] = e
+    out[o + 13] = LID_LABEL if kind == LID else ctx[base + S_WALL]
+    out[o + 14] = rt
+    out[o + 15] = rn
+    out[o + 16] = s_o
+    out[o + 17] = q3
+    ctx[MC_ROW] += 1.0
+    ctx[EN_IMPACTS] = n
+    ctx[EN_EVENT_T] = t
+    ctx[MC_LAST_IMPACT] = t
+    ctx[EN_T] = t
+    ctx[EN_THETA] = theta
+    ctx[EN_U1] = n1
+    ctx[EN_U2] = n2
+    ctx[EN_U3] = n3
+    ctx[EN_Q3] = q3
+    ctx[COUNTS + int(regime)] += 1.0
+    remember_impact(ctx, t)
+    collapsed = int(ctx[EN_RCOUNT]) > COLLAPSE_COUNT or ctx[EN_ZERO] >= ZERO_FLIGHT_LIMIT
+    ctx[EN_FAULT] = 1.0 if collapsed else 0.0
+    if not hold_after(ctx, p, walls, index, j, theta, n3, wn, elastic, t):
+        land(ctx, p, walls, j, s_o, theta, n1, n2, n3, wn, elastic, -1, t)
+    return True
+
+
+@inline
+def start_phase(ctx, p, walls, until):
+    """Set up the phase of the ball in contact (``ContactPhases._contact_step`` up to
+    ``run_phase``): -1, or the status that ends the run first."""
+    if ctx[EN_T] < ctx[MC_CONTACT + 4] and not end_chatter(ctx, p, walls, until):
+        return TIME_LIMIT
+    t0 = ctx[EN_T]
+    end_at = deadline(ctx, until)
+    if t0 >= end_at:
+        ctx[MC_FINAL] = t0
+        return IN_CONTACT
+    j = int(ctx[MC_CONTACT])
+    w = wall_of(ctx, j)
+    roll = ctx[MC_MODE] == M_ROLL
+    ctx[PH_WALL] = float(w)
+    ctx[PH_LO] = pmax(ctx[MC_WALL_LO + w], ctx[MC_X_LO])
+    ctx[PH_HI] = pmin(ctx[MC_WALL_HI + w], ctx[MC_X_HI])
+    ctx[PH_MODE] = ROLL if roll else SLIDE
+    ctx[PH_SGN] = ctx[MC_CONTACT + 3]
+    ctx[PH_THETA0] = ctx[EN_THETA]
+    ctx[PH_LIMIT] = until - t0
+    ctx[PH_Y] = ctx[MC_CONTACT + 1]
+    ctx[PH_Y + 1] = ctx[MC_CONTACT + 2]
+    ctx[PH_Y + 2] = 0.0 if roll else ctx[EN_U3]
+    ctx[PH_SURF] = float(j)
+    ctx[PH_NEXT] = math.inf
+    ctx[PH_STEPS] = 0.0
+    ctx[PH_PAUSE] = PAUSE_STEPS
+    ctx[PH_PAUSE_T] = end_at - t0
+    ctx[MC_STOP_AT] = end_at - t0
+    return -1
+
+
+@inline
+def phase_cut(ctx, p, walls, cout, tau, y):
+    """The row of the phase under way cut tau after its start with the contact state
+    ctx[y:y + 3] (``end`` = ``cut``): the engine's state stays at the phase's start.
+    Returns the time of the cut (s)."""
+    j = int(ctx[MC_CONTACT])
+    w = wall_of(ctx, j)
+    mode = ctx[MC_MODE]
+    roll = mode == M_ROLL
+    theta0 = ctx[PH_THETA0]
+    theta = (theta0 + ctx[OMEGA] * tau) % (2.0 * math.pi)
+    t_cut = ctx[EN_T] + tau
+    o = contact_row(ctx, cout, 1.0, ctx[MC_CONTACT + 4], t_cut, j, -1.0, mode, END_CUT,
+                    ctx[MC_CONTACT + 5])  # fmt: skip
+    q1, q2, u1, u2, u3 = lab_state(ctx, p, walls, w, theta0, ctx[MC_CONTACT + 1],
+                                   ctx[MC_CONTACT + 2], ctx[EN_U3], roll)  # fmt: skip
+    row_state(cout, o + 9, q1, q2, u1, u2, u3)
+    q1, q2, u1, u2, u3 = lab_state(ctx, p, walls, w, theta, ctx[y], ctx[y + 1], ctx[y + 2], roll)
+    row_state(cout, o + 14, q1, q2, u1, u2, u3)
+    ctx[MC_PHASE_ON] = PHASE_OFF
+    return t_cut
+
+
+@inline
+def answer_pause(ctx, p, walls, cout, until):
+    """A pause of the phase under way, answered as the engine's pause answers it when
+    no stop is requested: on (-1), or the status that ends the run (the phase cut at
+    the contact span's end)."""
+    tau = ctx[PH_TAU]
+    if tau < ctx[MC_STOP_AT]:
+        ctx[PH_PAUSE] = ctx[PH_STEPS] + PAUSE_STEPS
+    elif ctx[PH_RSINCE] == math.inf:
+        # moving at the contact span's end: cut there
+        t_cut = phase_cut(ctx, p, walls, cout, tau, PH_Y)
+        if t_cut >= deadline(ctx, until):
+            ctx[MC_FINAL] = t_cut
+            return IN_CONTACT
+        return TIME_LIMIT
+    else:
+        # at rest relative to the boundary: on to the kernel's at-rest stop (within a
+        # drive period), looked at after every step
+        ctx[PH_PAUSE_T] = math.inf
+        ctx[PH_PAUSE] = ctx[PH_STEPS] + 1.0
+    ctx[MC_PHASE_ON] = PHASE_ON
+    return -1
+
+
+@inline
+def finish_phase(ctx, p, walls, out, cout, until, status):
+    """``ContactPhases._contact_step`` after ``run_phase``: the phase's end, its row,
+    the transition (-1: the run goes on), or the status that ends the run."""
+    ctx[MC_PHASE_ON] = PHASE_OFF
+    if status == PHASE_LIMIT:
+        phase_cut(ctx, p, walls, cout, ctx[PH_LIMIT], PH_Y)
+        return TIME_LIMIT
+    j = int(ctx[MC_CONTACT])
+    w = wall_of(ctx, j)
+    s0, sd0, sgn = ctx[MC_CONTACT + 1], ctx[MC_CONTACT + 2], ctx[MC_CONTACT + 3]
+    t_start, settle = ctx[MC_CONTACT + 4], ctx[MC_CONTACT + 5]
+    mode = ctx[MC_MODE]
+    roll = mode == M_ROLL
+    theta0, u3_0 = ctx[PH_THETA0], ctx[EN_U3]
+    tau = ctx[PH_END_T]
+    i = int(ctx[PH_END_I])
+    s1, sd1, w1 = ctx[PH_END_Y], ctx[PH_END_Y + 1], ctx[PH_END_Y + 2]
+    total, error = compensated_add(ctx[EN_CLOCK], ctx[EN_CLOCK_ERR], tau)
+    theta = (theta0 + ctx[OMEGA] * tau) % (2.0 * math.pi)
+    t = total + error
+    q1, q2, u1, u2, u3 = lab_state(ctx, p, walls, w, theta, s1, sd1, w1, roll)
+    if not math.isfinite(q1 + q2 + u1 + u2 + u3):
+        ctx[EN_ERR_VALUE] = t
+        ctx[EN_STOP] = E_PHASE_NON_FINITE
+        raise KernelError(E_PHASE_NON_FINITE)
+    q3 = ctx[EN_Q3] + 0.5 * (u3_0 + u3) * tau
+    if i == 0:
+        reason = END_LIFT_OFF
+    elif i < 3:
+        reason = END_WALL_END
+    elif i == 3:
+        reason = END_SLIP if roll else END_ROLL
+    else:
+        reason = END_IMPACT
+    o = contact_row(ctx, cout, 0.0, t_start, t, j, -1.0, mode, reason, settle)
+    q1s, q2s, u1s, u2s, u3s = lab_state(ctx, p, walls, w, theta0, s0, sd0, u3_0, roll)
+    row_state(cout, o + 9, q1s, q2s, u1s, u2s, u3s)
+    row_state(cout, o + 14, q1, q2, u1, u2, u3)
+    ctx[EN_T] = t
+    ctx[EN_THETA] = theta
+    ctx[EN_Q1] = q1
+    ctx[EN_Q2] = q2
+    ctx[EN_U1] = u1
+    ctx[EN_U2] = u2
+    ctx[EN_U3] = u3
+    ctx[EN_Q3] = q3
+    end_phase(ctx, mode, t_start, tau, total, error)
+    if reason == END_LIFT_OFF or reason == END_WALL_END:
+        # the centre is on the offset curve with a tangent velocity: leave along the
+        # wall's normal (see LIFT_OFF_SPEED)
+        fp = walls[1][w](s1, p)
+        c = 1.0 / math.sqrt(1.0 + fp * fp)
+        ctx[EN_U1] = u1 - LIFT_OFF_SPEED * fp * c
+        ctx[EN_U2] = u2 + LIFT_OFF_SPEED * c
+        to_flight(ctx)
+    elif reason == END_SLIP:
+        set_forces(ctx, w, M_ROLL, 0.0)
+        f = forces(ctx, p, walls, theta, s1, sd1)[3]
+        set_contact(ctx, M_SLIDE, float(j), s1, sd1, -1.0 if f > 0.0 else 1.0, t, t)
+    elif reason == END_ROLL:
+        set_forces(ctx, w, M_ROLL, 0.0)
+        _, _, n_force, f = forces(ctx, p, walls, theta, s1, sd1)
+        if abs(f) <= ctx[PH_MUS] * n_force:
+            set_contact(ctx, M_ROLL, float(j), s1, sd1, 0.0, t, t)
+        else:
+            set_contact(ctx, M_SLIDE, float(j), s1, sd1, -sgn, t, t)
+    if reason == END_WALL_END:
+        # at the container's end of x rather than the wall's: the ball leaves sideways
+        lo, hi = ctx[PH_LO], ctx[PH_HI]
+        low_end = s1 <= 0.5 * (lo + hi)
+        if (low_end and lo > ctx[MC_WALL_LO + w]) or (not low_end and hi < ctx[MC_WALL_HI + w]):
+            ctx[EN_ERR_VALUE] = s1
+            ctx[EN_STOP] = E_LEFT
+            raise KernelError(E_LEFT)
+    if reason == END_IMPACT:
+        to_flight(ctx)
+        impact_from_contact(ctx, p, walls, out, i - 4, j, t, tau, theta, q3)
+    return -1
+
+
+@inline
+def contact_step(ctx, p, walls, out, cout, until):
+    """A phase of the ball in contact with one wall, to its end or a pause: -1 when the
+    run goes on, else the status that ends this call (PAUSED: the phase goes on at the
+    next)."""
+    on = ctx[MC_PHASE_ON]
+    if on == PHASE_CUT:
+        phase_cut(ctx, p, walls, cout, ctx[PH_TAU], PH_Y)
+        return PAUSED
+    if on == PHASE_OFF:
+        code = start_phase(ctx, p, walls, until)
+        if code >= 0:
+            return code
+        ctx[MC_PHASE_ON] = PHASE_ON
+        status = run_phase(ctx, p, walls, True)
+    else:
+        if on == PHASE_PAUSED:
+            code = answer_pause(ctx, p, walls, cout, until)
+            if code >= 0:
+                return code
+        status = run_phase(ctx, p, walls, False)
+    if status == PHASE_PAUSE:
+        ctx[MC_PHASE_ON] = PHASE_PAUSED
+        return PAUSED
+    return finish_phase(ctx, p, walls, out, cout, until, status)
+
+
+@jit
+def run_machine(ctx, p, walls, out, rows, cout, crows):
+    """Advance the trajectory until impact number ``ctx[EN_TARGET]`` (``rows`` impact
+    rows in ``out``, ``crows`` contact rows in ``cout``, counted in MC_ROW and MC_CROW
+    from zero at each call). ``walls`` = (f, f', f'', f''') of the curve's walls.
+
+    Returns a status: DONE, FULL, CONTACTS_FULL, TIME_LIMIT (``ctx[EN_UNTIL]`` comes
+    first), COLLAPSE (``ctx[EN_FAULT]``: 1 impacts piled up, 2 phases of zero duration),
+    IN_CONTACT (no impact for the contact span, at MC_FINAL) or PAUSED (a long phase,
+    or a phase cut by a stop request: MC_PHASE_ON). A documented stop raises
+    KernelError, the rows written so far counted."""
+    flight_walls = (walls[0], walls[1], walls[2])
+    ctx[MC_ROW] = 0.0
+    ctx[MC_CROW] = 0.0
+    until = ctx[EN_UNTIL]
+    while ctx[EN_IMPACTS] < ctx[EN_TARGET]:
+        row = int(ctx[MC_ROW])
+        if row == rows:
+            return FULL
+        if int(ctx[MC_CROW]) == crows:
+            return CONTACTS_FULL
+        mode = ctx[MC_MODE]
+        if mode == M_FLIGHT:
+            ctx[EN_SETTLES] = 0.0
+            ctx[MC_FLYING] = 1.0
+            code, written = run_chunk(ctx, p, flight_walls, out[row * NCOL :], rows - row)
+            ctx[MC_FLYING] = 0.0
+            ctx[MC_ROW] = float(row + written)
+            if written > 0:
+                ctx[MC_LAST_IMPACT] = ctx[EN_T]
+                ctx[MC_FINAL] = ctx[EN_T]
+            if ctx[EN_SETTLES] != 0.0:
+                j = int(ctx[EN_LAST_J])
+                # the free flight's test of the chatter's tail (loop.SETTLES_TAIL)
+                tail = 1 if int(ctx[EN_SETTLES]) & 2 != 0 else 0
+                land(ctx, p, walls, j, ctx[EN_LAST_S], ctx[EN_THETA], ctx[EN_U1], ctx[EN_U2],
+                     ctx[EN_U3], ctx[EN_LAST_WN], ctx[EN_LAST_REGIME] == ELASTIC, tail,
+                     ctx[EN_T])  # fmt: skip
+            if code != LAND:
+                return code
+            continue
+        if mode == M_HELD:
+            code = hold_step(ctx, p, walls, cout, until)
+        else:
+            code = contact_step(ctx, p, walls, out, cout, until)
+        if code >= 0:
+            return code
+        if ctx[EN_FAULT] != 0.0:
+            return COLLAPSE
+    return DONE
