@@ -34,6 +34,9 @@ energy created
     (v_e = ``elastic_below``, w_n the normal velocity it replaces), and counted
     separately; under contact phases no impact has an allowance (a lying ball lands or
     reflects, the lift is never made).
+zero-impulse rows
+    phases scenes: rows of collisions.csv with neither a normal nor a tangential
+    impulse (a contact without impulse is no impact under contact phases).
 contact penetrations, contact detached
     contact phases at whose start or end the centre is off the wall's offset curve:
     clearance below -``GAP_LIMIT`` (in a wall or the lid) or above it (off the wall).
@@ -795,6 +798,10 @@ def run_job(job: Job) -> dict[str, Any]:
         result = run_streamed(sim, Path(tmp) / "a", collisions=job.impacts)
         columns = read_collisions(Path(tmp) / "a" / "collisions.csv")
         report.update(audit_rows(sim.boundary, sim.drive, columns))
+        if scene.contact.model == "phases":
+            # under contact phases a row is an impact: a contact without impulse is none
+            no_impulse = (columns["Rn"] == 0.0) & (columns["Rt"] == 0.0)
+            report["zero_impulse_rows"] = int(no_impulse.sum())
         report.update(
             impacts=len(result),
             events=len(result),
@@ -911,7 +918,8 @@ def _job_line(report: dict[str, Any]) -> str:
         phases = (
             f" +{report.get('contact_phases', 0)} phases: pen "
             f"{report.get('contact_penetrations', 0)} det {report.get('contact_detached', 0)} "
-            f"nonfin {report.get('contact_non_finite_rows', 0)} transition "
+            f"nonfin {report.get('contact_non_finite_rows', 0)} "
+            f"zero-impulse {report.get('zero_impulse_rows', 0)} transition "
             f"{report.get('transition_energy_created', 0)}/{report.get('transition_jumps', 0)}"
             f" phase-energy {report.get('phase_energy_created', 0)}"
         )
@@ -961,6 +969,7 @@ def _aggregate(reports: list[dict[str, Any]]) -> dict[str, Any]:
         "contact_penetrations": total("contact_penetrations"),
         "contact_detached": total("contact_detached"),
         "contact_non_finite_rows": total("contact_non_finite_rows"),
+        "zero_impulse_rows": total("zero_impulse_rows"),
         "transition_energy_created": total("transition_energy_created"),
         "transition_jumps": total("transition_jumps"),
         "unlinked_phases": total("unlinked_phases"),
@@ -1030,6 +1039,7 @@ MUST_BE_ZERO = (
     "contact_penetrations",
     "contact_detached",
     "contact_non_finite_rows",
+    "zero_impulse_rows",
     "transition_energy_created",
     "transition_jumps",
     "unlinked_phases",

@@ -420,7 +420,7 @@ class ContactPhases:
         pressing = False
         res = self.impact.apply(ball, Contact(z, vb1, vb2, pressing))
         if not is_impact(res):
-            if not self._hold_after(index, j, theta, res, t):
+            if not self._hold_after(index, j, theta, res, t, impulse=False, instant=tau == 0.0):
                 self._land(j, s_o, theta, res, t)
             return None
         sc = self.scene
@@ -441,28 +441,68 @@ class ContactPhases:
         while t - recent[0] >= COLLAPSE_SPAN:
             recent.popleft()
         self._fault = self._collapse(n, t)
-        if not self._hold_after(index, j, theta, res, t):
+        if not self._hold_after(index, j, theta, res, t, instant=tau == 0.0):
             self._land(j, s_o, theta, res, t)
         return record
 
     # ------------------------------------------------------------------ two walls
 
-    def _hold_after(self, index: int, j: int, theta: float, res: Any, t: float) -> bool:
-        """After an impact on wall j of a ball in contact with wall ``index``: is it held
-        by both? Yes when the rebound speed is below the landing speed (as for landing
-        on one wall) and both walls press it. The chattering between the two walls that
-        this skips would carry the ball's velocity relative to the boundary, at most the
-        rebound speed, to zero: it is dropped (never energy created), the spin is kept."""
-        if self.boundary.surfaces[j].kind != "wall" or not self._settles(res):
+    def _hold_after(
+        self,
+        index: int,
+        j: int,
+        theta: float,
+        res: Any,
+        t: float,
+        impulse: bool = True,
+        instant: bool = False,
+    ) -> bool:
+        """After a contact with wall j of a ball in contact with wall ``index`` (an
+        impact, or with ``impulse`` False a contact that gave none; ``instant``: the
+        phase on wall ``index`` lasted no time, it met wall j where it began): is it held
+        by both? Yes when both walls press it and
+
+        * the rebound speed is below the landing speed (as for landing on one wall), or
+        * the phase lasted no time: the ball meets one wall and the other at one
+          instant, a series of impacts at that instant that takes its velocity relative
+          to the boundary to zero (e < 1: each impact shrinks its normal component
+          towards one wall by e, and the two normals span the plane), or
+        * the chattering between the two walls would end within ``CHATTER_TAIL`` of a
+          drive period: v = e |wn| (|wn|, the speed at which the ball separates from
+          wall j, after a contact without impulse) with 2 v <= CHATTER_TAIL P a (1 - e),
+          a the smaller wall's normal force per unit mass, the bound of a series of
+          rebounds each turned back by at least a (the time of a single wall's series,
+          :mod:`billiard.models.chatter`; recorded as the phase's ``t_settle``).
+
+        The last two hold whatever ``contact.elastic_below`` is. The chattering this
+        skips would carry the ball's velocity relative to the boundary, at most v, to
+        zero: it is dropped (never energy created), the spin is kept. Without them a
+        ball pressed into a vertex with ``elastic_below = 0`` meets one wall and the
+        other at one instant, again and again, until the collapse stop."""
+        if self.boundary.surfaces[j].kind != "wall":
             return False  # the lid holds nothing
+        slow = self._settles(res)
+        e = self.contact_model.e
+        if not slow and e >= 1.0:
+            return False
         ball = self._ball
         px, _, _, _ = self.drive.to_boundary_frame(theta, ball.q1, ball.q2, ball.u1, ball.u2)
         offsets = self.boundary.offsets
         z_index = offsets[index].contact(px, list(self.warm[index]))[1]
         z_j = offsets[j].contact(px, list(self.warm[j]))[1]
-        if not self.vertex_hold.holds(z_index, z_j, theta, res.u3):
+        hold = self.vertex_hold
+        if not hold.holds(z_index, z_j, theta, res.u3):
             return False
-        self._enter_hold(index, j, t, t)
+        settle = t
+        if not slow and not instant:
+            n_a, n_b = hold.pressing(z_index, z_j, theta, res.u3)
+            a = min(n_a, n_b) / self.contact_model.m
+            v = e * abs(res.wn) if impulse else abs(res.wn)
+            period = _impact.chatter_period(self.drive.omega)
+            if not 2.0 * v <= _impact.CHATTER_TAIL * period * a * (1.0 - e):
+                return False
+            settle = t + 2.0 * v / (a * (1.0 - e))
+        self._enter_hold(index, j, t, settle)
         return True
 
     def _enter_hold(self, a: int, b: int, t: float, settle: float) -> None:

@@ -159,7 +159,8 @@ from .layout import (
 from .loop import RING, compensated_add, run_chunk
 from .rules import COLLAPSE_COUNT, COLLAPSE_SPAN, ZERO_FLIGHT_LIMIT
 from .surfaces import contact
-from .vertex import holds, run_hold
+from .vertex import forces as hold_forces
+from .vertex import holds, run_hold, sign
 
 #: Normal speed (m/s) a ball leaving a wall is given (see
 #: :data:`billiard.engine.contact_phases.LIFT_OFF_SPEED`).
@@ -210,7 +211,7 @@ def centre_in_boundary(ctx, theta, q1, q2):
     return q1, q2 - d
 
 
-@inline
+@jit
 def lab_state(ctx, p, walls, w, theta, s, sd, u3, roll):
     """(q1, q2, u1, u2, u3): the lab state of a ball on wall w at (s, s_dot) with spin
     u3 (the no-slip spin when ``roll``), drive angle theta
@@ -245,6 +246,16 @@ def set_forces(ctx, w, mode, sgn):
     ctx[PH_SGN] = sgn
 
 
+@jit
+def forces_of(ctx, p, walls, w, mode, sgn, theta, s, sd):
+    """(s_ddot, u3_dot, N, F) on wall w in contact mode ``mode`` with slip sign ``sgn``
+    (:func:`~billiard.kernels.contact_forces.forces`; its slots set). One compiled
+    function that every step of the machine calls: inlined, the generated equations
+    would be compiled into each (numba compiles a kernel into every caller)."""
+    set_forces(ctx, w, mode, sgn)
+    return forces(ctx, p, walls, theta, s, sd)
+
+
 @inline
 def mode_for(ctx, p, walls, w, theta, s, sd, u3):
     """(mode, slip sign) of a ball at (s, s_dot, u3) on wall w: rolling when the slip
@@ -255,8 +266,7 @@ def mode_for(ctx, p, walls, w, theta, s, sd, u3):
     slip = slip_velocity(sd, u3, fp, f2, r)
     scale = abs(sd) * math.sqrt(1.0 + fp * fp) + r * abs(u3)
     if abs(slip) <= 1e-12 + 1e-9 * scale:
-        set_forces(ctx, w, M_ROLL, 0.0)
-        _, _, n, f = forces(ctx, p, walls, theta, s, sd)
+        _, _, n, f = forces_of(ctx, p, walls, w, M_ROLL, 0.0, theta, s, sd)
         if abs(f) <= ctx[PH_MUS] * n:
             return M_ROLL, 0.0
         return M_SLIDE, (-1.0 if f > 0.0 else 1.0)
@@ -266,11 +276,10 @@ def mode_for(ctx, p, walls, w, theta, s, sd, u3):
 @inline
 def normal_force(ctx, p, walls, w, mode, sgn, theta, s, sd):
     """N (N) of wall w on a ball in contact mode ``mode`` at (s, s_dot)."""
-    set_forces(ctx, w, mode, sgn)
-    return forces(ctx, p, walls, theta, s, sd)[2]
+    return forces_of(ctx, p, walls, w, mode, sgn, theta, s, sd)[2]
 
 
-@inline
+@jit
 def contact_kept(ctx, p, walls, j, px):
     """(s, z) of surface j's contact point for a centre at px, its warm start left as
     it was (the engine asks with a copy of it)."""
@@ -316,10 +325,11 @@ def to_flight(ctx):
 
 
 @inline
-def chatter_accel(ctx, p, walls, theta, s, sd, tau):
-    """The acceleration (m/s^2) with which the wall presses the ball tau seconds after
-    the impact (the forces' slots set for its contact mode)."""
-    return forces(ctx, p, walls, theta + ctx[OMEGA] * tau, s + sd * tau, sd)[2] / ctx[PH_M]
+def chatter_accel(ctx, p, walls, w, mode, sgn, theta, s, sd, tau):
+    """The acceleration (m/s^2) with which wall w presses the ball in contact mode
+    ``mode`` tau seconds after the impact."""
+    y0 = s + sd * tau
+    return forces_of(ctx, p, walls, w, mode, sgn, theta + ctx[OMEGA] * tau, y0, sd)[2] / ctx[PH_M]
 
 
 @inline
@@ -342,10 +352,10 @@ def bracket(v, e, a0, jerk, window):
 
 
 @inline
-def summed(ctx, p, walls, theta, s, sd, v, e):
+def summed(ctx, p, walls, w, mode, sgn, theta, s, sd, v, e):
     """:func:`billiard.models.chatter.summed` (NOT_SUMMED for None)."""
     period = chatter_period(ctx[OMEGA])
-    a0 = chatter_accel(ctx, p, walls, theta, s, sd, 0.0)
+    a0 = chatter_accel(ctx, p, walls, w, mode, sgn, theta, s, sd, 0.0)
     if not a0 > 0.0:
         return NOT_SUMMED
     t0 = 2.0 * v / (a0 * (1.0 - e))
@@ -354,8 +364,8 @@ def summed(ctx, p, walls, theta, s, sd, v, e):
     if not t0 <= CHATTER_TAIL * period:
         return NOT_SUMMED
     window = 2.0 * t0
-    a1 = chatter_accel(ctx, p, walls, theta, s, sd, t0)
-    a2 = chatter_accel(ctx, p, walls, theta, s, sd, window)
+    a1 = chatter_accel(ctx, p, walls, w, mode, sgn, theta, s, sd, t0)
+    a2 = chatter_accel(ctx, p, walls, w, mode, sgn, theta, s, sd, window)
     jerk = 2.0 * pmax(abs(a1 - a0), abs(a2 - a1)) / t0
     lo, hi = bracket(v, e, a0, jerk, window)
     if hi - lo > CHATTER_TOL * period:
@@ -379,7 +389,7 @@ def leave_wall(ctx, p, walls, w, s, theta):
     ctx[EN_U2] = ctx[EN_U2] + dv * ny
 
 
-@inline
+@jit
 def land(ctx, p, walls, j, s, theta, u1, u2, u3, wn, elastic, tail, t):
     """``ContactPhases._land`` after an impact at t on surface j at s, the speeds
     (u1, u2, u3) after it, the normal speed wn before it; ``tail``: the free flight's
@@ -398,7 +408,7 @@ def land(ctx, p, walls, j, s, theta, u1, u2, u3, wn, elastic, tail, t):
             leave_wall(ctx, p, walls, w, s, theta)
         return
     if tail != 0:
-        tau = summed(ctx, p, walls, theta, s, sd, rebound, e)
+        tau = summed(ctx, p, walls, w, mode, sgn, theta, s, sd, rebound, e)
         if tau != NOT_SUMMED:
             total, error = compensated_add(ctx[EN_CLOCK], ctx[EN_CLOCK_ERR], tau)
             set_contact(ctx, mode, float(j), s, sd, sgn, total + error, total + error)
@@ -409,7 +419,7 @@ def land(ctx, p, walls, j, s, theta, u1, u2, u3, wn, elastic, tail, t):
     set_contact(ctx, mode, float(j), s, sd, sgn, t, settle)
 
 
-@inline
+@jit
 def end_chatter(ctx, p, walls, until):
     """``ContactPhases._end_chatter`` (no samples): move a ball that landed at the end
     of a summed chatter series there; False when that is after ``until``."""
@@ -523,17 +533,30 @@ def enter_hold(ctx, a, b, t, settle):
 
 
 @inline
-def hold_after(ctx, p, walls, index, j, theta, u3, wn, elastic, t):
-    """``ContactPhases._hold_after``: after an impact on wall j of a ball in contact
-    with wall ``index``, is it held by both (then held)?"""
-    if not is_wall(ctx, j) or not rebound_settles(ctx[IM_E], ctx[IM_EB], wn, elastic):
+def hold_after(ctx, p, walls, index, j, theta, u3, wn, elastic, t, impulse, instant):
+    """``ContactPhases._hold_after``: after a contact with wall j (an impact, or one
+    without ``impulse``; ``instant``: at the start of the phase on wall ``index``) of
+    a ball in contact with wall ``index``, is it held by both (then held)?"""
+    if not is_wall(ctx, j):
+        return False
+    e = ctx[IM_E]
+    slow = rebound_settles(e, ctx[IM_EB], wn, elastic)
+    if not slow and e >= 1.0:
         return False
     px, _ = centre_in_boundary(ctx, theta, ctx[EN_Q1], ctx[EN_Q2])
     z_index = contact_kept(ctx, p, walls, index, px)[1]
     z_j = contact_kept(ctx, p, walls, j, px)[1]
     if not holds(ctx, z_index, z_j, theta, u3):
         return False
-    enter_hold(ctx, index, j, t, t)
+    settle = t
+    if not slow and not instant:
+        n_a, n_b = hold_forces(ctx, z_index, z_j, theta, sign(u3))
+        a = pmin(n_a, n_b) / ctx[PH_M]
+        v = e * abs(wn) if impulse else abs(wn)
+        if not 2.0 * v <= CHATTER_TAIL * chatter_period(ctx[OMEGA]) * a * (1.0 - e):
+            return False
+        settle = t + 2.0 * v / (a * (1.0 - e))
+    enter_hold(ctx, index, j, t, settle)
     return True
 
 
@@ -560,7 +583,7 @@ def held_lab(ctx, theta, px, py):
     return q1, q2, u1, u2
 
 
-@inline
+@jit
 def hold_step(ctx, p, walls, cout, until):
     """``ContactPhases._hold_step``: the held ball to a release (-1: the run goes on),
     or the status that ends the run."""
@@ -581,7 +604,8 @@ def hold_step(ctx, p, walls, cout, until):
     ctx[VX_LIMIT] = until - t0
     ctx[VX_W] = u3_0
     ctx[VX_NEXT] = math.inf
-    status = run_hold(ctx, True)
+    # a new hold (a plain bool, True: a literal would compile run_hold once more)
+    status = run_hold(ctx, ctx[MC_MODE] == M_HELD)
     omega = ctx[OMEGA]
     q1s, q2s, u1s, u2s = held_lab(ctx, theta0, px, py)
     if status == PHASE_LIMIT:
@@ -627,7 +651,7 @@ def hold_step(ctx, p, walls, cout, until):
 # ---------------------------------------------------------------------- one wall
 
 
-@inline
+@jit
 def impact_from_contact(ctx, p, walls, out, other, index, t, tau, theta, q3):
     """``ContactPhases._impact_from_contact``: the ball in contact with wall ``index``
     reaches surface ``other`` (numbered without ``index``): an impact, its row written
@@ -651,7 +675,7 @@ def impact_from_contact(ctx, p, walls, out, other, index, t, tau, theta, q3):
     elastic = regime == ELASTIC
     if rn == 0.0 and rt == 0.0:
         # no impulse: no impact (billiard.models.corner.is_impact)
-        if not hold_after(ctx, p, walls, index, j, theta, n3, wn, elastic, t):
+        if not hold_after(ctx, p, walls, index, j, theta, n3, wn, elastic, t, False, tau == 0.0):
             land(ctx, p, walls, j, s_o, theta, n1, n2, n3, wn, elastic, -1, t)
         return False
     u4, un = frame_velocity(n1, n2, z)
@@ -690,12 +714,12 @@ def impact_from_contact(ctx, p, walls, out, other, index, t, tau, theta, q3):
     remember_impact(ctx, t)
     collapsed = int(ctx[EN_RCOUNT]) > COLLAPSE_COUNT or ctx[EN_ZERO] >= ZERO_FLIGHT_LIMIT
     ctx[EN_FAULT] = 1.0 if collapsed else 0.0
-    if not hold_after(ctx, p, walls, index, j, theta, n3, wn, elastic, t):
+    if not hold_after(ctx, p, walls, index, j, theta, n3, wn, elastic, t, True, tau == 0.0):
         land(ctx, p, walls, j, s_o, theta, n1, n2, n3, wn, elastic, -1, t)
     return True
 
 
-@inline
+@jit
 def start_phase(ctx, p, walls, until):
     """Set up the phase of the ball in contact (``ContactPhases._contact_step`` up to
     ``run_phase``): -1, or the status that ends the run first."""
@@ -728,7 +752,7 @@ def start_phase(ctx, p, walls, until):
     return -1
 
 
-@inline
+@jit
 def phase_cut(ctx, p, walls, cout, tau, y):
     """The row of the phase under way cut tau after its start with the contact state
     ctx[y:y + 3] (``end`` = ``cut``): the engine's state stays at the phase's start.
@@ -751,7 +775,7 @@ def phase_cut(ctx, p, walls, cout, tau, y):
     return t_cut
 
 
-@inline
+@jit
 def answer_pause(ctx, p, walls, cout, until):
     """A pause of the phase under way, answered as the engine's pause answers it when
     no stop is requested: on (-1), or the status that ends the run (the phase cut at
@@ -775,7 +799,7 @@ def answer_pause(ctx, p, walls, cout, until):
     return -1
 
 
-@inline
+@jit
 def finish_phase(ctx, p, walls, out, cout, until, status):
     """``ContactPhases._contact_step`` after ``run_phase``: the phase's end, its row,
     the transition (-1: the run goes on), or the status that ends the run."""
@@ -832,12 +856,10 @@ def finish_phase(ctx, p, walls, out, cout, until, status):
         ctx[EN_U2] = u2 + LIFT_OFF_SPEED * c
         to_flight(ctx)
     elif reason == END_SLIP:
-        set_forces(ctx, w, M_ROLL, 0.0)
-        f = forces(ctx, p, walls, theta, s1, sd1)[3]
+        f = forces_of(ctx, p, walls, w, M_ROLL, 0.0, theta, s1, sd1)[3]
         set_contact(ctx, M_SLIDE, float(j), s1, sd1, -1.0 if f > 0.0 else 1.0, t, t)
     elif reason == END_ROLL:
-        set_forces(ctx, w, M_ROLL, 0.0)
-        _, _, n_force, f = forces(ctx, p, walls, theta, s1, sd1)
+        _, _, n_force, f = forces_of(ctx, p, walls, w, M_ROLL, 0.0, theta, s1, sd1)
         if abs(f) <= ctx[PH_MUS] * n_force:
             set_contact(ctx, M_ROLL, float(j), s1, sd1, 0.0, t, t)
         else:
@@ -870,13 +892,12 @@ def contact_step(ctx, p, walls, out, cout, until):
         if code >= 0:
             return code
         ctx[MC_PHASE_ON] = PHASE_ON
-        status = run_phase(ctx, p, walls, True)
-    else:
-        if on == PHASE_PAUSED:
-            code = answer_pause(ctx, p, walls, cout, until)
-            if code >= 0:
-                return code
-        status = run_phase(ctx, p, walls, False)
+    elif on == PHASE_PAUSED:
+        code = answer_pause(ctx, p, walls, cout, until)
+        if code >= 0:
+            return code
+    # one call site, a plain bool (a literal would compile run_phase once more per value)
+    status = run_phase(ctx, p, walls, on == PHASE_OFF)
     if status == PHASE_PAUSE:
         ctx[MC_PHASE_ON] = PHASE_PAUSED
         return PAUSED

@@ -95,6 +95,10 @@ class VertexHold:
         """Do both walls press a ball with spin u3 (rad/s) at drive angle theta?"""
         return _k.holds(self.ctx, za, zb, theta, u3)
 
+    def pressing(self, za: float, zb: float, theta: float, u3: float) -> tuple[float, float]:
+        """(N_a, N_b) on a ball with spin u3 (rad/s): the forces :meth:`holds` looks at."""
+        return _k.forces(self.ctx, za, zb, theta, _k.sign(u3))
+
     def spin_rate(self, n_a: float, n_b: float, sigma: float) -> float:
         """du3/dt (rad/s^2) from the kinetic friction of both walls."""
         return _k.spin_rate(self.ctx, n_a, n_b, sigma)

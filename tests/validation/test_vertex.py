@@ -287,3 +287,36 @@ def test_random_shaken_wedges_record_only_impacts_with_an_impulse(seed):
     columns = result.columns
     assert not ((columns["Rt"] == 0.0) & (columns["Rn"] == 0.0)).any()
     assert same_time_runs(columns["t"]) <= 10
+
+
+def test_without_a_landing_speed_a_shaken_vertex_holds_the_ball_without_cycles():
+    # elastic_below = 0: no landing speed; the ball meets one wall and the other at one
+    # instant (a series of impacts in no time) and is held, instead of piling up impacts
+    # at that instant until the collapse stop
+    from billiard.scene.scene import load_scene
+
+    sc = with_values(load_scene("wedge-6.6hz"), {**SHAKEN_VERTEX, "contact.elastic_below": 0.0})
+    result = simulate(sc, collisions=1_000_000, duration=10.0)
+    assert result.status is Status.TIME_LIMIT, result.message
+    t = result.columns["t"]
+    assert len(result) > 50 and t[-1] - SHAKEN_VERTEX["initial.t"] > 9.0
+    assert same_time_runs(t) <= 3
+    assert result.mode_times["held"] > 0.0
+    assert not ((result.columns["Rt"] == 0.0) & (result.columns["Rn"] == 0.0)).any()
+
+
+@pytest.mark.parametrize("seed", [34, 312])
+def test_without_a_landing_speed_random_shaken_wedges_run_without_zero_time_cycles(seed):
+    # two draws whose ball slid into the vertex and met the walls in turn at one
+    # instant until 1,000 phases of zero duration stopped the run
+    from bench.soak import scene_from_draw
+
+    draw = shaken_wedge_draw(seed)
+    draw["elastic_below"] = 0.0
+    sc = with_values(scene_from_draw(draw), {"run.duration": 4.0})
+    result = simulate(sc, collisions=100_000)
+    assert result.status is Status.TIME_LIMIT, result.message
+    assert result.mode_times["held"] > 0.0
+    columns = result.columns
+    assert not ((columns["Rt"] == 0.0) & (columns["Rn"] == 0.0)).any()
+    assert same_time_runs(columns["t"]) <= 10
