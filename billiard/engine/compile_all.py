@@ -12,6 +12,11 @@ and cache what those runs need, and marks the cache. The process that asked then
 each kernel from the cache in milliseconds. numba compiles one function at a time in a
 process; two processes compile on two cores at once.
 
+The state machine of contact phases (:mod:`billiard.kernels.machine`) links the impact
+loop, the phase and the hold, so it compiles last, in the worker that compiled the phase
+and the hold, once the other worker has put the impact loop in the cache
+(:data:`LOOP_CACHED`, :data:`WAIT_LOOP`).
+
 Not compiled here (each on its first use, with its own notice): method ``rk4``'s fixed
 steps, a curve with more than two walls, and the wall functions of a curve other than
 the wedge and the parabola (well under a second each). Where numba cannot cache (no
@@ -29,6 +34,7 @@ from __future__ import annotations
 import os
 import subprocess
 import sys
+import tempfile
 import time
 from typing import Any
 
@@ -43,20 +49,23 @@ ALL_NOTICE = (
 )
 #: printed when they are compiled
 ALL_NOTICE_DONE = "billiard: compiled the engine's kernels in {seconds:.1f} s"
-#: (scene, changed keys, impacts, CSV, rolling): short runs that together need every
-#: kernel a run of a curve of up to two walls can need (the wall tables of such curves
-#: share one type: :data:`billiard.geometry.wall_functions.WALL_SLOTS`); ``CSV``: the
-#: CSV formatting too; ``rolling``: the ball starts at rest on the bowl's wall 2 mm from
-#: its vertex. Duration-limited where the ball makes no impact.
-JOBS: tuple[tuple[str, dict[str, Any], int, bool, bool], ...] = (
+#: (scene, changed keys, impacts, CSV, rolling, sampled): short runs that together need
+#: every kernel a run of a curve of up to two walls can need (the wall tables of such
+#: curves share one type: :data:`billiard.geometry.wall_functions.WALL_SLOTS`); ``CSV``:
+#: the CSV formatting too; ``rolling``: the ball starts at rest on the bowl's wall 2 mm
+#: from its vertex; ``sampled``: with trajectory samples, so that its contact phases run
+#: through the models' classes (the phase and hold kernels, called from Python), not the
+#: state machine. Duration-limited where the ball makes no impact.
+JOBS: tuple[tuple[str, dict[str, Any], int, bool, bool, bool], ...] = (
     # the impact loop (exact flight and air drag), the resting scan
-    ("wedge-6.6hz", {}, 20, False, False),
+    ("wedge-6.6hz", {}, 20, False, False, False),
     # the CSV formatting, the contact phases of a ball rolling in the bowl, then the hold
     # of a ball in the vertex: neither flies (the impact loop is the other worker's)
     (
         "parabola-5.4hz",
         {"drive.amplitude": 0.0, "contact.model": "phases", "run.duration": 0.05},
         1,
+        True,
         True,
         True,
     ),
@@ -66,17 +75,31 @@ JOBS: tuple[tuple[str, dict[str, Any], int, bool, bool], ...] = (
         1,
         False,
         False,
+        True,
     ),
+    # the trajectory state machine (billiard.kernels.machine), which calls the impact
+    # loop, the phase and the hold: compiled once they are in the cache
+    ("wedge-6.6hz", {"contact.model": "phases"}, 20, False, False, False),
 )
 #: the job after which a worker also runs a small ensemble (the impact loop's scene)
 ENSEMBLE_JOB = 0
+#: a worker's step that tells the other worker that the impact loop is in the cache ...
+LOOP_CACHED = "loop-cached"
+#: ... and the other worker's step that waits for it (at most WAIT_S seconds)
+WAIT_LOOP = "wait-loop"
+WAIT_S = 300.0
 #: the jobs of each worker process, run side by side (numba compiles one function at a
-#: time in a process: two processes compile on two cores)
-WORKERS: tuple[tuple[int, ...], ...] = ((0,), (1, 2))
+#: time in a process: two processes compile on two cores). The state machine links the
+#: impact loop, the phase and the hold: it is compiled by the worker that compiled the
+#: phase and the hold, after the other has put the impact loop in the cache (numba
+#: would otherwise compile the loop a second time, some 18 s).
+WORKERS: tuple[tuple[int | str, ...], ...] = ((0, LOOP_CACHED), (1, 2, WAIT_LOOP, 3))
 #: what a worker runs
 _WORKER = "from billiard.engine.compile_all import run_jobs; run_jobs({jobs})"
 #: set in a worker's environment: its own first compile calls no hook
 _WORKER_ENV = "BILLIARD_COMPILE_WORKER"
+#: set in the workers' environment: the file whose existence says the loop is cached
+_SIGNAL_ENV = "BILLIARD_COMPILE_SIGNAL"
 
 
 def _rolling_start(scene: Any) -> dict[str, float]:
@@ -91,8 +114,9 @@ def _rolling_start(scene: Any) -> dict[str, float]:
     return {"initial.q1": q1, "initial.q2": q2, "initial.v1": 0.0, "initial.v2": 0.0}
 
 
-def run_jobs(jobs: list[int]) -> None:
-    """Run :data:`JOBS` ``jobs`` in this process (each compiles what it needs)."""
+def run_jobs(jobs: list[int | str]) -> None:
+    """Run :data:`JOBS` ``jobs`` in this process (each compiles what it needs), and the
+    hand-over steps :data:`LOOP_CACHED` and :data:`WAIT_LOOP`."""
     import numpy as np
 
     from billiard.engine.simulation import Simulation
@@ -100,17 +124,41 @@ def run_jobs(jobs: list[int]) -> None:
     from billiard.runfile.rows import format_rows_bytes
     from billiard.scene.scene import load_scene, with_values
 
+    signal = os.environ.get(_SIGNAL_ENV)
+    ensemble_scene = None
     for index in jobs:
-        name, changes, impacts, csv, rolling = JOBS[index]
+        if index == LOOP_CACHED:
+            if signal:
+                open(signal, "w").close()
+            if ensemble_scene is not None:
+                _ensemble(ensemble_scene)
+            continue
+        if index == WAIT_LOOP:
+            waited = time.monotonic() + WAIT_S
+            while signal and not os.path.exists(signal) and time.monotonic() < waited:
+                time.sleep(0.05)
+            continue
+        name, changes, impacts, csv, rolling, sampled = JOBS[int(index)]
         scene = load_scene(name)
         if rolling:
             changes = {**changes, **_rolling_start(scene)}
         scene = with_values(scene, changes)
         if csv:
             format_rows_bytes(np.zeros((1, len(COLUMNS))), "\n")
-        Simulation(scene).run(impacts, MemoryRecorder())
+        sim = Simulation(scene)
+        if sampled:
+            sim.sample_dt = 0.01
+            sim.on_sample = _ignore
+        sim.run(impacts, MemoryRecorder())
         if index == ENSEMBLE_JOB:
-            _ensemble(scene)
+            # after the other worker is told the loop is cached (LOOP_CACHED)
+            ensemble_scene = scene
+    if ensemble_scene is not None and LOOP_CACHED not in jobs:
+        _ensemble(ensemble_scene)
+
+
+def _ignore(*_: Any) -> None:
+    """A trajectory sample's receiver that keeps nothing."""
 
 
 def _ensemble(scene: Any) -> None:
@@ -135,21 +183,29 @@ def compile_all() -> bool:
         return False  # nothing can be cached: each process compiles what it needs
     print(ALL_NOTICE, file=sys.stderr, flush=True)
     started = time.perf_counter()
-    env = {**os.environ, _WORKER_ENV: "1"}
-    try:
-        workers = [
-            subprocess.Popen(
-                [sys.executable, "-c", _WORKER.format(jobs=list(jobs))],
-                env=env,
-                stdout=subprocess.DEVNULL,
-                stderr=subprocess.DEVNULL,
-            )
-            for jobs in WORKERS
-        ]
-    except OSError:
-        return False  # no process to start: each kernel compiles on its first use
-    for worker in workers:
-        worker.wait()
+    with tempfile.TemporaryDirectory(prefix="billiard-compile-") as folder:
+        env = {
+            **os.environ,
+            _WORKER_ENV: "1",
+            _SIGNAL_ENV: os.path.join(folder, "loop-cached"),
+        }
+        try:
+            workers = [
+                subprocess.Popen(
+                    [sys.executable, "-c", _WORKER.format(jobs=list(jobs))],
+                    env=env,
+                    stdout=subprocess.DEVNULL,
+                    stderr=subprocess.DEVNULL,
+                )
+                for jobs in WORKERS
+            ]
+        except OSError:
+            return False  # no process to start: each kernel compiles on its first use
+        for worker in workers:
+            worker.wait()
+            # a worker that ended without its hand-over (it failed) releases the other
+            if not os.path.exists(env[_SIGNAL_ENV]):
+                open(env[_SIGNAL_ENV], "w").close()
     _jit.mark_all_compiled()
     seconds = time.perf_counter() - started
     print(ALL_NOTICE_DONE.format(seconds=seconds), file=sys.stderr, flush=True)
