@@ -171,6 +171,7 @@ def write_motion(ctx: Any, state: EngineState) -> None:
     last = state.ball.t if state.last_impact is None else state.last_impact
     ctx[L.MC_LAST_IMPACT] = float(last)
     ctx[L.MC_PHASE_ON] = 0.0
+    ctx[L.MC_FLYING] = 0.0
 
 
 def read_motion(ctx: Any) -> dict[str, Any]:

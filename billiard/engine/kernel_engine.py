@@ -543,6 +543,8 @@ class KernelEngine:
                 began = monotonic()
                 code, done, error = self._chunk(rows, min(collisions, start + rows), until)
                 elapsed = monotonic() - began
+                if error is not None:
+                    self._flights_stopped()
                 if error is None or not isinstance(error, BallAtRest):
                     sim.final_time = float(ctx[L.MC_FINAL])
                 cut = self._hand_out(
@@ -590,6 +592,15 @@ class KernelEngine:
             # a ball at rest ends the run complete: a status, not a stop reason
             status, reason = exc.status, None if exc.status.finished else str(exc)
         return status, reason
+
+    def _flights_stopped(self) -> None:
+        """A stop inside the machine's flights (``run_chunk``) after impacts they made:
+        the run has reached the last of them, its last impact (as flights that return
+        say in the machine's slots)."""
+        ctx = self.ctx
+        if ctx[L.MC_FLYING] == 1.0 and ctx[L.EN_IMPACTS] > ctx[L.MC_FLIGHT_FROM]:
+            ctx[L.MC_LAST_IMPACT] = ctx[L.EN_T]
+            ctx[L.MC_FINAL] = ctx[L.EN_T]
 
     def _cut_phase(self, until: float) -> None:
         """A stop request inside a phase: its row, cut where it is (``end`` = ``cut``),

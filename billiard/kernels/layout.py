@@ -414,6 +414,7 @@ MC_STOP_AT = _ctx("MC_STOP_AT", "stop_at", 1, "s", "the phase under way: its con
 MC_ROW = _ctx("MC_ROW", "row", 1, "", "impact rows written in this call")
 MC_CROW = _ctx("MC_CROW", "contact_row", 1, "", "contact rows written in this call")
 MC_FLYING = _ctx("MC_FLYING", "flying", 1, "", "1.0 while the flights run (a stop is theirs)")
+MC_FLIGHT_FROM = _ctx("MC_FLIGHT_FROM", "flight_from", 1, "", "impacts when the flights began")
 CTX.end()
 
 SIZE = CTX.size

@@ -95,6 +95,7 @@ from .layout import (
     MC_CONTACT,
     MC_CROW,
     MC_FINAL,
+    MC_FLIGHT_FROM,
     MC_FLYING,
     MC_LAST_IMPACT,
     MC_MODE,
@@ -929,6 +930,7 @@ def run_machine(ctx, p, walls, out, rows, cout, crows):
         if mode == M_FLIGHT:
             ctx[EN_SETTLES] = 0.0
             ctx[MC_FLYING] = 1.0
+            ctx[MC_FLIGHT_FROM] = ctx[EN_IMPACTS]
             code, written = run_chunk(ctx, p, flight_walls, out[row * NCOL :], rows - row)
             ctx[MC_FLYING] = 0.0
             ctx[MC_ROW] = float(row + written)
