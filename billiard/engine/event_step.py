@@ -25,12 +25,16 @@ from billiard.engine.state import BallState
 from billiard.errors import SimulationError
 from billiard.generated import ball as _ball
 from billiard.kernels.interpreted import impact as _impact
+from billiard.models.corner import is_impact
 from billiard.models.event_locator import Event
 from billiard.models.impact import Contact
 from billiard.runfile.record import COLUMNS, ContactRecord, ImpactRecord
 from billiard.status import Status
 
 __all__ = ["EventStep", "check_finite"]
+
+#: what the flight's step returns at a contact without impulse under contact phases
+_NO_IMPULSE = object()
 
 # Floats of a record, by column name, for naming the culprit of a non-finite state.
 _ROW_FLOATS = tuple(name for name in COLUMNS if name not in ("n", "regime", "wall"))
@@ -58,8 +62,21 @@ class EventStep:
         return ev.surface.gap_accel(px, py, vx, vy, ax, ay, self.warm[ev.index])
 
     def _step(self, until: float) -> ImpactRecord | ContactRecord | None:
-        if self._mode != "flight":
-            return self._contact_step(until)
+        while True:
+            if self._mode != "flight":
+                return self._contact_step(until)
+            record = self._flight_step(until)
+            if record is not _NO_IMPULSE:
+                return record
+            # a contact without impulse (contact phases): on from it, or from its landing
+            if self._fault is not None:
+                raise self._fault
+
+    def _flight_step(self, until: float) -> Any:
+        """The flight to the next contact and the impact there (its record), None after
+        ``until``, or ``_NO_IMPULSE``: under contact phases a contact that gives no
+        impulse is no impact (``billiard.models.corner``): no record, nothing counted,
+        the ball on from there (``loop.no_impulse``)."""
         state = self._ball
         n = self._impacts
         try:
@@ -121,6 +138,15 @@ class EventStep:
             + res.Rt + res.Rn + ev.s + q3
         ):  # fmt: skip
             check_finite(record)
+        if self.phases and not is_impact(res):
+            self._ball = BallState(t, ev.theta, ev.q1, ev.q2, res.u1, res.u2, res.u3, q3)
+            self._clock, self._clock_error = total, error
+            self._zero_flights = self._zero_flights + 1 if tau == 0.0 else 0
+            self.final_time = t
+            if self._zero_flights >= ZERO_FLIGHT_LIMIT:
+                self._fault = self._collapse(n, t)
+            self._land_after(ev, res, accel, t)
+            return _NO_IMPULSE
         # commit: from here on nothing can fail, so the state always matches the records
         self._impacts = n + 1
         self._last_impact = t
@@ -141,12 +167,16 @@ class EventStep:
         if len(recent) > COLLAPSE_COUNT or self._zero_flights >= ZERO_FLIGHT_LIMIT:
             self._fault = self._collapse(n + 1, t)
         if self.phases:
-            e = self.contact_model.e
-            tail = ev.surface.kind != "lid" and _impact.chatter_tail(
-                e, res.wn, accel, self.drive.omega
-            )
-            self._land(ev.index, ev.s, ev.theta, res, t, tail)
+            self._land_after(ev, res, accel, t)
         return record
+
+    def _land_after(self, ev: Event, res: Any, accel: float, t: float) -> None:
+        """Land the ball after a flight's contact at t if the chattering it starts
+        settles (``ContactPhases._land``; ``accel``: the free flight's acceleration
+        into the surface, m/s^2)."""
+        e = self.contact_model.e
+        tail = ev.surface.kind != "lid" and _impact.chatter_tail(e, res.wn, accel, self.drive.omega)
+        self._land(ev.index, ev.s, ev.theta, res, t, tail)
 
     def _collapse(self, n: int, t: float) -> SimulationError | None:
         """The inelastic-collapse stop after impact n, if the impacts have piled up.

@@ -461,9 +461,11 @@ class KernelEngine:
                 start = self.impacts
                 saved = ctx.copy()
                 began = monotonic()
+                t_before = float(ctx[L.EN_T])
                 code, done, error = self._chunk(rows, min(collisions, start + rows), until)
                 elapsed = monotonic() - began
-                if done:
+                if done or float(ctx[L.EN_T]) != t_before:
+                    # the last impact, or a contact without impulse after it (phases)
                     sim.final_time = float(ctx[L.EN_T])
                 cut = self._hand_out(
                     recorder, sink, start, done, collisions, progress, on_record, request
@@ -595,11 +597,10 @@ class KernelEngine:
 
     def _flights_stopped(self) -> None:
         """A stop inside the machine's flights (``run_chunk``) after impacts they made:
-        the run has reached the last of them, its last impact (as flights that return
-        say in the machine's slots)."""
+        the run has reached the last of them (as flights that return say in MC_FINAL;
+        loop.impact keeps MC_LAST_IMPACT)."""
         ctx = self.ctx
-        if ctx[L.MC_FLYING] == 1.0 and ctx[L.EN_IMPACTS] > ctx[L.MC_FLIGHT_FROM]:
-            ctx[L.MC_LAST_IMPACT] = ctx[L.EN_T]
+        if ctx[L.MC_FLYING] == 1.0 and ctx[L.EN_T] != ctx[L.MC_FLIGHT_FROM]:
             ctx[L.MC_FINAL] = ctx[L.EN_T]
 
     def _cut_phase(self, until: float) -> None:

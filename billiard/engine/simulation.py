@@ -593,8 +593,8 @@ class Simulation(ContactPhases, EventStep):
             self.restore(state)
             self._fault, self.final_time = fault, final_time
             if self._impacts > impacts:
-                # the kernels stop after an impact (or leave the state at the last one)
-                self._last_impact = self._ball.t
+                # the kernels stop after an impact (or a contact without impulse after it)
+                self._last_impact = float(ctx[L.MC_LAST_IMPACT])
         if ctx[L.EN_SETTLES] != 0.0:
             ball = self._ball
             settled = Settled(

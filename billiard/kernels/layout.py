@@ -414,7 +414,10 @@ MC_STOP_AT = _ctx("MC_STOP_AT", "stop_at", 1, "s", "the phase under way: its con
 MC_ROW = _ctx("MC_ROW", "row", 1, "", "impact rows written in this call")
 MC_CROW = _ctx("MC_CROW", "contact_row", 1, "", "contact rows written in this call")
 MC_FLYING = _ctx("MC_FLYING", "flying", 1, "", "1.0 while the flights run (a stop is theirs)")
-MC_FLIGHT_FROM = _ctx("MC_FLIGHT_FROM", "flight_from", 1, "", "impacts when the flights began")
+MC_FLIGHT_FROM = _ctx("MC_FLIGHT_FROM", "flight_from", 1, "s", "the ball's time when they began")
+# a flight's contact without impulse under contact phases (loop.impact): no row, no
+# impact counted; the ball goes on from it (or lands)
+EN_NO_ROW = _ctx("EN_NO_ROW", "no_row", 1, "", "1.0: the last contact gave no impulse (no row)")
 CTX.end()
 
 SIZE = CTX.size

@@ -31,6 +31,7 @@ from .layout import (
     EN_LAST_REGIME,
     EN_LAST_S,
     EN_LAST_WN,
+    EN_NO_ROW,
     EN_Q1,
     EN_Q2,
     EN_Q3,
@@ -57,6 +58,7 @@ from .layout import (
     LAND,
     LID,
     LID_LABEL,
+    MC_LAST_IMPACT,
     NCOL,
     OMEGA,
     RECENT,
@@ -197,7 +199,15 @@ def impact(ctx, p, walls, out, row, tau, j, q1, q2, u1, u2, theta, s, z):
     ):  # fmt: skip
         ctx[EN_STOP] = E_NON_FINITE
         raise KernelError(E_NON_FINITE)
+    if ctx[EN_LAND_ON] != 0.0 and rn == 0.0 and rt == 0.0:
+        # under contact phases a contact without impulse is no impact: no row, nothing
+        # counted; the ball goes on from it, or lands
+        no_impulse(ctx, t, theta, q1, q2, n1, n2, n3, q3, total, error, tau)
+        settles(ctx, j, kind, s, u1, u2, u3, z, vb1, vb2, regime, accel)
+        return True
     # commit
+    ctx[EN_NO_ROW] = 0.0
+    ctx[MC_LAST_IMPACT] = t
     ctx[EN_IMPACTS] = n
     ctx[EN_T] = t
     ctx[EN_THETA] = theta
@@ -231,6 +241,27 @@ def impact(ctx, p, walls, out, row, tau, j, q1, q2, u1, u2, theta, s, z):
     if ctx[EN_LAND_ON] != 0.0:
         settles(ctx, j, kind, s, u1, u2, u3, z, vb1, vb2, regime, accel)
     return True
+
+
+@inline
+def no_impulse(ctx, t, theta, q1, q2, u1, u2, u3, q3, total, error, tau):
+    """The state at a flight's contact without impulse (contact phases): the ball there,
+    no impact counted, EN_NO_ROW set; such contacts at one instant count as zero
+    flights (a collapse after ZERO_FLIGHT_LIMIT of them)."""
+    ctx[EN_NO_ROW] = 1.0
+    ctx[EN_T] = t
+    ctx[EN_THETA] = theta
+    ctx[EN_Q1] = q1
+    ctx[EN_Q2] = q2
+    ctx[EN_U1] = u1
+    ctx[EN_U2] = u2
+    ctx[EN_U3] = u3
+    ctx[EN_Q3] = q3
+    ctx[EN_CLOCK] = total
+    ctx[EN_CLOCK_ERR] = error
+    ctx[EN_ZERO] = ctx[EN_ZERO] + 1.0 if tau == 0.0 else 0.0
+    if ctx[EN_ZERO] >= ZERO_FLIGHT_LIMIT:
+        ctx[EN_FAULT] = 1.0
 
 
 @inline
@@ -271,7 +302,8 @@ def run_chunk(ctx, p, walls, out, rows):
             return FULL, row
         if not step(ctx, p, walls, out, row):
             return TIME_LIMIT, row
-        row += 1
+        if ctx[EN_NO_ROW] == 0.0:
+            row += 1
         code = chunk_ends(ctx)
         if code >= 0:
             return code, row
@@ -290,7 +322,8 @@ def run_chunk_fixed(ctx, p, walls, nears, out, rows):
             return FULL, row
         if not step_fixed(ctx, p, walls, nears, out, row):
             return TIME_LIMIT, row
-        row += 1
+        if ctx[EN_NO_ROW] == 0.0:
+            row += 1
         code = chunk_ends(ctx)
         if code >= 0:
             return code, row

@@ -930,12 +930,13 @@ def run_machine(ctx, p, walls, out, rows, cout, crows):
         if mode == M_FLIGHT:
             ctx[EN_SETTLES] = 0.0
             ctx[MC_FLYING] = 1.0
-            ctx[MC_FLIGHT_FROM] = ctx[EN_IMPACTS]
+            ctx[MC_FLIGHT_FROM] = ctx[EN_T]
             code, written = run_chunk(ctx, p, flight_walls, out[row * NCOL :], rows - row)
             ctx[MC_FLYING] = 0.0
             ctx[MC_ROW] = float(row + written)
-            if written > 0:
-                ctx[MC_LAST_IMPACT] = ctx[EN_T]
+            if written > 0 or ctx[EN_T] != ctx[MC_FLIGHT_FROM]:
+                # at the last impact (its time in MC_LAST_IMPACT: loop.impact) or at a
+                # contact without impulse after it
                 ctx[MC_FINAL] = ctx[EN_T]
             if ctx[EN_SETTLES] != 0.0:
                 j = int(ctx[EN_LAST_J])
