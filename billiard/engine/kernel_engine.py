@@ -59,6 +59,8 @@ FIRST_CHUNK = 64
 LAST_CHUNK = 4096
 #: contact rows of a chunk of the state machine (contact.model = "phases")
 CONTACT_ROWS = 4096
+#: (kernel, wall table type) pairs this process has called (see KernelEngine._call)
+_CALLED: set[tuple[Any, Any]] = set()
 #: the fixed-step detection's memory between flights: the departures in a row, the feet
 _FIXED_MEMORY = (
     slice(L.RK_DEPARTURES, L.RK_DEPARTURES + 1),
@@ -265,10 +267,15 @@ class KernelEngine:
 
                 self._entry = run_machine
         out = self._rows_from(first)
+        # the first call of a kernel for a wall table's type in this process may compile
+        # it (with the notices); later ones, of any engine, load nothing
+        key = (self._entry, getattr(self._walls, "numba_type", None))
         try:
-            if first_call:
+            if key not in _CALLED:
                 with _jit.compiling(self._entry):
-                    return self._result(self._entry(*self._arguments(out, rows)))
+                    result = self._result(self._entry(*self._arguments(out, rows)))
+                _CALLED.add(key)
+                return result
             return self._result(self._entry(*self._arguments(out, rows)))
         finally:
             if out is not self._buffer and isinstance(out, list):

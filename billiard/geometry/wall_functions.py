@@ -99,9 +99,22 @@ def near_functions(sim: Any) -> tuple[tuple[Any, ...], ...]:
 
 def _table(walls: Any, names: tuple[str, ...], args: int) -> tuple[tuple[Any, ...], ...]:
     """One row per function name, one :func:`WallFunction` of ``args`` floats per wall:
-    a :class:`WallTable` when compiled, the interpreted functions as they are."""
-    rows = tuple(tuple(WallFunction(getattr(w, name), args) for w in walls) for name in names)
-    return WallTable(rows) if _jit.ENABLED else rows
+    a :class:`WallTable` when compiled (one per set of functions in a process: typing it
+    costs some 0.2 ms, which every run would pay), the interpreted functions as they
+    are."""
+    functions = tuple(tuple(getattr(w, name) for w in walls) for name in names)
+    if not _jit.ENABLED:
+        return functions
+    key = (functions, args)
+    table = _tables.get(key)
+    if table is None:
+        table = WallTable(tuple(WallFunction(f, args) for f in row) for row in functions)
+        _tables[key] = table
+    return table
+
+
+#: the wall tables made in this process, by their functions
+_tables: dict[Any, Any] = {}
 
 
 def plain_wall_functions(walls: Any) -> tuple[tuple[Any, ...], ...]:
