@@ -216,42 +216,46 @@ time less the last's, the waits are the runs that printed a compile notice; targ
 """
 
 CONTACT_AFTER = """Why the ratios are what they are. Both models make their impacts on the
-compiled loop (`run_chunk`); under "phases" the loop ends a chunk at every impact that
-settles on a wall, and each rolling or sliding phase and each hold in a vertex is a
-compiled call of its own (`kernels/contact.py`, `kernels/vertex.py`, once per phase and
-per sample). What runs between those calls is Python: landing and lift-off, the
-phase's start and end, handing the state to the kernels and back
-(`Simulation._fly` in `billiard/engine/simulation.py`; `docs/compiled-engine.md`,
-"Contact phases and holds"): about 0.3 ms a phase.
+compiled loop (`run_chunk`). Under "phases" the whole trajectory runs on the compiled
+state machine (`billiard/kernels/machine.py`; `docs/compiled-engine.md`, "Contact phases
+and holds: the state machine"): the loop hands an impact that settles to the machine's
+landing, and each rolling or sliding phase and each hold is integrated in the same call,
+its end and the transition after it included; Python sees the run only when a buffer is
+full, every 1,000 steps of a long phase, and at the end. A phase costs its integration
+steps and a few microseconds around them (the phase cost above: the wedge's phases about
+10 us each, the longer ones of hyperbola-5.8hz about 23 us), where the engine's Python
+bookkeeping cost about 140 us a phase before.
 
-* **A ball at rest** (bowl at rest, the floor after the drop, the vertex): the impact
-  model relaunches it about 490 times per simulated second, each hop a located flight.
-  Under "phases" the ball lies in one rolling phase (or one hold in the vertex); on a
-  static boundary the phase's step grows fivefold per step when the error estimate is
-  zero, so the whole run takes a handful of steps and its cost hardly depends on the
-  duration: the ratio grows with the simulated time and is not a constant.
+* **A ball at rest** (bowl at rest, the floor after the drop, the vertex, the shaken
+  table at rest between its chatter): the impact model relaunches it hundreds of times
+  per simulated second, each hop a located flight. Under "phases" the ball lies in one
+  phase or hold; on a static boundary the phase's step grows fivefold per step when the
+  error estimate is zero, and on a shaken one whole drive periods at rest are skipped,
+  so a run costs a handful of steps and some 0.15 ms of set-up: the ratio grows with the
+  simulated time and is not a constant.
 * **Rolling oscillations in the bowl, the slide down the steep wall**: the phase is
   integrated with Dormand-Prince 5(4) at the scene's `run.rtol` (1e-10, the flights'
   tolerance), about 500 steps per simulated second in the bowl, each with six
-  right-hand-side calls and the end conditions. Compiled, that is a few times cheaper
-  than the compiled hops it replaces, not ten times: the phase's cost is its step count.
-* **The shaken table** (Gamma = 0.9): a step is at most 1/20 of the drive period, so that
-  the end conditions, which the drive moves, cannot change sign twice unseen within a
-  step; at rest relative to the table whole drive periods are skipped.
-* **The paper scenes**: the ball is in contact a few per cent of the time. Where it
-  hardly lands (parabola-5.4hz, hyperbola-4.5hz: a handful of phases in 600 s) the two
-  models now cost the same, both flying on the compiled loop. In the wedge and
-  hyperbola-5.8hz the ball lands about 1,500 times in 600 s; each phase costs about
-  0.3 ms of Python around its compiled call, where the fifteen or so hops it replaces
-  cost 1-4 us each: there "phases" is 2-10 times dearer. In the chaotic scenes the two
-  models follow different trajectories after the first contact, so their ratio compares
-  two samples of the same attractor and moves by tens of per cent from one measurement
-  to the next.
+  right-hand-side calls and the end conditions: a few times cheaper than the compiled
+  hops it replaces, not ten times; the phase's cost is its step count. The slide lasts
+  1.3 s and is one phase of a few steps: its run is mostly the 0.15 ms of a run's
+  set-up in Python (engine state into the state vector and back), against 0.46 ms of
+  hops.
+* **The paper scenes**: the ball is in contact a few per cent of the time or less. Where
+  it hardly lands (parabola-5.4hz, hyperbola-4.5hz: a handful of phases in 600 s) the two
+  models make the same flights on the same loop, and "phases" pays only its landing test
+  after every impact (the rebound's speed against the landing speed, the chatter's
+  tail): within 2 % of 1x, inside the noise of these times. In the wedge and
+  hyperbola-5.8hz a phase replaces the dozen or more hops of 1-4 us each it would take
+  the impact model, so "phases" is now the cheaper of the two. In the chaotic scenes the
+  two models follow different trajectories after the first contact, so their ratio
+  compares two samples of the same attractor and moves by tens of per cent from one
+  measurement to the next.
 
 The target of 10x therefore holds where a contact phase replaces hops of a ball that
-lies still, slides or is held on a wall, and not where the phase itself must be
-integrated finely (rolling oscillations, a long slide) or where phases are many and
-short (the paper scenes). A compiled phase loop (landing, lift-off and holds in `ctx`)
-is what would move the paper scenes; a looser error tolerance for contact phases than
-for flights would cut the step counts; neither is measured here.
+lies still or is held on a wall, and not where the phase itself must be integrated
+finely (rolling oscillations) or is so short that a run's set-up dominates (the slide);
+a looser error tolerance for contact phases than for flights would cut the step counts,
+and is not measured here. The first-use compile grew from 20 s to 40 s with the machine
+(docs/design.md, "One compile"): the target of 20 s is missed.
 """
