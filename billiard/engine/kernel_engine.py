@@ -478,12 +478,7 @@ class KernelEngine:
                     recorder, sink, start, done, collisions, progress, on_record, request
                 )
                 if cut is not None:
-                    # a stop request after impact start + cut: back to the chunk's start
-                    # and up to there again, so that the state matches the records
-                    ctx[:] = saved
-                    self._sync_out()
-                    again, written, error = self._chunk(rows, start + cut, until)
-                    assert error is None and written == cut, (again, written, error)
+                    self._redo(saved, rows, start, cut, until)
                     sim.final_time = float(ctx[L.EN_T])
                     raise RunInterrupted(request.signum)
                 if error is not None:
@@ -561,12 +556,7 @@ class KernelEngine:
                     contacts=int(ctx[L.MC_CROW]),
                 )  # fmt: skip
                 if cut is not None:
-                    # a stop request after impact start + cut: back to the chunk's start
-                    # and up to there again, so that the state matches the records
-                    ctx[:] = saved
-                    self._sync_out()
-                    again, written, error = self._chunk(rows, start + cut, until)
-                    assert error is None and written == cut, (again, written, error)
+                    self._redo(saved, rows, start, cut, until)
                     sim.final_time = float(ctx[L.MC_FINAL])
                     raise RunInterrupted(request.signum)
                 if error is not None:
@@ -634,6 +624,15 @@ class KernelEngine:
             hook = sim.on_contact if row[0] == 0.0 else sim.on_contact_cut
             if hook is not None:
                 hook(record)
+
+    def _redo(self, saved: Any, rows: int, start: int, cut: int, until: float) -> None:
+        """A stop request after impact start + cut of a chunk begun from ``saved``: back
+        to the chunk's start and up to there again, so that the state matches the
+        records handed out."""
+        self.ctx[:] = saved
+        self._sync_out()
+        again, written, error = self._chunk(rows, start + cut, until)
+        assert error is None and written == cut, (again, written, error)
 
     def _hand_out(
         self,

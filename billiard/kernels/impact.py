@@ -119,3 +119,67 @@ def chatter_tail(e, wn, accel, omega):
     if e >= 1.0 or not accel > 0.0:
         return False
     return 2.0 * e * abs(wn) <= CHATTER_TAIL * chatter_period(omega) * accel * (1.0 - e)
+
+
+#: The largest error of a summed chatter series' end accepted, as a fraction of the
+#: drive period (1 s without a drive frequency): 1e-8 of 0.05 s is 5e-10 s.
+CHATTER_TOL = 1e-8
+#: :func:`chatter_time`'s answer when the series may not be summed
+NOT_SUMMED = -1.0
+
+
+@inline
+def chatter_bracket(v, e, a0, jerk, window):
+    """The times (s) within which a chatter series ends (see
+    :mod:`billiard.models.chatter`): rebound speed ``v`` (m/s), restitution ``e`` < 1,
+    acceleration into the wall ``a0`` (m/s^2) at its start, changing at most ``jerk``
+    (m/s^3) over ``window`` seconds. (0, inf) when the bound does not hold: the
+    acceleration may vanish in the window, the series may not converge, or it may
+    outlast the window."""
+    if v == 0.0:
+        return 0.0, 0.0
+    spread = jerk * window
+    a_lo, a_hi = a0 - spread, a0 + spread
+    if not a_lo > 0.0:
+        return 0.0, math.inf
+    rho = math.sqrt(a_hi / a_lo)
+    if not e * rho < 1.0:
+        return 0.0, math.inf
+    lo = 2.0 * v / (a_hi * (1.0 - e / rho))
+    hi = 2.0 * v / (a_lo * (1.0 - e * rho))
+    if hi > window:
+        return 0.0, math.inf
+    return lo, hi
+
+
+@inline
+def chatter_time(v, e, a0, period):
+    """T0 = 2 v / (a0 (1 - e)), the time a chatter series with rebound speed ``v`` takes
+    at the constant acceleration ``a0`` into the wall, when it is positive and at most
+    CHATTER_TAIL of ``period`` (0.0 for v = 0); NOT_SUMMED otherwise. The series is
+    summed when also :func:`chatter_bounded` holds."""
+    if not a0 > 0.0:
+        return NOT_SUMMED
+    t0 = 2.0 * v / (a0 * (1.0 - e))
+    if t0 == 0.0:
+        return 0.0
+    if not t0 <= CHATTER_TAIL * period:
+        return NOT_SUMMED  # followed impact by impact until its tail is this short
+    return t0
+
+
+@inline
+def chatter_bounded(v, e, a0, a1, a2, t0, period):
+    """Is the error of T0 = ``t0`` at most CHATTER_TOL of ``period``, the acceleration
+    into the wall being a0, a1, a2 at 0, t0 and 2 t0 after the impact (its rate
+    bounded by twice the larger difference quotient over the window 2 t0)?"""
+    window = 2.0 * t0
+    jerk = 2.0 * pmax(abs(a1 - a0), abs(a2 - a1)) / t0
+    lo, hi = chatter_bracket(v, e, a0, jerk, window)
+    return not hi - lo > CHATTER_TOL * period
+
+
+@inline
+def pmax(a, b):
+    """Python's ``max(a, b)``: b only when it is greater."""
+    return b if b > a else a

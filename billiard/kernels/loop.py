@@ -174,25 +174,9 @@ def impact(ctx, p, walls, out, row, tau, j, q1, q2, u1, u2, theta, s, z):
     m, r, k = ctx[IM_M], ctx[IM_R], ctx[IM_K]
     e = energy(q2, n1, n2, n3, m, r, k, ctx[G])
     n = ctx[EN_IMPACTS] + 1.0
-    o = row * NCOL
-    out[o] = n
-    out[o + 1] = t
-    out[o + 2] = q1
-    out[o + 3] = q2
-    out[o + 4] = n1
-    out[o + 5] = n2
-    out[o + 6] = n3
-    out[o + 7] = u4
-    out[o + 8] = un
-    out[o + 9] = tau
-    out[o + 10] = regime
-    out[o + 11] = z
-    out[o + 12] = e
-    out[o + 13] = LID_LABEL if kind == LID else ctx[base + S_WALL]
-    out[o + 14] = rt
-    out[o + 15] = rn
-    out[o + 16] = s
-    out[o + 17] = q3
+    wall = LID_LABEL if kind == LID else ctx[base + S_WALL]
+    write_row(out, row * NCOL, n, t, q1, q2, n1, n2, n3, u4, un, tau, regime, z, e, wall, rt, rn,
+              s, q3)  # fmt: skip
     # the row is written before the check, so that the caller can name the culprit
     if not math.isfinite(
         t + q1 + q2 + n1 + n2 + n3 + u4 + un + tau + z + e + rt + rn + s + q3
@@ -209,21 +193,25 @@ def impact(ctx, p, walls, out, row, tau, j, q1, q2, u1, u2, theta, s, z):
     ctx[EN_NO_ROW] = 0.0
     ctx[MC_LAST_IMPACT] = t
     ctx[EN_IMPACTS] = n
-    ctx[EN_T] = t
-    ctx[EN_THETA] = theta
-    ctx[EN_Q1] = q1
-    ctx[EN_Q2] = q2
-    ctx[EN_U1] = n1
-    ctx[EN_U2] = n2
-    ctx[EN_U3] = n3
-    ctx[EN_Q3] = q3
+    set_ball(ctx, t, theta, q1, q2, n1, n2, n3, q3)
     ctx[EN_CLOCK] = total
     ctx[EN_CLOCK_ERR] = error
     ctx[COUNTS + int(regime)] += 1.0
     if resting:
         ctx[COUNTS + 3] += 1.0
     ctx[EN_ZERO] = ctx[EN_ZERO] + 1.0 if tau == 0.0 else 0.0
-    # the collapse window: impact times within COLLAPSE_SPAN of this one
+    remember_impact(ctx, t)
+    if int(ctx[EN_RCOUNT]) > COLLAPSE_COUNT or ctx[EN_ZERO] >= ZERO_FLIGHT_LIMIT:
+        ctx[EN_FAULT] = 1.0
+    if ctx[EN_LAND_ON] != 0.0:
+        settles(ctx, j, kind, s, u1, u2, u3, z, vb1, vb2, regime, accel)
+    return True
+
+
+@inline
+def remember_impact(ctx, t):
+    """The collapse window after an impact at t: the impact times within COLLAPSE_SPAN
+    of it, a ring of RING slots at RECENT (EN_RHEAD the oldest, EN_RCOUNT of them)."""
     count = int(ctx[EN_RCOUNT])
     head = int(ctx[EN_RHEAD])
     if count == RING:
@@ -236,19 +224,34 @@ def impact(ctx, p, walls, out, row, tau, j, q1, q2, u1, u2, theta, s, z):
         count -= 1
     ctx[EN_RCOUNT] = count
     ctx[EN_RHEAD] = head
-    if count > COLLAPSE_COUNT or ctx[EN_ZERO] >= ZERO_FLIGHT_LIMIT:
-        ctx[EN_FAULT] = 1.0
-    if ctx[EN_LAND_ON] != 0.0:
-        settles(ctx, j, kind, s, u1, u2, u3, z, vb1, vb2, regime, accel)
-    return True
 
 
 @inline
-def no_impulse(ctx, t, theta, q1, q2, u1, u2, u3, q3, total, error, tau):
-    """The state at a flight's contact without impulse (contact phases): the ball there,
-    no impact counted, EN_NO_ROW set; such contacts at one instant count as zero
-    flights (a collapse after ZERO_FLIGHT_LIMIT of them)."""
-    ctx[EN_NO_ROW] = 1.0
+def write_row(out, o, n, t, q1, q2, u1, u2, u3, u4, un, tau, regime, z, e, wall, rt, rn, s, q3):
+    """One row of collisions.csv (NCOL floats, regime and wall as codes) at out[o:]."""
+    out[o] = n
+    out[o + 1] = t
+    out[o + 2] = q1
+    out[o + 3] = q2
+    out[o + 4] = u1
+    out[o + 5] = u2
+    out[o + 6] = u3
+    out[o + 7] = u4
+    out[o + 8] = un
+    out[o + 9] = tau
+    out[o + 10] = regime
+    out[o + 11] = z
+    out[o + 12] = e
+    out[o + 13] = wall
+    out[o + 14] = rt
+    out[o + 15] = rn
+    out[o + 16] = s
+    out[o + 17] = q3
+
+
+@inline
+def set_ball(ctx, t, theta, q1, q2, u1, u2, u3, q3):
+    """The engine's ball (EN_T .. EN_Q3)."""
     ctx[EN_T] = t
     ctx[EN_THETA] = theta
     ctx[EN_Q1] = q1
@@ -257,6 +260,15 @@ def no_impulse(ctx, t, theta, q1, q2, u1, u2, u3, q3, total, error, tau):
     ctx[EN_U2] = u2
     ctx[EN_U3] = u3
     ctx[EN_Q3] = q3
+
+
+@inline
+def no_impulse(ctx, t, theta, q1, q2, u1, u2, u3, q3, total, error, tau):
+    """The state at a flight's contact without impulse (contact phases): the ball there,
+    no impact counted, EN_NO_ROW set; such contacts at one instant count as zero
+    flights (a collapse after ZERO_FLIGHT_LIMIT of them)."""
+    ctx[EN_NO_ROW] = 1.0
+    set_ball(ctx, t, theta, q1, q2, u1, u2, u3, q3)
     ctx[EN_CLOCK] = total
     ctx[EN_CLOCK_ERR] = error
     ctx[EN_ZERO] = ctx[EN_ZERO] + 1.0 if tau == 0.0 else 0.0

@@ -30,7 +30,15 @@ from .contact import pmax, pmin, run_phase
 from .contact_equations import centre_state, roll_spin, s_dot_of_velocity, slip_velocity
 from .contact_forces import forces
 from .decorators import inline, jit
-from .impact import CHATTER_TAIL, chatter_period, kane_levinson, rebound_settles
+from .impact import (
+    CHATTER_TAIL,
+    NOT_SUMMED,
+    chatter_bounded,
+    chatter_period,
+    chatter_time,
+    kane_levinson,
+    rebound_settles,
+)
 from .layout import (
     AMP,
     CCOL,
@@ -57,7 +65,6 @@ from .layout import (
     EN_Q2,
     EN_Q3,
     EN_RCOUNT,
-    EN_RHEAD,
     EN_SETTLES,
     EN_STOP,
     EN_T,
@@ -134,7 +141,6 @@ from .layout import (
     PH_Y,
     PHASE_LIMIT,
     PHASE_PAUSE,
-    RECENT,
     ROLL,
     S_KIND,
     S_SLOPE,
@@ -157,8 +163,8 @@ from .layout import (
     G,
     KernelError,
 )
-from .loop import RING, compensated_add, run_chunk
-from .rules import COLLAPSE_COUNT, COLLAPSE_SPAN, ZERO_FLIGHT_LIMIT
+from .loop import compensated_add, remember_impact, run_chunk, set_ball, write_row
+from .rules import COLLAPSE_COUNT, ZERO_FLIGHT_LIMIT
 from .surfaces import contact
 from .vertex import forces as hold_forces
 from .vertex import holds, run_hold, sign
@@ -169,9 +175,6 @@ LIFT_OFF_SPEED = 1e-6
 #: accepted steps of a phase between two returns to Python (a stop request is looked
 #: at, progress reported): some milliseconds
 PAUSE_STEPS = 1000.0
-#: the largest error of a summed chatter series' end accepted, as a fraction of the
-#: drive period (:data:`billiard.models.chatter.CHATTER_TOL`)
-CHATTER_TOL = 1e-8
 #: MC_PHASE_ON: no phase under way, one under way, one paused (its pause answered at
 #: the next call), one to cut where it is (a stop request: the next call writes its
 #: cut row and returns)
@@ -179,8 +182,6 @@ PHASE_OFF = 0.0
 PHASE_ON = 1.0
 PHASE_PAUSED = 2.0
 PHASE_CUT = 3.0
-#: a summed chatter series that may not be summed
-NOT_SUMMED = -1.0
 
 
 # ---------------------------------------------------------------------- kinematics
@@ -334,42 +335,16 @@ def chatter_accel(ctx, p, walls, w, mode, sgn, theta, s, sd, tau):
 
 
 @inline
-def bracket(v, e, a0, jerk, window):
-    """:func:`billiard.models.chatter.bracket`."""
-    if v == 0.0:
-        return 0.0, 0.0
-    spread = jerk * window
-    a_lo, a_hi = a0 - spread, a0 + spread
-    if not a_lo > 0.0:
-        return 0.0, math.inf
-    rho = math.sqrt(a_hi / a_lo)
-    if not e * rho < 1.0:
-        return 0.0, math.inf
-    lo = 2.0 * v / (a_hi * (1.0 - e / rho))
-    hi = 2.0 * v / (a_lo * (1.0 - e * rho))
-    if hi > window:
-        return 0.0, math.inf
-    return lo, hi
-
-
-@inline
 def summed(ctx, p, walls, w, mode, sgn, theta, s, sd, v, e):
     """:func:`billiard.models.chatter.summed` (NOT_SUMMED for None)."""
     period = chatter_period(ctx[OMEGA])
     a0 = chatter_accel(ctx, p, walls, w, mode, sgn, theta, s, sd, 0.0)
-    if not a0 > 0.0:
-        return NOT_SUMMED
-    t0 = 2.0 * v / (a0 * (1.0 - e))
-    if t0 == 0.0:
-        return 0.0
-    if not t0 <= CHATTER_TAIL * period:
-        return NOT_SUMMED
-    window = 2.0 * t0
+    t0 = chatter_time(v, e, a0, period)
+    if t0 == NOT_SUMMED or t0 == 0.0:
+        return t0
     a1 = chatter_accel(ctx, p, walls, w, mode, sgn, theta, s, sd, t0)
-    a2 = chatter_accel(ctx, p, walls, w, mode, sgn, theta, s, sd, window)
-    jerk = 2.0 * pmax(abs(a1 - a0), abs(a2 - a1)) / t0
-    lo, hi = bracket(v, e, a0, jerk, window)
-    if hi - lo > CHATTER_TOL * period:
+    a2 = chatter_accel(ctx, p, walls, w, mode, sgn, theta, s, sd, 2.0 * t0)
+    if not chatter_bounded(v, e, a0, a1, a2, t0, period):
         return NOT_SUMMED
     return t0
 
@@ -501,23 +476,6 @@ def end_phase(ctx, mode, t_start, tau, total, error):
         ctx[EN_FAULT] = 2.0  # contact phases of zero duration piled up
 
 
-@inline
-def remember_impact(ctx, t):
-    """The collapse window after an impact at t (``loop.impact``'s ring)."""
-    count = int(ctx[EN_RCOUNT])
-    head = int(ctx[EN_RHEAD])
-    if count == RING:
-        head = (head + 1) % RING
-        count -= 1
-    ctx[RECENT + (head + count) % RING] = t
-    count += 1
-    while t - ctx[RECENT + head] >= COLLAPSE_SPAN:
-        head = (head + 1) % RING
-        count -= 1
-    ctx[EN_RCOUNT] = count
-    ctx[EN_RHEAD] = head
-
-
 # ---------------------------------------------------------------------- two walls
 
 
@@ -627,14 +585,7 @@ def hold_step(ctx, p, walls, cout, until):
     o = contact_row(ctx, cout, 0.0, t_start, t, a, b, M_HELD, END_RELEASE, settle)
     row_state(cout, o + 9, q1s, q2s, u1s, u2s, u3_0)
     row_state(cout, o + 14, q1, q2, u1, u2, u3)
-    ctx[EN_T] = t
-    ctx[EN_THETA] = theta
-    ctx[EN_Q1] = q1
-    ctx[EN_Q2] = q2
-    ctx[EN_U1] = u1
-    ctx[EN_U2] = u2
-    ctx[EN_U3] = u3
-    ctx[EN_Q3] = q3
+    set_ball(ctx, t, theta, q1, q2, u1, u2, u3, q3)
     end_phase(ctx, M_HELD, t_start, tau, total, error)
     to_flight(ctx)
     keeps = int(ctx[VX_KEEPS])
@@ -682,35 +633,14 @@ def impact_from_contact(ctx, p, walls, out, other, index, t, tau, theta, q3):
     u4, un = frame_velocity(n1, n2, z)
     e = energy(q2, n1, n2, n3, ctx[IM_M], ctx[IM_R], ctx[IM_K], ctx[G])
     n = ctx[EN_IMPACTS] + 1.0
-    o = int(ctx[MC_ROW]) * NCOL
-    out[o] = n
-    out[o + 1] = t
-    out[o + 2] = q1
-    out[o + 3] = q2
-    out[o + 4] = n1
-    out[o + 5] = n2
-    out[o + 6] = n3
-    out[o + 7] = u4
-    out[o + 8] = un
-    out[o + 9] = tau
-    out[o + 10] = regime
-    out[o + 11] = z
-    out[o + 12] = e
-    out[o + 13] = LID_LABEL if kind == LID else ctx[base + S_WALL]
-    out[o + 14] = rt
-    out[o + 15] = rn
-    out[o + 16] = s_o
-    out[o + 17] = q3
+    wall = LID_LABEL if kind == LID else ctx[base + S_WALL]
+    write_row(out, int(ctx[MC_ROW]) * NCOL, n, t, q1, q2, n1, n2, n3, u4, un, tau, regime, z, e,
+              wall, rt, rn, s_o, q3)  # fmt: skip
     ctx[MC_ROW] += 1.0
     ctx[EN_IMPACTS] = n
     ctx[EN_EVENT_T] = t
     ctx[MC_LAST_IMPACT] = t
-    ctx[EN_T] = t
-    ctx[EN_THETA] = theta
-    ctx[EN_U1] = n1
-    ctx[EN_U2] = n2
-    ctx[EN_U3] = n3
-    ctx[EN_Q3] = q3
+    set_ball(ctx, t, theta, q1, q2, n1, n2, n3, q3)
     ctx[COUNTS + int(regime)] += 1.0
     remember_impact(ctx, t)
     collapsed = int(ctx[EN_RCOUNT]) > COLLAPSE_COUNT or ctx[EN_ZERO] >= ZERO_FLIGHT_LIMIT
@@ -839,14 +769,7 @@ def finish_phase(ctx, p, walls, out, cout, until, status):
     q1s, q2s, u1s, u2s, u3s = lab_state(ctx, p, walls, w, theta0, s0, sd0, u3_0, roll)
     row_state(cout, o + 9, q1s, q2s, u1s, u2s, u3s)
     row_state(cout, o + 14, q1, q2, u1, u2, u3)
-    ctx[EN_T] = t
-    ctx[EN_THETA] = theta
-    ctx[EN_Q1] = q1
-    ctx[EN_Q2] = q2
-    ctx[EN_U1] = u1
-    ctx[EN_U2] = u2
-    ctx[EN_U3] = u3
-    ctx[EN_Q3] = q3
+    set_ball(ctx, t, theta, q1, q2, u1, u2, u3, q3)
     end_phase(ctx, mode, t_start, tau, total, error)
     if reason == END_LIFT_OFF or reason == END_WALL_END:
         # the centre is on the offset curve with a tangent velocity: leave along the

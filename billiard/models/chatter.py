@@ -42,7 +42,6 @@ most |s_dot| T0, and the energy relative to the wall never grows.
 
 from __future__ import annotations
 
-import math
 from collections.abc import Callable
 
 from billiard.kernels.interpreted import impact as _impact
@@ -52,10 +51,9 @@ __all__ = ["CHATTER_TAIL", "CHATTER_TOL", "bracket", "summed"]
 #: The longest chatter summed, as a fraction of the drive period (the kernels' test
 #: of the free flight, ``impact.chatter_tail``, uses the same).
 CHATTER_TAIL = _impact.CHATTER_TAIL
-
 #: The largest error of the accumulation time accepted, as a fraction of the drive
 #: period (1 s without a drive frequency): 1e-8 of 0.05 s is 5e-10 s.
-CHATTER_TOL = 1e-8
+CHATTER_TOL = _impact.CHATTER_TOL
 
 
 def bracket(v: float, e: float, a0: float, jerk: float, window: float) -> tuple[float, float]:
@@ -63,41 +61,24 @@ def bracket(v: float, e: float, a0: float, jerk: float, window: float) -> tuple[
     rebound speed ``v`` (m/s), restitution ``e`` < 1, acceleration into the wall ``a0``
     (m/s^2) at its start, changing at most ``jerk`` (m/s^3) over ``window`` seconds.
     (0, inf) when the bound does not hold: the acceleration may vanish in the window,
-    the series may not converge, or it may outlast the window."""
-    if v == 0.0:
-        return 0.0, 0.0
-    spread = jerk * window
-    a_lo, a_hi = a0 - spread, a0 + spread
-    if not a_lo > 0.0:
-        return 0.0, math.inf
-    rho = math.sqrt(a_hi / a_lo)
-    if not e * rho < 1.0:
-        return 0.0, math.inf
-    lo = 2.0 * v / (a_hi * (1.0 - e / rho))
-    hi = 2.0 * v / (a_lo * (1.0 - e * rho))
-    if hi > window:
-        return 0.0, math.inf
-    return lo, hi
+    the series may not converge, or it may outlast the window
+    (:func:`billiard.kernels.impact.chatter_bracket`)."""
+    return _impact.chatter_bracket(v, e, a0, jerk, window)
 
 
 def summed(v: float, e: float, accel: Callable[[float], float], period: float) -> float | None:
     """The time (s) the chatter series after an impact takes to end, T0, when it is at
     most ``CHATTER_TAIL`` of ``period`` (s) and its error bound at most ``CHATTER_TOL``
-    of it, else None. ``v``: the rebound's
-    normal speed (m/s); ``e`` < 1; ``accel(tau)``: the acceleration into the wall (m/s^2)
-    tau seconds after the impact."""
+    of it, else None. ``v``: the rebound's normal speed (m/s); ``e`` < 1;
+    ``accel(tau)``: the acceleration into the wall (m/s^2) tau seconds after the impact
+    (the kernels' :func:`~billiard.kernels.impact.chatter_time` and
+    :func:`~billiard.kernels.impact.chatter_bounded`, which the state machine runs)."""
     a0 = accel(0.0)
-    if not a0 > 0.0:
+    t0 = _impact.chatter_time(v, e, a0, period)
+    if t0 == _impact.NOT_SUMMED:
         return None
-    t0 = 2.0 * v / (a0 * (1.0 - e))
     if t0 == 0.0:
         return 0.0
-    if not t0 <= CHATTER_TAIL * period:
-        return None  # followed impact by impact until its tail is this short
-    window = 2.0 * t0
-    a1, a2 = accel(t0), accel(window)
-    jerk = 2.0 * max(abs(a1 - a0), abs(a2 - a1)) / t0
-    lo, hi = bracket(v, e, a0, jerk, window)
-    if hi - lo > CHATTER_TOL * period:
+    if not _impact.chatter_bounded(v, e, a0, accel(t0), accel(2.0 * t0), t0, period):
         return None
     return t0
