@@ -45,7 +45,7 @@ __all__ = ["ALL_NOTICE", "ALL_NOTICE_DONE", "JOBS", "WORKERS", "compile_all", "r
 #: printed before the kernels compile together
 ALL_NOTICE = (
     "billiard: compiling the engine's kernels with numba, once per install or update "
-    "(about half a minute); cached for later runs"
+    "(under a minute); cached for later runs"
 )
 #: printed when they are compiled
 ALL_NOTICE_DONE = "billiard: compiled the engine's kernels in {seconds:.1f} s"

@@ -527,7 +527,7 @@ class Simulation(ContactPhases, EventStep):
         """:meth:`run` under contact phases on the compiled state machine
         (:meth:`billiard.engine.kernel_engine.KernelEngine.run_phases`): the engine
         state goes into its state vector, and back when the run ends."""
-        if self._fault is not None:
+        if self._fault is not None and self._impacts < collisions:
             # a stop detected before (the next step raises it)
             fault = self._fault
             self.status = fault.status
