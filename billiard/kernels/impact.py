@@ -35,9 +35,11 @@ REGIME_RTOL = 16 * 2.0**-52
 
 @inline
 def kane_levinson(ctx, u1, u2, u3, z, vb1, vb2, pressing):
-    """Post-impact (u1, u2, u3, Rt, Rn, regime code, resting) for a ball with speeds
-    (u1, u2, u3) hitting a boundary with tangent angle z moving at (vb1, vb2);
-    ``pressing``: its relative acceleration pushes it into the surface."""
+    """Post-impact (u1, u2, u3, Rt, Rn, regime code, resting, wt, wn) for a ball with
+    speeds (u1, u2, u3) hitting a boundary with tangent angle z moving at (vb1, vb2);
+    ``pressing``: its relative acceleration pushes it into the surface. (wt, wn): the
+    contact point's velocity relative to the boundary before the impact (m/s), which
+    the law starts from (the landing test and the record read it too)."""
     m = ctx[IM_M]
     r = ctx[IM_R]
     k = ctx[IM_K]
@@ -57,7 +59,7 @@ def kane_levinson(ctx, u1, u2, u3, z, vb1, vb2, pressing):
             resting = True
     if wn >= 0.0 and not resting:
         # the contact point is already separating: no impulse
-        return u1, u2, u3, 0.0, 0.0, ELASTIC if low else SLIP, False
+        return u1, u2, u3, 0.0, 0.0, ELASTIC if low else SLIP, False, wt, wn
     n1, n2, n3, rt, rn = impact_stick(v1, v2, u3, z, vb1, vb2, m, r, k, e)
     regime = STICK
     rounding = REGIME_RTOL * m * (abs(v1) + abs(v2) + r * abs(u3) + abs(vb1) + abs(vb2))
@@ -79,7 +81,7 @@ def kane_levinson(ctx, u1, u2, u3, z, vb1, vb2, pressing):
         du1, du2 = n1 - u1, n2 - u2
         rt = m * (c * du1 + s * du2)
         rn = m * (c * du2 - s * du1)
-    return n1, n2, n3, rt, rn, regime, resting
+    return n1, n2, n3, rt, rn, regime, resting, wt, wn
 
 
 @inline

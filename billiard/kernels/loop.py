@@ -9,7 +9,7 @@ from __future__ import annotations
 import math
 
 from . import fixed_step, flight
-from .ball import contact_velocity, energy, frame_velocity
+from .ball import energy, frame_velocity
 from .decorators import inline, jit
 from .impact import chatter_tail, kane_levinson, rebound_settles
 from .layout import (
@@ -169,7 +169,8 @@ def impact(ctx, p, walls, out, row, tau, j, q1, q2, u1, u2, theta, s, z):
     # under contact phases a lying ball lands or reflects: the low-velocity rule's
     # relaunch (which adds energy) is the impacts model's alone
     press = accel > 0.0 and ctx[EN_LAND_ON] == 0.0
-    n1, n2, n3, rt, rn, regime, resting = kane_levinson(ctx, u1, u2, u3, z, vb1, vb2, press)
+    n1, n2, n3, rt, rn, regime, resting, _, wn = kane_levinson(ctx, u1, u2, u3, z, vb1, vb2,
+                                                               press)  # fmt: skip
     u4, un = frame_velocity(n1, n2, z)
     m, r, k = ctx[IM_M], ctx[IM_R], ctx[IM_K]
     e = energy(q2, n1, n2, n3, m, r, k, ctx[G])
@@ -187,7 +188,7 @@ def impact(ctx, p, walls, out, row, tau, j, q1, q2, u1, u2, theta, s, z):
         # under contact phases a contact without impulse is no impact: no row, nothing
         # counted; the ball goes on from it, or lands
         no_impulse(ctx, t, theta, q1, q2, n1, n2, n3, q3, total, error, tau)
-        settles(ctx, j, kind, s, u1, u2, u3, z, vb1, vb2, regime, accel)
+        settles(ctx, j, kind, s, wn, regime, accel)
         return True
     # commit
     ctx[EN_NO_ROW] = 0.0
@@ -204,7 +205,7 @@ def impact(ctx, p, walls, out, row, tau, j, q1, q2, u1, u2, theta, s, z):
     if int(ctx[EN_RCOUNT]) > COLLAPSE_COUNT or ctx[EN_ZERO] >= ZERO_FLIGHT_LIMIT:
         ctx[EN_FAULT] = 1.0
     if ctx[EN_LAND_ON] != 0.0:
-        settles(ctx, j, kind, s, u1, u2, u3, z, vb1, vb2, regime, accel)
+        settles(ctx, j, kind, s, wn, regime, accel)
     return True
 
 
@@ -277,15 +278,15 @@ def no_impulse(ctx, t, theta, q1, q2, u1, u2, u3, q3, total, error, tau):
 
 
 @inline
-def settles(ctx, j, kind, s, u1, u2, u3, z, vb1, vb2, regime, accel):
-    """After an impact on surface j at s with speeds (u1, u2, u3) before it: does the
+def settles(ctx, j, kind, s, wn, regime, accel):
+    """After an impact on surface j at s with the normal velocity wn (m/s) of the
+    contact point relative to the boundary before it: does the
     chattering it starts settle (``ContactPhases._settles``: an inelastic contact with a
     wall whose rebound speed e |wn| is at most the landing speed, or the low-velocity
     rule applied; e and the landing speed are the impact law's IM_E and IM_EB), or may
     its tail be summed (``chatter_tail``, ``accel`` the free flight's acceleration into
     the wall, m/s^2)? Sets EN_SETTLES (SETTLES_SLOW plus SETTLES_TAIL, the criteria met)
     and the impact's EN_LAST_J, EN_LAST_S, EN_LAST_WN, EN_LAST_REGIME."""
-    wt, wn = contact_velocity(u1, u2, u3, z, vb1, vb2, ctx[IM_R])
     e = ctx[IM_E]
     ctx[EN_LAST_J] = j
     ctx[EN_LAST_S] = s

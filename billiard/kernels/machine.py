@@ -25,7 +25,7 @@ from __future__ import annotations
 
 import math
 
-from .ball import contact_velocity, energy, frame_velocity
+from .ball import energy, frame_velocity
 from .contact import pmax, pmin, run_phase
 from .contact_equations import centre_state, roll_spin, s_dot_of_velocity, slip_velocity
 from .contact_forces import forces
@@ -622,8 +622,7 @@ def impact_from_contact(ctx, p, walls, out, other, index, t, tau, theta, q3):
     vb1, vb2 = boundary_velocity(ctx, theta)
     # a ball that reaches a second wall or the lid lands, is held or reflects: under
     # contact phases the low-velocity rule never relaunches it (that adds energy)
-    n1, n2, n3, rt, rn, regime, _ = kane_levinson(ctx, u1, u2, u3, z, vb1, vb2, False)
-    _, wn = contact_velocity(u1, u2, u3, z, vb1, vb2, ctx[IM_R])
+    n1, n2, n3, rt, rn, regime, _, _, wn = kane_levinson(ctx, u1, u2, u3, z, vb1, vb2, False)
     elastic = regime == ELASTIC
     if rn == 0.0 and rt == 0.0:
         # no impulse: no impact (billiard.models.corner.is_impact)

@@ -12,7 +12,6 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any, Protocol
 
-from billiard.kernels.interpreted import ball as _ball
 from billiard.kernels.interpreted import impact as _impact
 from billiard.kernels.interpreted import layout as _L
 
@@ -182,12 +181,10 @@ class KaneLevinsonImpact:
         """Post-impact speeds for a ball with speeds ``state.u1, state.u2, state.u3``."""
         u1, u2, u3 = state.u1, state.u2, state.u3
         z, vb1, vb2 = contact.z, contact.vb1, contact.vb2
-        n1, n2, n3, rt, rn, regime, resting = _impact.kane_levinson(
+        # with the relative velocity before the impact, which the record reports
+        n1, n2, n3, rt, rn, regime, resting, wt, wn = _impact.kane_levinson(
             self.ctx, u1, u2, u3, z, vb1, vb2, contact.pressing
         )
-        # the relative velocity before the impact, which the record reports (the law
-        # computes it first from the same generated map)
-        wt, wn = _ball.contact_velocity(u1, u2, u3, z, vb1, vb2, self.ctx[_L.IM_R])
         return ImpactResult(n1, n2, n3, rt, rn, _L.REGIMES[int(regime)], wt, wn, resting)
 
 
