@@ -223,7 +223,7 @@ landing, and each rolling or sliding phase and each hold is integrated in the sa
 its end and the transition after it included; Python sees the run only when a buffer is
 full, every 1,000 steps of a long phase, and at the end. A phase costs its integration
 steps and a few microseconds around them (the phase cost above: the wedge's phases about
-10 us each, the longer ones of hyperbola-5.8hz about 23 us), where the engine's Python
+10 us each, the longer ones of hyperbola-5.8hz about 22 us), where the engine's Python
 bookkeeping cost about 140 us a phase before.
 
 * **A ball at rest** (bowl at rest, the floor after the drop, the vertex, the shaken
@@ -245,7 +245,7 @@ bookkeeping cost about 140 us a phase before.
   it hardly lands (parabola-5.4hz, hyperbola-4.5hz: a handful of phases in 600 s) the two
   models make the same flights on the same loop, and "phases" pays only its landing test
   after every impact (the rebound's speed against the landing speed, the chatter's
-  tail): within 2 % of 1x, inside the noise of these times. In the wedge and
+  tail): within 3 % of 1x, inside the noise of these times. In the wedge and
   hyperbola-5.8hz a phase replaces the dozen or more hops of 1-4 us each it would take
   the impact model, so "phases" is now the cheaper of the two. In the chaotic scenes the
   two models follow different trajectories after the first contact, so their ratio
