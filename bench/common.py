@@ -8,11 +8,13 @@ run alone, not of building the simulation; a fast run is repeated and the median
 
 from __future__ import annotations
 
+import argparse
 import math
 import statistics
 import time
 from collections.abc import Callable
 from dataclasses import dataclass
+from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -214,3 +216,19 @@ def position_difference(a: dict, b: dict, k: int) -> float:
     if len(a["q1"]) < k or len(b["q1"]) < k:
         return math.inf
     return float(math.hypot(a["q1"][k - 1] - b["q1"][k - 1], a["q2"][k - 1] - b["q2"][k - 1]))
+
+
+def section_arguments(prog: str, description: str | None, quick: str, argv: list[str] | None):
+    """The command line of a bench that measures one section by itself (``--quick``
+    with its help ``quick``, ``--docs``, ``--render``), and the documentation folder
+    it writes to: (args, docs)."""
+    parser = argparse.ArgumentParser(prog=prog, description=description)
+    parser.add_argument("--quick", action="store_true", help=quick)
+    parser.add_argument(
+        "--docs", help="documentation folder (default docs, or runs/bench-quick with --quick)"
+    )
+    parser.add_argument(
+        "--render", action="store_true", help="measure nothing: rewrite the section from bench.json"
+    )
+    args = parser.parse_args(argv)
+    return args, Path(args.docs or ("runs/bench-quick" if args.quick else "docs"))

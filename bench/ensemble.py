@@ -16,7 +16,6 @@ first; the machine's load average is recorded with them.
 
 from __future__ import annotations
 
-import argparse
 import json
 import os
 import platform
@@ -29,7 +28,8 @@ from typing import Any
 
 import numpy as np
 
-from bench.markdown import write_section
+from bench.common import section_arguments
+from bench.markdown import publish_section
 
 BEGIN, END = "<!-- ensemble-bench -->", "<!-- /ensemble-bench -->"
 SCENE = "wedge-6.6hz"
@@ -397,14 +397,7 @@ def saved_results(docs: Path) -> Path:
 def publish(docs: Path, results: dict | None = None) -> bool:
     """Save ``results`` (when given) and write the section of ``docs/sweeps.md`` from
     the saved results; False when there are none."""
-    saved = saved_results(docs)
-    if results is not None:
-        saved.parent.mkdir(parents=True, exist_ok=True)
-        saved.write_text(json.dumps(results, indent=1))
-    elif not saved.exists():
-        return False
-    write_section(docs / "sweeps.md", render(json.loads(saved.read_text())), BEGIN, END)
-    return True
+    return publish_section(saved_results(docs), docs / "sweeps.md", render, BEGIN, END, results)
 
 
 def _partial(docs: Path, results: dict) -> None:
@@ -415,16 +408,9 @@ def _partial(docs: Path, results: dict) -> None:
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(prog="python -m bench.ensemble", description=__doc__)
-    parser.add_argument("--quick", action="store_true", help="small sizes, under a minute")
-    parser.add_argument(
-        "--docs", help="documentation folder (default docs, or runs/bench-quick with --quick)"
+    args, docs = section_arguments(
+        "python -m bench.ensemble", __doc__, "small sizes, under a minute", argv
     )
-    parser.add_argument(
-        "--render", action="store_true", help="measure nothing: rewrite the section from bench.json"
-    )
-    args = parser.parse_args(argv)
-    docs = Path(args.docs or ("runs/bench-quick" if args.quick else "docs"))
     if args.render:
         publish(docs)
     else:

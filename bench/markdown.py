@@ -3,6 +3,8 @@ so that every section can use them)."""
 
 from __future__ import annotations
 
+import json
+from collections.abc import Callable
 from pathlib import Path
 
 
@@ -24,3 +26,23 @@ def write_section(doc: Path, section: str, begin: str, end: str) -> None:
     else:
         text = text.rstrip("\n") + "\n\n" + section
     doc.write_text(text)
+
+
+def publish_section(
+    saved: Path,
+    doc: Path,
+    render: Callable[[dict], str],
+    begin: str,
+    end: str,
+    results: dict | None = None,
+) -> bool:
+    """Save ``results`` (when given) as JSON to ``saved`` and write the section between
+    ``begin`` and ``end`` of ``doc``, rendered from the saved results; False when there
+    are none."""
+    if results is not None:
+        saved.parent.mkdir(parents=True, exist_ok=True)
+        saved.write_text(json.dumps(results, indent=1))
+    elif not saved.exists():
+        return False
+    write_section(doc, render(json.loads(saved.read_text())), begin, end)
+    return True

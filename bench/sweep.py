@@ -15,9 +15,7 @@ section between the markers ``<!-- sweep-bench -->`` and ``<!-- /sweep-bench -->
 
 from __future__ import annotations
 
-import argparse
 import hashlib
-import json
 import os
 import platform
 import resource
@@ -26,7 +24,8 @@ import tempfile
 import time
 from pathlib import Path
 
-from bench.markdown import write_section
+from bench.common import section_arguments
+from bench.markdown import publish_section
 from billiard import load_scene
 from billiard.sweep import Sweep, parse_vary, run_sweep
 from billiard.sweep.progress import SweepProgress
@@ -257,27 +256,15 @@ def saved_results(docs: Path) -> Path:
 def publish(docs: Path, results: dict | None = None) -> bool:
     """Save ``results`` (when given) and write the sweep section of
     ``docs/performance.md`` from the saved results; False when there are none."""
-    saved = saved_results(docs)
-    if results is not None:
-        saved.parent.mkdir(parents=True, exist_ok=True)
-        saved.write_text(json.dumps(results, indent=1))
-    elif not saved.exists():
-        return False
-    write_section(docs / "performance.md", render(json.loads(saved.read_text())), BEGIN, END)
-    return True
+    return publish_section(
+        saved_results(docs), docs / "performance.md", render, BEGIN, END, results
+    )
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(prog="python -m bench.sweep", description=__doc__)
-    parser.add_argument("--quick", action="store_true", help="small sizes, about a minute")
-    parser.add_argument(
-        "--docs", help="documentation folder (default docs, or runs/bench-quick with --quick)"
+    args, docs = section_arguments(
+        "python -m bench.sweep", __doc__, "small sizes, about a minute", argv
     )
-    parser.add_argument(
-        "--render", action="store_true", help="measure nothing: rewrite the section from bench.json"
-    )
-    args = parser.parse_args(argv)
-    docs = Path(args.docs or ("runs/bench-quick" if args.quick else "docs"))
     publish(docs, None if args.render else measure(args.quick))
     print(f"bench.sweep: wrote the sweep section of {docs / 'performance.md'}")
     return 0

@@ -46,7 +46,7 @@ from __future__ import annotations
 
 import importlib.util
 import threading
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from types import ModuleType
 from typing import Any
 
@@ -204,11 +204,19 @@ def advance(sim: Any) -> Any:
     curve parameters ``params[i]``, up to ``impacts`` rows into ``out[i]`` (``impacts *
     NCOL`` floats), and writes (status, rows written) into ``ends[i]``; a thread that
     stops leaves ``ends[i]`` as it was and its code in ``ctxs[i, EN_STOP]``."""
+    return _device_kernel(sim, _advance, "loop", _advance_kernel)
+
+
+def _device_kernel(
+    sim: Any, cache: dict[str, Any], module: str, make: Callable[[ModuleType], Any]
+) -> Any:
+    """The kernel ``make`` builds from module ``module`` of the device twin of the
+    curve of ``sim``, built once per twin (``cache``, by the twin's package)."""
     package = device_kernels(sim).__name__
     with _lock:
-        kernel = _advance.get(package)
+        kernel = cache.get(package)
         if kernel is None:
-            kernel = _advance[package] = _advance_kernel(twin.load_module(package, "loop"))
+            kernel = cache[package] = make(twin.load_module(package, module))
     return kernel
 
 
@@ -272,12 +280,7 @@ def ensemble_kernel(sim: Any) -> Any:
     target)`` of the curve of ``sim``: thread ``i`` runs
     :func:`billiard.kernels.ensemble.measure` on its rows of the arrays (the CPU
     ensemble's per-trajectory function, from the same source)."""
-    package = device_kernels(sim).__name__
-    with _lock:
-        kernel = _measure.get(package)
-        if kernel is None:
-            kernel = _measure[package] = _measure_kernel(twin.load_module(package, "ensemble"))
-    return kernel
+    return _device_kernel(sim, _measure, "ensemble", _measure_kernel)
 
 
 def _measure_kernel(ensemble: ModuleType) -> Any:

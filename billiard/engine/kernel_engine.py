@@ -490,14 +490,9 @@ class KernelEngine:
                 if code == L.LAND:
                     status = None
                     break
-                if checkpoint is not None and monotonic() >= next_save:
-                    checkpoint(sim.state)
-                    next_save = monotonic() + interval
-                fault = self.pending_stop()
-                if fault is not None:
-                    raise fault
-                if elapsed < fast and rows < LAST_CHUNK:
-                    rows *= 2
+                next_save, rows = self._chunk_ended(
+                    checkpoint, next_save, interval, elapsed < fast, rows
+                )
         except SimulationError as exc:
             # a ball at rest ends the run complete: a status, not a stop reason
             status, reason = exc.status, None if exc.status.finished else str(exc)
@@ -579,18 +574,34 @@ class KernelEngine:
                         report_time(progress, float(ctx[L.EN_T] + ctx[L.PH_TAU]))
                         progress(self.impacts, collisions)
                     continue
-                if checkpoint is not None and monotonic() >= next_save:
-                    checkpoint(sim.state)
-                    next_save = monotonic() + interval
-                fault = self.pending_stop()
-                if fault is not None:
-                    raise fault
-                if elapsed < fast and rows < LAST_CHUNK:
-                    rows *= 2
+                next_save, rows = self._chunk_ended(
+                    checkpoint, next_save, interval, elapsed < fast, rows
+                )
         except SimulationError as exc:
             # a ball at rest ends the run complete: a status, not a stop reason
             status, reason = exc.status, None if exc.status.finished else str(exc)
         return status, reason
+
+    def _chunk_ended(
+        self,
+        checkpoint: Callable[[Any], None] | None,
+        next_save: float,
+        interval: float,
+        fast: bool,
+        rows: int,
+    ) -> tuple[float, int]:
+        """After a chunk that leaves the run going on: the checkpoint when one is due,
+        the stop detected after its last impact (raised), and the next chunk's size
+        (twice as many rows after a ``fast`` chunk). Returns (next_save, rows)."""
+        if checkpoint is not None and time.monotonic() >= next_save:
+            checkpoint(self.sim.state)
+            next_save = time.monotonic() + interval
+        fault = self.pending_stop()
+        if fault is not None:
+            raise fault
+        if fast and rows < LAST_CHUNK:
+            rows *= 2
+        return next_save, rows
 
     def _flights_stopped(self) -> None:
         """A stop inside the machine's flights (``run_chunk``) after impacts they made:

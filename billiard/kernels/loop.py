@@ -93,20 +93,25 @@ def pressing(ctx, p, walls, j, theta, q1, q2, u1, u2):
 
 
 @inline
-def gap_acceleration(ctx, p, walls, j, theta, q1, q2, u1, u2):
-    """d2G/dt2 (m/s^2) of surface j for the ball in free flight: negative when its
-    acceleration relative to the boundary pushes it into the surface."""
+def boundary_frame(ctx, theta, q1, q2, u1, u2):
+    """(px, py, vx, vy): the centre's position (m) and velocity (m/s) relative to the
+    boundary at drive angle theta (``Drive.to_boundary_frame``)."""
     a = ctx[AMP]
     d = a * math.sin(theta)
     v = a * ctx[OMEGA] * math.cos(theta)
-    horizontal = ctx[HORIZ] != 0.0
-    if horizontal:
-        px, py, vx, vy = q1 - d, q2, u1 - v, u2
-    else:
-        px, py, vx, vy = q1, q2 - d, u1, u2 - v
+    if ctx[HORIZ] != 0.0:
+        return q1 - d, q2, u1 - v, u2
+    return q1, q2 - d, u1, u2 - v
+
+
+@inline
+def gap_acceleration(ctx, p, walls, j, theta, q1, q2, u1, u2):
+    """d2G/dt2 (m/s^2) of surface j for the ball in free flight: negative when its
+    acceleration relative to the boundary pushes it into the surface."""
+    px, py, vx, vy = boundary_frame(ctx, theta, q1, q2, u1, u2)
     a1, a2 = flight.acceleration(ctx, u1, u2)
     ab = -ctx[AMP] * ctx[OMEGA] * ctx[OMEGA] * math.sin(theta)
-    if horizontal:
+    if ctx[HORIZ] != 0.0:
         ax, ay = a1 - ab, a2
     else:
         ax, ay = a1, a2 - ab

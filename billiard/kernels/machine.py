@@ -28,7 +28,7 @@ import math
 from .ball import energy, frame_velocity
 from .contact import pmax, pmin, run_phase
 from .contact_equations import centre_state, roll_spin, s_dot_of_velocity, slip_velocity
-from .contact_forces import forces
+from .contact_forces import boundary, forces
 from .decorators import inline, jit
 from .impact import (
     CHATTER_TAIL,
@@ -163,7 +163,14 @@ from .layout import (
     G,
     KernelError,
 )
-from .loop import compensated_add, remember_impact, run_chunk, set_ball, write_row
+from .loop import (
+    boundary_frame,
+    compensated_add,
+    remember_impact,
+    run_chunk,
+    set_ball,
+    write_row,
+)
 from .rules import COLLAPSE_COUNT, ZERO_FLIGHT_LIMIT
 from .surfaces import contact
 from .vertex import forces as hold_forces
@@ -188,29 +195,11 @@ PHASE_CUT = 3.0
 
 
 @inline
-def drive_offset(ctx, theta):
-    """(d, v): the boundary's displacement (m) and velocity (m/s) along the drive's axis
-    at drive angle theta (as :class:`billiard.geometry.drive.Drive` computes them)."""
-    a = ctx[AMP]
-    return a * math.sin(theta), a * ctx[OMEGA] * math.cos(theta)
-
-
-@inline
-def boundary_velocity(ctx, theta):
-    """(vb1, vb2): the boundary's lab-frame velocity (m/s)."""
-    v = ctx[AMP] * ctx[OMEGA] * math.cos(theta)
-    if ctx[HORIZ] == 1.0:
-        return v, 0.0
-    return 0.0, v
-
-
-@inline
-def centre_in_boundary(ctx, theta, q1, q2):
-    """(px, py): the centre (m) in the boundary's frame."""
-    d = ctx[AMP] * math.sin(theta)
-    if ctx[HORIZ] == 1.0:
-        return q1 - d, q2
-    return q1, q2 - d
+def displacement(ctx, theta):
+    """The boundary's displacement (m) along the drive's axis at drive angle theta (as
+    :class:`billiard.geometry.drive.Drive` computes it; its velocity:
+    :func:`~billiard.kernels.contact_forces.boundary`)."""
+    return ctx[AMP] * math.sin(theta)
 
 
 @jit
@@ -221,11 +210,9 @@ def lab_state(ctx, p, walls, w, theta, s, sd, u3, roll):
     f0 = walls[0][w](s, p)
     fp = walls[1][w](s, p)
     f2 = walls[2][w](s, p)
-    d, v = drive_offset(ctx, theta)
-    if ctx[HORIZ] == 1.0:
-        d1, d2, vb1, vb2 = d, 0.0, v, 0.0
-    else:
-        d1, d2, vb1, vb2 = 0.0, d, 0.0, v
+    d = displacement(ctx, theta)
+    d1, d2 = (d, 0.0) if ctx[HORIZ] == 1.0 else (0.0, d)
+    vb1, vb2, _, _ = boundary(ctx, theta)
     q1, q2, u1, u2 = centre_state(s, sd, f0, fp, f2, d1, d2, vb1, vb2, ctx[PH_R])
     spin = roll_spin(sd, fp, f2, ctx[PH_R]) if roll else u3
     return q1, q2, u1, u2, spin
@@ -236,7 +223,7 @@ def s_dot(ctx, p, walls, w, theta, s, u1, u2):
     """ds/dt (m/s) of a centre at s with the lab velocity (u1, u2)."""
     fp = walls[1][w](s, p)
     f2 = walls[2][w](s, p)
-    vb1, vb2 = boundary_velocity(ctx, theta)
+    vb1, vb2, _, _ = boundary(ctx, theta)
     return s_dot_of_velocity(u1, u2, fp, f2, vb1, vb2, ctx[PH_R])
 
 
@@ -356,7 +343,7 @@ def leave_wall(ctx, p, walls, w, s, theta):
     fp = walls[1][w](s, p)
     c = 1.0 / math.sqrt(1.0 + fp * fp)
     nx, ny = -fp * c, c
-    vb1, vb2 = boundary_velocity(ctx, theta)
+    vb1, vb2, _, _ = boundary(ctx, theta)
     vn = (ctx[EN_U1] - vb1) * nx + (ctx[EN_U2] - vb2) * ny
     if vn >= LIFT_OFF_SPEED:
         return
@@ -410,13 +397,7 @@ def end_chatter(ctx, p, walls, until):
     q1, q2, u1, u2, _ = lab_state(
         ctx, p, walls, w, theta, ctx[MC_CONTACT + 1], ctx[MC_CONTACT + 2], u3, roll
     )
-    ctx[EN_T] = t_start
-    ctx[EN_THETA] = theta
-    ctx[EN_Q1] = q1
-    ctx[EN_Q2] = q2
-    ctx[EN_U1] = u1
-    ctx[EN_U2] = u2
-    ctx[EN_Q3] = ctx[EN_Q3] + u3 * tau
+    set_ball(ctx, t_start, theta, q1, q2, u1, u2, u3, ctx[EN_Q3] + u3 * tau)
     ctx[EN_CLOCK] = t_start
     ctx[EN_CLOCK_ERR] = 0.0
     ctx[MC_FINAL] = t_start
@@ -484,8 +465,8 @@ def enter_hold(ctx, a, b, t, settle):
     """``ContactPhases._enter_hold``: the ball moves with the boundary, held by walls
     a and b at its present centre."""
     theta = ctx[EN_THETA]
-    px, py = centre_in_boundary(ctx, theta, ctx[EN_Q1], ctx[EN_Q2])
-    u1, u2 = boundary_velocity(ctx, theta)
+    px, py, _, _ = boundary_frame(ctx, theta, ctx[EN_Q1], ctx[EN_Q2], 0.0, 0.0)
+    u1, u2, _, _ = boundary(ctx, theta)
     ctx[EN_U1] = u1
     ctx[EN_U2] = u2
     set_contact(ctx, M_HELD, float(a), float(b), px, py, t, settle)
@@ -502,7 +483,7 @@ def hold_after(ctx, p, walls, index, j, theta, u3, wn, elastic, t, impulse, inst
     slow = rebound_settles(e, ctx[IM_EB], wn, elastic)
     if not slow and e >= 1.0:
         return False
-    px, _ = centre_in_boundary(ctx, theta, ctx[EN_Q1], ctx[EN_Q2])
+    px, _, _, _ = boundary_frame(ctx, theta, ctx[EN_Q1], ctx[EN_Q2], 0.0, 0.0)
     z_index = contact_kept(ctx, p, walls, index, px)[1]
     z_j = contact_kept(ctx, p, walls, j, px)[1]
     if not holds(ctx, z_index, z_j, theta, u3):
@@ -533,12 +514,12 @@ def continue_on(ctx, p, walls, j, px, theta, u3, t):
 @inline
 def held_lab(ctx, theta, px, py):
     """(q1, q2, u1, u2) of a ball held at (px, py) in the boundary's frame."""
-    d = ctx[AMP] * math.sin(theta)
+    d = displacement(ctx, theta)
     if ctx[HORIZ] == 1.0:
         q1, q2 = px + d, py
     else:
         q1, q2 = px, py + d
-    u1, u2 = boundary_velocity(ctx, theta)
+    u1, u2, _, _ = boundary(ctx, theta)
     return q1, q2, u1, u2
 
 
@@ -617,9 +598,9 @@ def impact_from_contact(ctx, p, walls, out, other, index, t, tau, theta, q3):
         raise KernelError(E_ESCAPED)
     q1, q2 = ctx[EN_Q1], ctx[EN_Q2]
     u1, u2, u3 = ctx[EN_U1], ctx[EN_U2], ctx[EN_U3]
-    px, _ = centre_in_boundary(ctx, theta, q1, q2)
+    px, _, _, _ = boundary_frame(ctx, theta, q1, q2, 0.0, 0.0)
     s_o, z = contact(ctx, p, walls, j, px)
-    vb1, vb2 = boundary_velocity(ctx, theta)
+    vb1, vb2, _, _ = boundary(ctx, theta)
     # a ball that reaches a second wall or the lid lands, is held or reflects: under
     # contact phases the low-velocity rule never relaunches it (that adds energy)
     n1, n2, n3, rt, rn, regime, _, _, wn = kane_levinson(ctx, u1, u2, u3, z, vb1, vb2, False)
