@@ -491,27 +491,32 @@ class ContactPhases:
         z_index = offsets[index].contact(px, list(self.warm[index]))[1]
         z_j = offsets[j].contact(px, list(self.warm[j]))[1]
         hold = self.vertex_hold
-        if not hold.holds(z_index, z_j, theta, res.u3):
+        spin = hold.held_spin(z_index, z_j, theta, res.u3)
+        if math.isnan(spin):
             return False
         settle = t
         if not slow and not instant:
-            n_a, n_b = hold.pressing(z_index, z_j, theta, res.u3)
+            n_a, n_b = hold.pressing(z_index, z_j, theta, spin)
             a = min(n_a, n_b) / self.contact_model.m
             v = e * abs(res.wn) if impulse else abs(res.wn)
             period = _impact.chatter_period(self.drive.omega)
             if not 2.0 * v <= _impact.CHATTER_TAIL * period * a * (1.0 - e):
                 return False
             settle = t + 2.0 * v / (a * (1.0 - e))
-        self._enter_hold(index, j, t, settle)
+        self._enter_hold(index, j, t, settle, spin)
         return True
 
-    def _enter_hold(self, a: int, b: int, t: float, settle: float) -> None:
+    def _enter_hold(
+        self, a: int, b: int, t: float, settle: float, spin: float | None = None
+    ) -> None:
         """Hold the ball in walls a and b: its centre stays where it is relative to the
-        boundary, and it moves with the boundary."""
+        boundary, and it moves with the boundary, with spin ``spin`` (rad/s; default
+        its own, see ``VertexHold.held_spin``)."""
         ball = self._ball
         px, py, _, _ = self.drive.to_boundary_frame(ball.theta, ball.q1, ball.q2, ball.u1, ball.u2)
         u1, u2 = self.drive.boundary_velocity(ball.theta)
-        self._ball = BallState(ball.t, ball.theta, ball.q1, ball.q2, u1, u2, ball.u3, ball.q3)
+        u3 = ball.u3 if spin is None else spin
+        self._ball = BallState(ball.t, ball.theta, ball.q1, ball.q2, u1, u2, u3, ball.q3)
         self._mode = HELD
         self._contact = (float(a), float(b), px, py, t, settle)
 

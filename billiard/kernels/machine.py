@@ -174,7 +174,7 @@ from .loop import (
 from .rules import COLLAPSE_COUNT, ZERO_FLIGHT_LIMIT
 from .surfaces import contact
 from .vertex import forces as hold_forces
-from .vertex import holds, run_hold, sign
+from .vertex import held_spin, run_hold, sign
 
 #: Normal speed (m/s) a ball leaving a wall is given (see
 #: :data:`billiard.engine.contact_phases.LIFT_OFF_SPEED`).
@@ -461,14 +461,16 @@ def end_phase(ctx, mode, t_start, tau, total, error):
 
 
 @inline
-def enter_hold(ctx, a, b, t, settle):
+def enter_hold(ctx, a, b, t, settle, spin):
     """``ContactPhases._enter_hold``: the ball moves with the boundary, held by walls
-    a and b at its present centre."""
+    a and b at its present centre, with spin ``spin``
+    (:func:`~billiard.kernels.vertex.held_spin`)."""
     theta = ctx[EN_THETA]
     px, py, _, _ = boundary_frame(ctx, theta, ctx[EN_Q1], ctx[EN_Q2], 0.0, 0.0)
     u1, u2, _, _ = boundary(ctx, theta)
     ctx[EN_U1] = u1
     ctx[EN_U2] = u2
+    ctx[EN_U3] = spin
     set_contact(ctx, M_HELD, float(a), float(b), px, py, t, settle)
 
 
@@ -486,17 +488,18 @@ def hold_after(ctx, p, walls, index, j, theta, u3, wn, elastic, t, impulse, inst
     px, _, _, _ = boundary_frame(ctx, theta, ctx[EN_Q1], ctx[EN_Q2], 0.0, 0.0)
     z_index = contact_kept(ctx, p, walls, index, px)[1]
     z_j = contact_kept(ctx, p, walls, j, px)[1]
-    if not holds(ctx, z_index, z_j, theta, u3):
+    spin = held_spin(ctx, z_index, z_j, theta, u3)
+    if math.isnan(spin):
         return False
     settle = t
     if not slow and not instant:
-        n_a, n_b = hold_forces(ctx, z_index, z_j, theta, sign(u3))
+        n_a, n_b = hold_forces(ctx, z_index, z_j, theta, sign(spin))
         a = pmin(n_a, n_b) / ctx[PH_M]
         v = e * abs(wn) if impulse else abs(wn)
         if not 2.0 * v <= CHATTER_TAIL * chatter_period(ctx[OMEGA]) * a * (1.0 - e):
             return False
         settle = t + 2.0 * v / (a * (1.0 - e))
-    enter_hold(ctx, index, j, t, settle)
+    enter_hold(ctx, index, j, t, settle, spin)
     return True
 
 

@@ -31,6 +31,7 @@ from .contact import EVENT_TOL, pmin
 from .contact_forces import boundary
 from .decorators import inline, jit
 from .illinois import narrow, secant_point
+from .impact import CHATTER_TAIL, chatter_period
 from .layout import (
     AMP,
     E_AT_REST,
@@ -106,6 +107,33 @@ def holds(ctx, za, zb, theta, u3):
     """Do both walls press a ball with spin u3 (rad/s) at drive angle theta?"""
     n_a, n_b = forces(ctx, za, zb, theta, sign(u3))
     return n_a > 0.0 and n_b > 0.0
+
+
+@inline
+def held_spin(ctx, za, zb, theta, u3):
+    """The spin (rad/s) with which both walls hold a ball arriving with spin u3 at drive
+    angle theta, or NaN where they cannot hold it.
+
+    Both walls press the ball with its spin's kinetic friction: it keeps u3. Where that
+    friction would pull the ball off a wall (a normal force below zero) but the walls
+    press a ball without spin, the spin is stopped by the same friction within
+    t* = k m r |u3| / (mu_k (N_a + N_b)) (N of the spinless hold), during which the
+    centre moves by about a t*^2, nothing a step resolves: when t* is at most
+    ``CHATTER_TAIL`` of a drive period, the tolerance to which a chatter series is
+    summed, the ball is held without spin (the spin's energy goes to friction, never
+    energy created). Otherwise a ball rolling into a vertex with a sliver of spin meets
+    one wall and the other again and again, each time at the spin-down's scale."""
+    if holds(ctx, za, zb, theta, u3):
+        return u3
+    if u3 == 0.0 or ctx[PH_MUK] == 0.0:
+        return math.nan
+    n_a, n_b = forces(ctx, za, zb, theta, 0.0)
+    if not (n_a > 0.0 and n_b > 0.0):
+        return math.nan
+    stop = ctx[PH_K] * ctx[PH_M] * ctx[PH_R] * abs(u3) / (ctx[PH_MUK] * (n_a + n_b))
+    if stop <= CHATTER_TAIL * chatter_period(ctx[OMEGA]):
+        return 0.0
+    return math.nan
 
 
 @inline

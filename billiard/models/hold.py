@@ -95,6 +95,11 @@ class VertexHold:
         """Do both walls press a ball with spin u3 (rad/s) at drive angle theta?"""
         return _k.holds(self.ctx, za, zb, theta, u3)
 
+    def held_spin(self, za: float, zb: float, theta: float, u3: float) -> float:
+        """The spin (rad/s) with which both walls hold a ball arriving with spin u3, or
+        NaN where they cannot (:func:`billiard.kernels.vertex.held_spin`)."""
+        return _k.held_spin(self.ctx, za, zb, theta, u3)
+
     def pressing(self, za: float, zb: float, theta: float, u3: float) -> tuple[float, float]:
         """(N_a, N_b) on a ball with spin u3 (rad/s): the forces :meth:`holds` looks at."""
         return _k.forces(self.ctx, za, zb, theta, _k.sign(u3))

@@ -320,3 +320,22 @@ def test_without_a_landing_speed_random_shaken_wedges_run_without_zero_time_cycl
     columns = result.columns
     assert not ((columns["Rt"] == 0.0) & (columns["Rn"] == 0.0)).any()
     assert same_time_runs(columns["t"]) <= 10
+
+
+@pytest.mark.parametrize("amplitude", [0.005, 0.01])
+def test_a_ball_rolling_into_the_shaken_wedges_vertex_is_held_there(amplitude):
+    """The paper's wedge shaken gently (Gamma 0.88 and 1.75, below g tan(beta) = 1.85 g,
+    where the walls can always hold a ball at rest in the vertex): the ball rolls into
+    the vertex with a sliver of spin whose kinetic friction would pull it off the other
+    wall. It used to meet one wall and the other 25,000 times in 43 ms (a stream of
+    elastic "impacts" of 1e-10 N s); the friction stops that spin within 1e-6 of a drive
+    period, so the ball is held and, the walls holding it for good, at rest."""
+    from billiard.scene.scene import load_scene
+
+    sc = load_scene("wedge-6.6hz", ["contact.model=phases", f"drive.amplitude={amplitude}"])
+    result = simulate(sc, collisions=25_000)
+    assert result.status is Status.AT_REST, result.message
+    assert len(result) < 100
+    assert result.mode_times["held"] > 0.0
+    t = result.columns["t"]
+    assert same_time_runs(t) <= 3
