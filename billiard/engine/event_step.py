@@ -143,8 +143,13 @@ class EventStep:
             self._clock, self._clock_error = total, error
             self._zero_flights = self._zero_flights + 1 if tau == 0.0 else 0
             self.final_time = t
-            if self._zero_flights >= ZERO_FLIGHT_LIMIT:
-                self._fault = self._collapse(n, t)
+            # as loop.no_impulse: such contacts enter the collapse window too
+            recent = self._recent
+            recent.append(t)
+            while t - recent[0] >= COLLAPSE_SPAN:
+                recent.popleft()
+            if self._zero_flights >= ZERO_FLIGHT_LIMIT or len(recent) > COLLAPSE_COUNT:
+                self._fault = pressed_stop(ev.surface.kind == "lid", n, t)
             self._land_after(ev, res, accel, t)
             return _NO_IMPULSE
         # commit: from here on nothing can fail, so the state always matches the records
@@ -212,6 +217,20 @@ class EventStep:
                 Status.COLLAPSE,
             )
         return None
+
+
+def pressed_stop(lid: bool, n: int, t: float) -> SimulationError:
+    """The stop of a ball that meets a surface (``lid``: the lid) without impulse again
+    and again while the clock no longer advances (``loop.no_impulse``): pressed against
+    a surface that cannot hold it, the run would turn for ever at time t."""
+    where = "the lid (which cannot hold a ball)" if lid else "a wall"
+    return SimulationError(
+        f"no progress in simulated time: the ball is pressed against {where} and meets "
+        f"it without impulse again and again ({COLLAPSE_COUNT} contacts within "
+        f"{COLLAPSE_SPAN:g} s or {ZERO_FLIGHT_LIMIT} at one time) after impact {n} "
+        f"(t = {t:.9g} s)",
+        Status.COLLAPSE,
+    )
 
 
 def check_finite(record: ImpactRecord) -> None:

@@ -185,6 +185,13 @@ class KernelEngine:
         from billiard.kernels.rules import COLLAPSE_COUNT, COLLAPSE_SPAN, ZERO_FLIGHT_LIMIT
 
         n, t = int(ctx[L.EN_IMPACTS]), float(ctx[L.EN_T])
+        from billiard.kernels.loop import FAULT_PRESSED
+
+        if ctx[L.EN_FAULT] == FAULT_PRESSED:
+            from billiard.engine.event_step import pressed_stop
+
+            j = int(ctx[L.EN_ERR_VALUE])
+            return pressed_stop(self.sim.boundary.surfaces[j].kind == "lid", n, t)
         if ctx[L.EN_FAULT] == 2.0:
             return SimulationError(
                 f"contact phases of zero duration piled up at t = {float(ctx[L.MC_FINAL]):.9g} s",
@@ -416,6 +423,12 @@ class KernelEngine:
         if fault is not None:
             raise fault
         code, done, error = self._chunk(1, self.impacts + 1, until)
+        while code == L.FULL and done == 0 and error is None:
+            # a chunk returns after QUIET_STEPS contacts without impulse: go on
+            fault = self.pending_stop()
+            if fault is not None:
+                raise fault
+            code, done, error = self._chunk(1, self.impacts + 1, until)
         if error is not None:
             raise error
         if done == 0:

@@ -23,6 +23,7 @@ from .layout import (
     ELASTIC,
     EN_CLOCK,
     EN_CLOCK_ERR,
+    EN_ERR_VALUE,
     EN_EVENT_T,
     EN_FAULT,
     EN_IMPACTS,
@@ -84,6 +85,13 @@ RING = COLLAPSE_COUNT + 1
 SETTLES_SLOW = 1.0
 #: ... and the chatter's tail may be summed (``impact.chatter_tail``)
 SETTLES_TAIL = 2.0
+#: EN_FAULT of a ball that meets a surface without impulse again and again at one time
+#: (:func:`no_impulse`); 1.0 is an inelastic collapse, 2.0 phases of zero duration
+FAULT_PRESSED = 3.0
+#: contacts without impulse in a row after which a chunk returns to Python (FULL, with
+#: the rows it has), so that a stop request is seen within milliseconds whatever the
+#: ball does
+QUIET_STEPS = 4096
 
 
 @inline
@@ -192,7 +200,7 @@ def impact(ctx, p, walls, out, row, tau, j, q1, q2, u1, u2, theta, s, z):
     if ctx[EN_LAND_ON] != 0.0 and rn == 0.0 and rt == 0.0:
         # under contact phases a contact without impulse is no impact: no row, nothing
         # counted; the ball goes on from it, or lands
-        no_impulse(ctx, t, theta, q1, q2, n1, n2, n3, q3, total, error, tau)
+        no_impulse(ctx, t, theta, q1, q2, n1, n2, n3, q3, total, error, tau, j)
         settles(ctx, j, kind, s, wn, regime, accel)
         return True
     # commit
@@ -269,17 +277,23 @@ def set_ball(ctx, t, theta, q1, q2, u1, u2, u3, q3):
 
 
 @inline
-def no_impulse(ctx, t, theta, q1, q2, u1, u2, u3, q3, total, error, tau):
-    """The state at a flight's contact without impulse (contact phases): the ball there,
-    no impact counted, EN_NO_ROW set; such contacts at one instant count as zero
-    flights (a collapse after ZERO_FLIGHT_LIMIT of them)."""
+def no_impulse(ctx, t, theta, q1, q2, u1, u2, u3, q3, total, error, tau, j):
+    """The state at a flight's contact without impulse (contact phases) with surface j:
+    the ball there, no impact counted, EN_NO_ROW set. Such contacts enter the collapse
+    window as impacts do, and those at one instant count as zero flights: a ball
+    pressed against a surface that cannot hold it (the lid) meets it again and again
+    at times that no longer advance the clock (flights of 1e-18 s at t ~ 1 s), which
+    stops the run (EN_FAULT = FAULT_PRESSED, the surface in EN_ERR_VALUE) instead of
+    turning for ever."""
     ctx[EN_NO_ROW] = 1.0
     set_ball(ctx, t, theta, q1, q2, u1, u2, u3, q3)
     ctx[EN_CLOCK] = total
     ctx[EN_CLOCK_ERR] = error
     ctx[EN_ZERO] = ctx[EN_ZERO] + 1.0 if tau == 0.0 else 0.0
-    if ctx[EN_ZERO] >= ZERO_FLIGHT_LIMIT:
-        ctx[EN_FAULT] = 1.0
+    remember_impact(ctx, t)
+    if ctx[EN_ZERO] >= ZERO_FLIGHT_LIMIT or int(ctx[EN_RCOUNT]) > COLLAPSE_COUNT:
+        ctx[EN_FAULT] = FAULT_PRESSED
+        ctx[EN_ERR_VALUE] = float(j)
 
 
 @inline
@@ -315,13 +329,17 @@ def run_chunk(ctx, p, walls, out, rows):
     impact that settles, when ``ctx[EN_LAND_ON]``); a documented stop inside
     raises KernelError, with ``ctx`` as after the last row written."""
     row = 0
+    quiet = 0
     while ctx[EN_IMPACTS] < ctx[EN_TARGET]:
-        if row == rows:
+        if row == rows or quiet == QUIET_STEPS:
             return FULL, row
         if not step(ctx, p, walls, out, row):
             return TIME_LIMIT, row
         if ctx[EN_NO_ROW] == 0.0:
             row += 1
+            quiet = 0
+        else:
+            quiet += 1
         code = chunk_ends(ctx)
         if code >= 0:
             return code, row
@@ -335,13 +353,17 @@ def run_chunk_fixed(ctx, p, walls, nears, out, rows):
     A search that needs the curve's global nearest point raises KernelError(E_FOOT),
     ``ctx`` as after the last row written: answered, the next call goes on."""
     row = 0
+    quiet = 0
     while ctx[EN_IMPACTS] < ctx[EN_TARGET]:
-        if row == rows:
+        if row == rows or quiet == QUIET_STEPS:
             return FULL, row
         if not step_fixed(ctx, p, walls, nears, out, row):
             return TIME_LIMIT, row
         if ctx[EN_NO_ROW] == 0.0:
             row += 1
+            quiet = 0
+        else:
+            quiet += 1
         code = chunk_ends(ctx)
         if code >= 0:
             return code, row

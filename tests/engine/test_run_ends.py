@@ -218,3 +218,42 @@ def test_the_lyapunov_exponent_of_a_rolling_ball_is_undefined():
     result = lyapunov_exponent(_gentle(**{"run.contact_span": 1.0}), impacts=50)
     assert result.undefined is not None and "without impacts" in result.undefined
     assert math.isnan(result.per_impact)
+
+
+#: A hyperbola shaken vertically at Gamma 12 with a lid, no landing speed: the ball is
+#: pressed against the lid (which cannot hold it) and met it without impulse at times
+#: that no longer advanced the clock (flights of 2e-18 s at t = 1.4 s), inside the
+#: compiled loop, which never came back to Python: the run ignored SIGTERM.
+PRESSED_ON_THE_LID = [
+    "boundary.ceiling=0.2108",
+    "drive.amplitude=0.025695",
+    "drive.frequency=10.968",
+    "drive.direction=vertical",
+    "contact.restitution=0.55",
+    "contact.mu_static=0.816",
+    "contact.model=phases",
+    "contact.elastic_below=0",
+]
+
+
+@pytest.mark.parametrize("sample", [None, 0.05])
+def test_a_ball_pressed_against_the_lid_stops_the_run_and_says_why(sample):
+    # the state machine (no samples) and the engine's classes (samples) alike
+    scene = load_scene("hyperbola-5.8hz", PRESSED_ON_THE_LID)
+    result = simulate(scene, collisions=100_000, sample=sample)
+    assert result.status is Status.COLLAPSE
+    assert "no progress in simulated time" in result.stop_reason
+    assert "pressed against the lid" in result.stop_reason
+    assert len(result) == 84 and 1.40 < result.final_time < 1.41
+
+
+def test_the_cli_run_pressed_against_the_lid_ends(tmp_path):
+    """The command that ran for ever ends within the test's time limit and says why."""
+    args = [a for key in PRESSED_ON_THE_LID for a in ("--set", key)]
+    proc = subprocess.run(
+        [sys.executable, "-m", "billiard.cli", "run", "hyperbola-5.8hz", *args,
+         "--no-plot", "--out", str(tmp_path / "run")],
+        capture_output=True, text=True, timeout=240, cwd=ROOT,
+    )  # fmt: skip
+    assert "no progress in simulated time" in proc.stderr, proc.stderr
+    assert "84 impacts" in proc.stdout
