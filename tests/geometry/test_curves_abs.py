@@ -218,3 +218,56 @@ def test_a_named_curve_with_a_smooth_join_derived_before_the_check_does_not_run(
     assert proc.returncode == 2 and len(lines) == 1, proc.stderr
     assert lines[0].startswith("billiard: error: boundary curve 'c1': at the join x = 0 m")
     assert not (tmp_path / "runs").exists()
+
+
+def _parabola_runs(model: str, amplitude: float):
+    """The same scene on aa*x**2 + 0.0063 and on SPLIT with bb = 0 (3 s, sampled)."""
+    base = with_values(
+        load_scene("parabola-5.4hz"), {"contact.model": model, "drive.amplitude": amplitude}
+    )
+    runs = []
+    for curve, parameters in (("aa*x**2 + 0.0063", {}), (SPLIT, {"bb": 0.0})):
+        values = {"boundary.curve": curve, "boundary.parameters.aa": 26.0}
+        values.update({f"boundary.parameters.{k}": v for k, v in parameters.items()})
+        runs.append(simulate(with_values(base, values), duration=3.0, sample=1e-3))
+    return runs
+
+
+@pytest.mark.parametrize(
+    ("model", "amplitude"), [("phases", 0.005), ("phases", 0.02543), ("impacts", 0.02543)]
+)
+def test_equal_pieces_are_one_wall_that_runs_as_the_plain_curve(
+    model, amplitude, tmp_path, monkeypatch
+):
+    """SPLIT with bb = 0 is the parabola 26 x^2 + 0.0063 split at 0 into two equal
+    walls. Kept as two, a ball rolling through the bottom (drive 5 mm) stopped the run
+    after 2.1 s on "contact phases of zero duration piled up"; one wall, it runs as the
+    plain parabola: rolling for 3 s, and bouncing (the scene's 25.43 mm drive), in both
+    contact models.
+
+    Tolerance: the merged wall's formulas (aa*x**2 - bb*x**2 with bb = 0) give the
+    parabola's heights to the last bit or so (here exactly, so the runs are the same
+    bits), and 3 s of this motion amplify a last-bit difference by far less than the
+    1e-11 of each column's scale allowed (as for the two branches of 100*abs(x)**3)."""
+    monkeypatch.setenv("BILLIARD_HOME", str(tmp_path))
+    curve = load_curve(SPLIT, {"aa": 26.0, "bb": 0.0})
+    assert len(curve.walls) == 1 and curve.breakpoints == ()
+    assert (curve.walls[0].lo, curve.walls[0].hi, curve.walls[0].index) == (-math.inf, math.inf, 0)
+    assert len(load_curve(SPLIT, {"aa": 26.0, "bb": 1.0}).walls) == 2  # not merged
+    plain, split = _parabola_runs(model, amplitude)
+    assert split.stop_reason is None and split.final_time == pytest.approx(3.0)
+    for table in ("columns", "contacts", "trajectory"):
+        a, b = getattr(plain, table), getattr(split, table)
+        if a is None:  # no contact phases under the impacts model
+            assert b is None and model == "impacts"
+            continue
+        assert list(a) == list(b)
+        for key in a:
+            x, y = np.asarray(a[key]), np.asarray(b[key])
+            assert x.shape == y.shape, (table, key)
+            if x.dtype.kind == "f":
+                scale = np.max(np.abs(x), initial=0.0)
+                assert np.max(np.abs(x - y), initial=0.0) <= 1e-11 * scale, (table, key)
+            else:
+                assert np.array_equal(x, y), (table, key)
+    assert len(plain.trajectory["t"]) > 2000
