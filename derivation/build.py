@@ -472,10 +472,11 @@ def derive_user_curve(
 ) -> Path:
     """Derive a user's curve into ``directory/<name>.py`` and return the path.
 
-    The curve must be able to hold a ball (:mod:`billiard.derivation.shape`, with the
-    parameters at their given values). The module is written to a temporary file in
-    ``directory``, checked, and renamed into place: another process never sees a partial
-    module. An existing module is replaced only with ``force``. Names starting with
+    The curve must be able to hold a ball, and the maximum of its walls must be the curve
+    (:mod:`billiard.derivation.shape`, with the parameters at their given values). The
+    module is written to a temporary file in ``directory``, checked, and renamed into
+    place: another process never sees a partial module. An existing module is replaced
+    only with ``force``. Names starting with
     ``expr_`` are the cache of scene expressions (derived with ``force``).
 
     Raises:
@@ -504,9 +505,13 @@ def derive_user_curve(
         with os.fdopen(handle, "w") as out:
             out.write(source)
         os.chmod(temp, 0o666 & ~_umask())  # mkstemp makes it private; a module is not
-        problem = shape.shape_problem(_load_walls(temp, name, params))
+        walls = _load_walls(temp, name, params)
+        problem = shape.shape_problem(walls)
         if problem is not None:
             raise curve.CurveDerivationError(f"curve {text!r} cannot hold a ball: {problem}")
+        problem = shape.join_problem(walls)
+        if problem is not None:
+            raise curve.CurveDerivationError(f"curve {text!r}: {problem}")
         os.replace(temp, path)
     finally:
         temp.unlink(missing_ok=True)

@@ -1,7 +1,7 @@
 """Can a derived curve hold the ball? Numeric checks on the generated wall functions.
 
 Run on the module exactly as the runtime will load it (parameters at their values), before
-it is put in place. Pure Python with ``math``: no sympy.
+it is put in place. Pure Python with ``math`` and numpy: no sympy.
 
 The usable range is found by walking outward from x = 0 (where the runtime starts its
 search for the container) on each side until the curve has risen ``RISE`` above the lowest
@@ -10,12 +10,16 @@ smooth piece, continued past its kinks as the runtime evaluates it) must give a 
 finite height, slope and second derivative; and the curve must be convex there. A plane
 (one straight wall: a floor, as for a ball bouncing on a shaken plate, or a tilted plane,
 as in the impact validation) has no bottom but is accepted: the ball bounces on it.
+On the same range, the maximum of the walls' formulas must be the curve
+(:func:`join_problem`): the runtime takes the boundary's height as that maximum.
 """
 
 from __future__ import annotations
 
 import math
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Iterable, Sequence
+
+import numpy as np
 
 #: How far (m) the curve must rise above its bottom on both sides.
 RISE = 0.05
@@ -93,6 +97,29 @@ class _Curve:
 def shape_problem(walls: Sequence[dict]) -> str | None:
     """Why these walls cannot hold a ball (one line, without the curve's name), or None."""
     curve = _Curve(walls)
+    walked = _walk(curve)
+    if isinstance(walked, str):
+        return walked
+    ends, failure = walked
+    if failure is not None:
+        return None if curve.straight else failure
+    return _convexity_problem(walls, ends[0] - MARGIN, ends[1] + MARGIN)
+
+
+def usable_range(walls: Sequence[dict]) -> tuple[float, float]:
+    """The range of x (m) that :func:`shape_problem` checks the walls on: from x = 0 outward
+    on each side until the curve has risen ``RISE`` above its lowest point (``REACH`` where
+    it never does), widened by ``MARGIN``."""
+    walked = _walk(_Curve(walls))
+    if isinstance(walked, str):  # not real somewhere: shape_problem says where
+        return -REACH, REACH
+    ends, _ = walked
+    return ends[0] - MARGIN, ends[1] + MARGIN
+
+
+def _walk(curve: _Curve) -> tuple[list[float], str | None] | str:
+    """The ends of the usable range (m) and why the curve does not open upward (or None),
+    walking outward from x = 0; or a one-line problem where a height is not real."""
     h0 = curve.height(0.0)
     if isinstance(h0, str):
         return h0
@@ -121,9 +148,109 @@ def shape_problem(walls: Sequence[dict]) -> str | None:
             ends.append(sign * REACH)
         else:
             ends.append(end)
-    if failure is not None:
-        return None if curve.straight else failure
-    return _convexity_problem(walls, ends[0] - MARGIN, ends[1] + MARGIN)
+    return ends, failure
+
+
+def join_problem(walls: Sequence[dict], xs: Iterable[float] | None = None) -> str | None:
+    """Where the maximum of the walls' formulas is not the curve, in one line, or None.
+
+    The runtime takes the boundary's height at x as the maximum of every wall's formula,
+    each continued past its interval (:mod:`billiard.geometry.boundary`). That is the curve
+    only where no wall's formula lies above the piece that holds x: true at a convex kink
+    (the wedge's vertex), false on one side of a smooth (C^1) join, such as
+    ``20*x**2 + 10*x*abs(x)``: right of 0 its piece 30 x^2 lies above the left piece
+    10 x^2 for x < 0 too, and a ball there would bounce and roll on the wrong curve.
+    Until walls are an ordered chain of pieces, such curves are refused.
+
+    ``walls``: dicts with ``lo``, ``hi`` (m), ``f`` and ``df`` (functions of x, parameters
+    bound); ``xs``: the abscissas (m) to compare at, by default :func:`usable_range`
+    sampled as the shape check samples it. Walls whose formula is not real and finite at
+    an x are skipped there (the shape and geometry checks report those).
+    """
+    if len(walls) < 2:
+        return None
+    if xs is None:
+        left, right = usable_range(walls)
+        xs = [0.0] + [x for p in _POINTS for x in (-p, p) if left <= x <= right]
+    grid = np.array(list(xs), dtype=float)
+    heights = np.array([_heights(wall["f"], grid) for wall in walls])  # NaN: not real
+    lo = np.array([[wall["lo"]] for wall in walls])
+    hi = np.array([[wall["hi"]] for wall in walls])
+    holds = (lo <= grid) & (grid <= hi)
+    # the curve: the piece that holds x (at a join both, with the same height); NaN where
+    # one is not real, -inf where none holds x (neither compares above anything)
+    curve = np.where(holds, heights, -np.inf).max(axis=0)
+    with np.errstate(invalid="ignore"):
+        excess = heights - curve
+        allowance = 1e-12 * np.maximum(1.0, np.maximum(np.abs(heights), np.abs(curve)))
+        above = ~holds & (excess > allowance)  # see rounding_allowance
+    if not above.any():
+        return None
+    j, k = np.unravel_index(np.argmax(np.where(above, excess, -np.inf)), above.shape)
+    return _join_message(walls, int(j), float(grid[k]), float(excess[j, k]))
+
+
+def _heights(fn: Callable[[float], float], xs: np.ndarray) -> list[float]:
+    """fn at each of xs, NaN where it is not real and finite."""
+    try:
+        values = [float(fn(x)) for x in xs.tolist()]  # a complex value: TypeError
+    except (ArithmeticError, ValueError, TypeError):
+        checked = [_real(fn, x) for x in xs.tolist()]
+        return [math.nan if v is None else v for v in checked]
+    return [v if math.isfinite(v) else math.nan for v in values]
+
+
+def rounding_allowance(*values: float) -> float:
+    """How far two evaluations of one quantity (a height in m, or its slope, f'' or f''')
+    may differ by rounding alone: 1e-12 of the largest value, taken as at least 1.
+
+    A generated function's value carries rounding errors of order 1e-16 of its largest
+    term (terms taken as at least 1: ``cosh(x) - 1`` cancels, as in the convexity check),
+    and two formulas of one piece (``aa*x**2 - bb*x**2`` and ``(aa - bb)*x**2``) differ by
+    a few such errors: the allowance leaves a factor 10^4 for that. For heights it is also
+    far below any length the engine resolves (gap tolerances of 1e-12 m and up, a ball's
+    radius of 1e-3 m), so a formula within it of the curve changes no run.
+    """
+    return 1e-12 * max(1.0, *(abs(v) for v in values))  # join_problem: the same, in numpy
+
+
+def _join_message(walls: Sequence[dict], j: int, x: float, excess: float) -> str:
+    """One line: wall j's formula lies above the curve at x, by ``excess`` (m)."""
+    wall = walls[j]
+    k = j - 1 if x < wall["lo"] else j + 1  # the neighbour across the join on x's side
+    at = wall["lo"] if x < wall["lo"] else wall["hi"]
+    left, right = (walls[k], wall) if k < j else (wall, walls[k])
+    slopes = (_real(left["df"], at), _real(right["df"], at))
+    if None in slopes:
+        why = "its pieces' formulas cross there"
+    else:
+        sl, sr = slopes
+        if abs(sr - sl) <= 1e-9 * (1.0 + abs(sl) + abs(sr)):
+            why = (
+                "the join is smooth (C1: the slope is continuous, f'' jumps), and smooth "
+                "joins are not supported yet"
+            )
+        elif sr < sl:
+            why = f"the join is a concave kink (slope {sl:.6g} -> {sr:.6g})"
+        else:
+            why = (
+                "the formulas of the pieces either side of this kink cross again away from "
+                "it, which is not supported yet"
+            )
+    return (
+        f"at the join x = {at:.6g} m, the formula of {_span(wall)} lies above "
+        f"{_span(walls[k])} (by {excess:.3g} m at x = {x:.6g} m), so the pointwise maximum "
+        f"of the walls is not the curve: {why}"
+    )
+
+
+def _span(wall: dict) -> str:
+    lo, hi = wall["lo"], wall["hi"]
+    if lo == -math.inf:
+        return f"the piece for x < {hi:g} m"
+    if hi == math.inf:
+        return f"the piece for x > {lo:g} m"
+    return f"the piece for {lo:g} < x < {hi:g} m"
 
 
 def _convexity_problem(walls: Sequence[dict], left: float, right: float) -> str | None:

@@ -18,6 +18,7 @@ from typing import Any
 import numpy as np
 
 from billiard import jit as _jit
+from billiard.derivation.shape import join_problem
 from billiard.errors import GeometryError
 from billiard.geometry.drive import Drive
 from billiard.geometry.surfaces import (
@@ -111,6 +112,7 @@ class Boundary:
         self.top = self.ceiling if self.ceiling is not None else self.escape_height
         try:
             self.x_range = self._container_range()
+            self._check_joins(curve)
             self.validate_radius()
             self.offsets: tuple[OffsetWall, ...] = tuple(
                 OffsetLine(w, radius, i) if self._is_straight(w) else OffsetWall(w, radius, i)
@@ -215,6 +217,28 @@ class Boundary:
         xs = np.linspace(lo, hi, _SAMPLES)
         extra = [x for x in (0.0,) if lo <= x <= hi]
         return np.concatenate([xs, extra])
+
+    def _check_joins(self, curve: str) -> None:
+        """Raise GeometryError where the maximum of the walls is not the curve on the
+        container's range (a smooth join, or parameters that put another piece's formula
+        on top): the runtime would simulate that maximum, another curve, without a word.
+        Checked here, where the parameters' values and the container are known."""
+        if len(self.walls) < 2:
+            return
+        problem = join_problem(
+            [
+                {
+                    "lo": w.lo,
+                    "hi": w.hi,
+                    "f": lambda x, w=w: w.f(x, w.p),
+                    "df": lambda x, w=w: w.df(x, w.p),
+                }
+                for w in self.walls
+            ],
+            (float(x) for x in self._wall_samples()),
+        )
+        if problem is not None:
+            raise GeometryError(f"{_curve_name(curve)}: {problem}")
 
     def validate_radius(self) -> None:
         """Raise GeometryError when the ball is too large for the boundary's curvature on
@@ -440,10 +464,14 @@ class Boundary:
             raise GeometryError(f"{where} puts the ball {depth:.3g} m into the wall")
 
 
+def _curve_name(curve: str) -> str:
+    return f"boundary curve {curve!r}" if curve else "the boundary curve"
+
+
 def _undefined_curve(walls: Sequence[dict], curve: str, exc: BaseException) -> str:
     """One line for a curve that cannot be evaluated where the ball can go: the first x,
     walking outward from 0, where a wall's height or derivatives are not real and finite."""
-    name = f"boundary curve {curve!r}" if curve else "the boundary curve"
+    name = _curve_name(curve)
     xs = [0.0]
     for e in range(-48, 25):  # 1e-6 m ... 1e3 m, 8 points per factor of ten
         xs += [-(10.0 ** (e / 8)), 10.0 ** (e / 8)]

@@ -17,10 +17,12 @@ from __future__ import annotations
 import hashlib
 import importlib
 import importlib.util
+import math
 import os
 import sys
 import time
-from dataclasses import dataclass, field
+from collections.abc import Callable
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from types import ModuleType
 
@@ -28,6 +30,7 @@ import numpy as np
 
 from billiard.derivation.contenthash import hash_matches
 from billiard.derivation.expr import BUILTIN_CURVES, is_curve_name, parse_curve
+from billiard.derivation.shape import rounding_allowance
 from billiard.geometry.walls import CURVE_FORMAT, Wall
 
 #: The curves whose generated modules ship with the package (the paper's).
@@ -212,11 +215,61 @@ def load_curve(curve: str, parameters: dict[str, float] | None = None) -> CurveM
     for index, (interval, f, df, d2f, near, dnear, poly, d3f) in enumerate(module.WALLS):
         lo, hi = interval(p)
         walls.append(Wall(index, float(lo), float(hi), p, f, df, d2f, near, dnear, poly, d3f))
+    walls, joins = _merge_equal_walls(walls)
     return CurveModel(
         name=module.NAME,
         expression=module.EXPRESSION,
         parameters=values,
         walls=tuple(walls),
-        breakpoints=tuple(module.breakpoints(p)),
+        breakpoints=tuple(b for b in module.breakpoints(p) if float(b) not in joins),
         source=getattr(module, "__file__", "") or "",
     )
+
+
+# Abscissas (m) at which two walls' formulas are compared: both sides of 0, from 1e-6 m
+# to 100 m (a curve's scale), 20 to a factor of ten.
+_COMPARE_AT = (0.0, *(s * 10.0 ** (e / 20) for e in range(-120, 41) for s in (-1.0, 1.0)))
+
+
+def _merge_equal_walls(walls: list[Wall]) -> tuple[list[Wall], set[float]]:
+    """The walls, neighbours with the same formulas (for these parameter values) made one
+    wall over both intervals, and the abscissas (m) of the joins that went.
+
+    ``aa*x**2 + bb*x*abs(x)`` is split at 0 for every bb (its f'' jumps there unless
+    bb = 0); with bb = 0 both pieces are aa*x**2. Kept as two walls, a rolling ball
+    would meet the other wall's identical surface at the join and each pass would end
+    its phase there (a run stopped on "contact phases of zero duration piled up").
+    The formulas are elementary functions of x, so equal on a range means equal.
+    """
+    merged = [walls[0]] if walls else []
+    joins: set[float] = set()
+    for wall in walls[1:]:
+        last = merged[-1]
+        if _same_formulas(last, wall):
+            merged[-1] = replace(last, hi=wall.hi)
+            joins.add(last.hi)
+        else:
+            merged.append(wall)
+    return [replace(wall, index=i) for i, wall in enumerate(merged)], joins
+
+
+def _same_formulas(a: Wall, b: Wall) -> bool:
+    for name in ("f", "df", "d2f", "d3f"):
+        fa, fb = getattr(a, name), getattr(b, name)
+        for x in _COMPARE_AT:
+            va, vb = _value(fa, x, a.p), _value(fb, x, b.p)
+            if va is None or vb is None:
+                if (va is None) != (vb is None):
+                    return False
+                continue
+            if abs(va - vb) > rounding_allowance(va, vb):
+                return False
+    return True
+
+
+def _value(fn: Callable[..., float], x: float, p: tuple[float, ...]) -> float | None:
+    try:
+        value = float(fn(x, p))
+    except (ArithmeticError, ValueError, TypeError):
+        return None
+    return value if math.isfinite(value) else None
