@@ -7,11 +7,16 @@ a curve expression in a scene.
 
 from __future__ import annotations
 
+import contextlib
 import functools
 import importlib.machinery
 import importlib.util
+import math
 import os
+import signal
 import tempfile
+import threading
+from collections.abc import Iterator
 from pathlib import Path
 
 import sympy as sm
@@ -19,7 +24,7 @@ import sympy as sm
 from . import codegen, curve, report, shape
 from .ball import BallDerivation, derive_ball, plain
 from .contact import ContactDerivation, derive_contact
-from .expr import PAPER_CURVES, curve_name_problem, parse_curve
+from .expr import DERIVE_TIMEOUT, PAPER_CURVES, curve_name_problem, parse_curve
 
 GENERATED = Path(__file__).resolve().parent.parent / "generated"
 
@@ -256,8 +261,12 @@ def curve_from_text(name: str, text: str, parameters: dict[str, str]) -> curve.C
         return curve.derive_curve(name, text, expr, parameters, psyms)
     except curve.CurveDerivationError:
         raise
-    except (TypeError, ValueError, ArithmeticError, NotImplementedError) as exc:
+    except (
+        TypeError, ValueError, ArithmeticError, NotImplementedError, RecursionError,
+        SystemError, MemoryError,
+    ) as exc:  # fmt: skip
         # sympy failing on a whitelisted expression: say so in one line, not a traceback
+        # (an expression too large for it can end in a RecursionError or SystemError)
         raise curve.CurveDerivationError(
             f"curve {text!r} cannot be derived ({type(exc).__name__}: {exc})"
         ) from None
@@ -462,6 +471,38 @@ def check(generated_dir: Path = GENERATED) -> list[str]:
     return problems
 
 
+class _Deadline(BaseException):
+    """Raised in the main thread when a derivation's time is up (a BaseException: the
+    ``except Exception`` clauses inside sympy must not swallow it)."""
+
+
+@contextlib.contextmanager
+def _deadline(seconds: float | None) -> Iterator[None]:
+    """Raise :class:`_Deadline` in the block after ``seconds`` of wall-clock time (None or
+    inf: no limit). A timer signal (SIGALRM), so only in the main thread; elsewhere, and
+    where the platform has none, the block runs unbounded."""
+    usable = (
+        seconds is not None
+        and math.isfinite(seconds)
+        and hasattr(signal, "setitimer")
+        and threading.current_thread() is threading.main_thread()
+    )
+    if not usable:
+        yield
+        return
+
+    def expire(signum: int, frame: object) -> None:
+        raise _Deadline
+
+    previous = signal.signal(signal.SIGALRM, expire)
+    signal.setitimer(signal.ITIMER_REAL, seconds)
+    try:
+        yield
+    finally:
+        signal.setitimer(signal.ITIMER_REAL, 0.0)
+        signal.signal(signal.SIGALRM, previous)
+
+
 def derive_user_curve(
     name: str,
     text: str,
@@ -469,6 +510,7 @@ def derive_user_curve(
     directory: Path,
     *,
     force: bool = False,
+    timeout: float | None = DERIVE_TIMEOUT,
 ) -> Path:
     """Derive a user's curve into ``directory/<name>.py`` and return the path.
 
@@ -476,12 +518,14 @@ def derive_user_curve(
     (:mod:`billiard.derivation.shape`, with the parameters at their given values). The
     module is written to a temporary file in ``directory``, checked, and renamed into
     place: another process never sees a partial module. An existing module is replaced
-    only with ``force``. Names starting with
-    ``expr_`` are the cache of scene expressions (derived with ``force``).
+    only with ``force``. Names starting with ``expr_`` are the cache of scene expressions
+    (derived with ``force``). The derivation stops after ``timeout`` seconds (None: no
+    limit; enforced in the main thread).
 
     Raises:
-        CurveDerivationError: a bad name, an existing curve, or a curve that cannot be
-            derived or cannot hold a ball (one line).
+        CurveDerivationError: a bad name, an existing curve, a curve that cannot be
+            derived or cannot hold a ball, or a derivation that took longer than
+            ``timeout`` (one line).
         OSError: ``directory`` cannot be written.
     """
     problem = curve_name_problem(name)
@@ -493,11 +537,18 @@ def derive_user_curve(
             f"curve {name!r} already exists ({path}); add --force to replace it"
         )
     params = {k: _exact(v) for k, v in (parameters or {}).items()}
-    cd = curve_from_text(name, text, params)
     try:
-        source = curve_module(cd)
+        with _deadline(timeout):
+            cd = curve_from_text(name, text, params)
+            source = curve_module(cd)
     except codegen.NonFiniteConstantError as exc:
         raise curve.CurveDerivationError(f"curve {text!r}: {exc}") from None
+    except _Deadline:
+        raise curve.CurveDerivationError(
+            f"curve {text!r}: the derivation (sympy) did not finish within {timeout:g} s; "
+            "write the expression more simply, or allow longer with `billiard derive "
+            "--timeout SECONDS`"
+        ) from None
     directory.mkdir(parents=True, exist_ok=True)
     handle, temp_name = tempfile.mkstemp(prefix=f".{name}-", suffix=".py.tmp", dir=directory)
     temp = Path(temp_name)

@@ -232,9 +232,31 @@ def _classical(derivative: sm.Basic) -> sm.Basic:
     return derivative.replace(sm.DiracDelta, lambda *args: sm.S.Zero)
 
 
+#: Largest root index (the denominator of a fractional power of s) whose radicals are
+#: cleared into a polynomial: clearing multiplies the degree by it, so ``x**2.0000001``
+#: (s**(20000001/10000000)) would ask for a polynomial of degree 10^7, which sympy
+#: builds for minutes and gigabytes. Such a wall gets no polynomial: its nearest point
+#: is found numerically, as for exp or sin.
+MAX_ROOT_INDEX = 12
+
+
+def _root_index(expr: sm.Basic) -> int:
+    """The least common multiple of the denominators of the fractional powers in
+    ``expr`` (1 when there are none)."""
+    index = 1
+    for power in expr.atoms(sm.Pow):
+        exponent = power.exp
+        if exponent.is_Rational and not exponent.is_Integer:
+            index = sm.ilcm(index, exponent.q)
+    return int(index)
+
+
 def nearest_polynomial(near: sm.Basic) -> list[sm.Basic] | None:
-    """Polynomial in s whose real roots contain the nearest points, or None."""
+    """Polynomial in s whose real roots contain the nearest points, or None (also when
+    clearing its radicals would need a root index over :data:`MAX_ROOT_INDEX`)."""
     numer = sm.together(near).as_numer_denom()[0]
+    if _root_index(numer) > MAX_ROOT_INDEX:
+        return None
     numer = sm.expand(numer)
     if numer.is_polynomial(s):
         poly = numer

@@ -46,6 +46,7 @@ from typing import Any
 
 __all__ = [
     "BUILTIN_CURVES",
+    "DERIVE_TIMEOUT",
     "FUNCTIONS",
     "MAX_DEPTH",
     "MAX_EXPONENT",
@@ -76,6 +77,11 @@ MAX_EXPONENT = 32
 #: Largest accepted product of the absolute exponents of powers nested in one another,
 #: as in ``(x**32)**32``; keeps exact symbolic evaluation of numeric powers cheap.
 MAX_NESTED_EXPONENT = 1024
+#: Seconds the derivation of an accepted expression (sympy) may take by default
+#: (``billiard derive --timeout SECONDS``): the paper's curves and the usual polynomials,
+#: radicals and abs() pieces take under a second; an expression sympy cannot simplify
+#: can take minutes and gigabytes.
+DERIVE_TIMEOUT = 60.0
 #: The functions that may be called, each with exactly one positional argument: the name
 #: in an expression -> (the :mod:`math` function, the name of the sympy function). The one
 #: table of allowed functions; everything else is derived from it.

@@ -15,7 +15,7 @@ import sys
 from collections.abc import Sequence
 
 from billiard.cli import analyses, derive, export, run, study, sweep, view
-from billiard.cli.common import UserError
+from billiard.cli.common import UserError, long_name_error
 
 __all__ = ["UserError", "build_parser", "main", "shows_default", "version_text"]
 
@@ -144,9 +144,12 @@ def main(argv: Sequence[str] | None = None) -> int:
     try:
         return args.func(args)
     except Exception as exc:
-        if not isinstance(exc, _user_errors()):
+        # a path given with a name too long for the file system fails wherever the
+        # command first touches it: bad input, reported as such
+        error = long_name_error(exc) if isinstance(exc, OSError) else exc
+        if error is None or not isinstance(error, _user_errors()):
             raise
-        message = " ".join(str(exc).split())
+        message = " ".join(str(error).split())
         print(f"billiard: error: {message}", file=sys.stderr)
         return 2
     except KeyboardInterrupt:

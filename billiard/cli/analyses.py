@@ -24,10 +24,33 @@ def _scene(args: argparse.Namespace, command: str):
 
 
 def _counts(args: argparse.Namespace, command: str) -> None:
+    from billiard.scene.spec import MAX_COLLISIONS
+
     if args.impacts < 1:
         raise UserError(f"{command}: --impacts must be >= 1, got {args.impacts}")
     if args.transient < 0:
         raise UserError(f"{command}: --transient must be >= 0, got {args.transient}")
+    if args.impacts + args.transient > MAX_COLLISIONS:
+        raise UserError(
+            f"{command}: --transient + --impacts = {args.transient + args.impacts:,} impacts "
+            f"per trajectory; at most {MAX_COLLISIONS:,}"
+        )
+
+
+def _write(command: str, path: Path, write, kept: list[Path]) -> Path:
+    """``write()`` (which writes ``path``), with a failure (a full disk, a quota) said
+    in one line naming the file, the reason and the files already written."""
+    try:
+        return write()
+    except OSError as exc:
+        reason = exc.strerror or str(exc) or type(exc).__name__
+        done = f"; kept {', '.join(str(p) for p in kept)}" if kept else ""
+        raise UserError(f"{command}: cannot write {path}: {reason}{done}") from None
+
+
+def _too_large(command: str, exc: Exception) -> UserError:
+    """An estimate over the limit (OutputSizeError), worded with --yes."""
+    return UserError(f"{command}: {exc.confirmed_by('--yes')}")
 
 
 def _progress(label: str):
@@ -55,7 +78,7 @@ def cmd_hysteresis(args: argparse.Namespace) -> int:
         axis = parse_vary(args.vary)
     except SweepError as exc:
         raise UserError(f"hysteresis: {exc}") from None
-    values = tuple(axis.values)
+    values = axis.values  # not materialised: a range of 10^9 values is refused by size
     if len(values) < 2:
         raise UserError(f"hysteresis: --vary {args.vary}: an up/down sweep needs >= 2 values")
     if not axis.numeric:
@@ -74,6 +97,14 @@ def cmd_hysteresis(args: argparse.Namespace) -> int:
         check_keys(scene, [axis])
     except SweepError as exc:
         raise UserError(f"hysteresis: {exc}") from None
+    from billiard.run.output_size import OutputSizeError
+    from billiard.sweep.hysteresis import check_size
+
+    if not args.yes:  # before the scene's set-up: refused at once
+        try:
+            check_size(len(values), args.starts)
+        except OutputSizeError as exc:
+            raise _too_large("hysteresis", exc) from None
     out = Path(args.out) if args.out else Path("runs") / f"hysteresis-{scene.name}"
     check_output_folder(out, "--out")
 
@@ -90,12 +121,15 @@ def cmd_hysteresis(args: argparse.Namespace) -> int:
             impacts=args.impacts,
             transient=args.transient,
             progress=None if report is None else (lambda _d, i, n: report(i + 1, n)),
+            allow_large=True,  # checked above, with --yes
         )
     except (ValueError, SceneError) as exc:
         raise UserError(f"hysteresis: {exc}") from None
-    out.mkdir(parents=True, exist_ok=True)
-    table = write_csv(result, out / "hysteresis.csv")
-    figure = hysteresis_figure(result, out / "hysteresis.png")
+    _write("hysteresis", out, lambda: out.mkdir(parents=True, exist_ok=True), [])
+    path = out / "hysteresis.csv"
+    table = _write("hysteresis", path, lambda: write_csv(result, path), [])
+    path = out / "hysteresis.png"
+    figure = _write("hysteresis", path, lambda: hysteresis_figure(result, path), [table])
     n = result.q1_start.size
     differ = int((result.columns["period"][0] != result.columns["period"][1]).sum())
     print(
@@ -122,9 +156,8 @@ def _interval(text: str, option: str) -> tuple[float, float]:
     return lo, hi
 
 
-def _eps(text: str) -> list[float]:
-    import numpy as np
-
+def _eps(text: str) -> tuple[float, float, int]:
+    """``--eps LO:HI:N`` read and checked (the N values are made after the size check)."""
     parts = text.split(":")
     try:
         if len(parts) != 3:
@@ -136,16 +169,29 @@ def _eps(text: str) -> list[float]:
         ) from None
     if not (math.isfinite(lo) and math.isfinite(hi)) or not 0.0 < lo < hi or count < 2:
         raise UserError(f"uncertainty: --eps {text}: need 0 < LO < HI (m) and N >= 2")
-    return [float(e) for e in np.geomspace(lo, hi, count)]
+    return lo, hi, count
 
 
 def cmd_uncertainty(args: argparse.Namespace) -> int:
+    import numpy as np
+
+    from billiard.run.output_size import OutputSizeError
+    from billiard.sweep.uncertainty import MIN_SAMPLES, SAMPLES_WHY, check_size
+
     _counts(args, "uncertainty")
-    if args.samples < 1:
-        raise UserError(f"uncertainty: --samples must be >= 1, got {args.samples}")
+    if args.samples < MIN_SAMPLES:
+        raise UserError(
+            f"uncertainty: --samples must be >= {MIN_SAMPLES}, got {args.samples}: {SAMPLES_WHY}"
+        )
     q1 = _interval(args.q1, "--q1")
     q2 = _interval(args.q2, "--q2")
-    eps = _eps(args.eps)
+    lo, hi, count = _eps(args.eps)
+    if not args.yes:
+        try:
+            check_size(args.samples, count)
+        except OutputSizeError as exc:
+            raise _too_large("uncertainty", exc) from None
+    eps = [float(e) for e in np.geomspace(lo, hi, count)]
     scene = _scene(args, "uncertainty")
     out = Path(args.out) if args.out else Path("runs") / f"uncertainty-{scene.name}"
     check_output_folder(out, "--out")
@@ -164,11 +210,13 @@ def cmd_uncertainty(args: argparse.Namespace) -> int:
             transient=args.transient,
             seed=args.seed,
             progress=_progress("uncertainty: trajectories"),
+            allow_large=True,  # checked above, with --yes
         )
     except (ValueError, SceneError) as exc:
         raise UserError(f"uncertainty: {exc}") from None
-    paths = write_results(result, out)
-    paths.append(uncertainty_figure(result, out / "uncertainty.png"))
+    paths = _write("uncertainty", out, lambda: write_results(result, out), [])
+    path = out / "uncertainty.png"
+    paths.append(_write("uncertainty", path, lambda: uncertainty_figure(result, path), paths))
     pairs = zip(result.labels, result.counts, strict=True)
     reached = ", ".join(f"{label} {n}" for label, n in pairs)
     print(
@@ -223,6 +271,12 @@ def add_parsers(sub: argparse._SubParsersAction) -> None:
         "--transient", type=int, default=300, help="impacts simulated first at each value"
     )
     p.add_argument("--out", metavar="DIR", help="output folder (default runs/hysteresis-SCENE)")
+    p.add_argument(
+        "--yes",
+        action="store_true",
+        help="run beyond about 1 GB of memory or of hysteresis.csv (refused without it, "
+        "naming the estimate)",
+    )
     add_set_argument(p, "override a key of the scene (repeatable)")
     p.set_defaults(func=cmd_hysteresis)
 
@@ -242,7 +296,9 @@ def add_parsers(sub: argparse._SubParsersAction) -> None:
     p._negative_number_matcher = re.compile(r"^-\d*\.?\d+([eE][-+]?\d+)?(:[-+.\deE]*)*$")
     p.add_argument("--q1", required=True, metavar="LO:HI", help="the box's q1 range (m)")
     p.add_argument("--q2", required=True, metavar="LO:HI", help="the box's q2 range (m)")
-    p.add_argument("--samples", type=int, default=2000, help="random valid starts in the box")
+    p.add_argument(
+        "--samples", type=int, default=2000, help="random valid starts in the box (>= 2)"
+    )
     p.add_argument(
         "--eps",
         default="1e-6:1e-3:7",
@@ -255,5 +311,10 @@ def add_parsers(sub: argparse._SubParsersAction) -> None:
     )
     p.add_argument("--seed", type=int, default=0, help="seed of the random starts")
     p.add_argument("--out", metavar="DIR", help="output folder (default runs/uncertainty-SCENE)")
+    p.add_argument(
+        "--yes",
+        action="store_true",
+        help="run beyond about 1 GB of memory (refused without it, naming the estimate)",
+    )
     add_set_argument(p, "override a key of the scene (repeatable)")
     p.set_defaults(func=cmd_uncertainty)

@@ -28,10 +28,14 @@ def cmd_derive(args: argparse.Namespace) -> int:
                     f"derive --dir {directory}: its parent directory {directory.parent} "
                     "does not exist"
                 )
+        if not (args.timeout > 0):  # also NaN
+            raise UserError(
+                f"derive: --timeout must be a number of seconds > 0, got {args.timeout}"
+            )
         started = time.perf_counter()
         try:
             path = build.derive_user_curve(
-                args.name, args.curve, params, directory, force=args.force
+                args.name, args.curve, params, directory, force=args.force, timeout=args.timeout
             )
         except CurveExpressionError as exc:
             raise UserError(str(exc)) from None
@@ -134,5 +138,15 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
         "--dir",
         help="where to write a user curve (default: the user curve directory, "
         "$BILLIARD_HOME/curves, see `billiard.geometry.curves.user_curve_dir`)",
+    )
+    from billiard.derivation.expr import DERIVE_TIMEOUT
+
+    p.add_argument(
+        "--timeout",
+        type=float,
+        default=DERIVE_TIMEOUT,
+        metavar="SECONDS",
+        help="longest time the derivation of --curve may take (s; inf: no limit); an "
+        "expression sympy cannot simplify is refused after it",
     )
     p.set_defaults(func=cmd_derive)

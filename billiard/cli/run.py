@@ -10,7 +10,7 @@ import sys
 import time
 from pathlib import Path
 
-from billiard.cli.common import UserError, _note, add_set_argument
+from billiard.cli.common import UserError, _note, add_set_argument, name_too_long
 from billiard.cli.figure_options import add_figure_arguments, figure_options
 
 
@@ -232,6 +232,9 @@ def cmd_run(args: argparse.Namespace) -> int:
         if args.duration is not None:
             with_values(scene, {"run.duration": args.duration})  # checks it
         out = Path(args.out) if args.out else Path("runs") / scene.name
+        why = name_too_long(out, "--out")
+        if why is not None:
+            raise UserError(f"run: {why}")
         if _holds_run(out) and not args.overwrite:
             again = shlex.quote(str(out))
             raise UserError(

@@ -22,6 +22,7 @@ from billiard.engine.simulation import Simulation
 from billiard.geometry.wall_functions import WallFunction, wall_functions
 from billiard.kernels import layout as L
 from billiard.runfile.record import COLUMNS, MemoryRecorder
+from billiard.scene.spec import check_collisions
 from billiard.status import Status
 
 __all__ = [
@@ -75,7 +76,7 @@ def _simulation(scene: Any, collisions: int | None) -> tuple[Simulation, int]:
     why = supports(sim)
     if why is not None:
         raise ValueError(f"the compiled engine does not run this scene: {why}")
-    total = scene.run.collisions if collisions is None else int(collisions)
+    total = scene.run.collisions if collisions is None else check_collisions(collisions)
     sim.resolved_scene(total)  # validates the impact count
     return sim, total
 

@@ -33,6 +33,7 @@ __all__ = [
     "MissingExtraError",
     "Table",
     "TableError",
+    "require_extra",
     "to_pandas",
     "to_xarray",
 ]
@@ -54,7 +55,9 @@ class TableError(ValueError):
     phases of the impacts model, samples without a sampling interval). One line."""
 
 
-def _require(module: str, what: str) -> Any:
+def require_extra(module: str, what: str) -> Any:
+    """The module ``module`` imported, or :class:`MissingExtraError` naming ``what`` needs
+    it and the extra that installs it."""
     try:
         return importlib.import_module(module)
     except ImportError:
@@ -136,7 +139,7 @@ def to_pandas(table: Table, attrs: Mapping[str, Any] | None = None) -> Any:
     Raises:
         MissingExtraError: pandas is not installed.
     """
-    pd = _require("pandas", "to_pandas()")
+    pd = require_extra("pandas", "to_pandas()")
     frame = pd.DataFrame({column: values for column, values in table.items()})
     frame.attrs.update(
         {"table": table.name, "units": table.units, "descriptions": table.descriptions}
@@ -157,7 +160,7 @@ def to_xarray(table: Table, attrs: Mapping[str, Any] | None = None) -> Any:
     Raises:
         MissingExtraError: xarray is not installed.
     """
-    xr = _require("xarray", "to_xarray()")
+    xr = require_extra("xarray", "to_xarray()")
     dim = DIMENSIONS[table.name]
     variables = {}
     for column, values in table.items():

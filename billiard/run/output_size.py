@@ -12,6 +12,10 @@ the bound of a run without a duration is loose (some 25 times what the paper's s
 make), so such a run is refused only beyond :data:`BOUND_FACTOR` times the limit, and
 otherwise stopped when it reaches the limit.
 
+The same limit holds for what other commands make from the user's numbers (an up/down
+sweep's trajectories, the uncertainty exponent's starts): each estimates its memory and
+files before it allocates anything and refuses through :func:`check_size`.
+
 While the run goes on, :func:`guard_samples` stops it with :class:`OutputSizeError` before
 it writes more rows than the larger of the estimate and the limit: the time a ball spends
 rolling, sliding or held (``contact.model = "phases"``) is not in the bound, and the
@@ -35,6 +39,7 @@ __all__ = [
     "OutputSizeError",
     "SampleEstimate",
     "check_samples",
+    "check_size",
     "estimate_samples",
     "guard_samples",
     "longest_flight",
@@ -242,6 +247,31 @@ def check_samples(estimate: SampleEstimate, *, sample: float, allow: str) -> Sam
         f"{_count(estimate.rows)} rows ({_bytes(estimate.bytes)} {where}), over the limit "
         f"of {_bytes(MAX_BYTES)}; give a larger sampling interval or a shorter duration "
         f"(run.duration, s), or {allow} to go ahead",
+        allow,
+    )
+
+
+def check_size(sizes: dict[str, float], *, what: str, fewer: str, allow: str) -> None:
+    """Refuse a piece of work whose estimated sizes (bytes; ``sizes`` maps ``memory`` or
+    a file's name to its estimate) are any of them over :data:`MAX_BYTES`.
+
+    Args:
+        sizes: the estimates, named as the message names them ("X of memory").
+        what: the work and the numbers that size it, e.g. "an up/down sweep of 71
+            values x 32 starts".
+        fewer: how to make it smaller (the options to lower).
+        allow: how the caller confirms it (``allow_large=True``; a command line puts its
+            own option in its place with :meth:`OutputSizeError.confirmed_by`).
+
+    Raises:
+        OutputSizeError: one line naming ``what``, the estimates and the limit.
+    """
+    if all(size <= MAX_BYTES for size in sizes.values()):
+        return
+    estimates = " and ".join(f"{_bytes(size)} of {name}" for name, size in sizes.items())
+    raise OutputSizeError(
+        f"{what} would take about {estimates}, over the limit of {_bytes(MAX_BYTES)}; "
+        f"{fewer}, or {allow} to go ahead",
         allow,
     )
 

@@ -71,6 +71,7 @@ from billiard.runfile.sidecsv import SideCsv, check_side
 from billiard.runfile.stream import CsvMark, CsvRecorder, RowMismatchError, RunBusyError, Truncation
 from billiard.runfile.write_error import RunWriteError
 from billiard.scene.scene import scene_from_toml, scene_to_toml
+from billiard.scene.spec import check_collisions
 from billiard.scene.userfile import MAX_SCENE_BYTES, FileRefused, read_limited
 from billiard.status import Status
 
@@ -152,7 +153,7 @@ def run_streamed(
         RunBusyError: another process is writing a run in ``out_dir``.
         RunInterrupted: SIGINT or SIGTERM; the files are complete up to the last impact.
     """
-    total = sim.scene.run.collisions if collisions is None else int(collisions)
+    total = sim.scene.run.collisions if collisions is None else check_collisions(collisions)
     resolved = sim.resolved_scene(total)
     samples = _samples(sim, total, sim.initial.t, 0, allow_large)
     store, why = choose_store(store, total, samples)
@@ -272,7 +273,7 @@ def resume(
         raise CheckpointError(
             f"{scene_path} was edited after the checkpoint was written (its sha256 differs)"
         )
-    total = scene.run.collisions if collisions is None else int(collisions)
+    total = scene.run.collisions if collisions is None else check_collisions(collisions)
     rows = mark.rows
     csv_path = out / _data_name(store)
     if csv_path.is_file() and csv_path.stat().st_size < mark.size:

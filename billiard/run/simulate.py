@@ -40,6 +40,7 @@ from billiard.run.persist import (
 from billiard.run.result import Result
 from billiard.runfile.record import CONTACT_COLUMNS, TRAJECTORY_COLUMNS, MemoryRecorder
 from billiard.scene.scene import Scene, SceneError, load_scene, with_values
+from billiard.scene.spec import check_collisions
 from billiard.status import Status
 
 __all__ = [
@@ -125,7 +126,7 @@ def simulate(
     if duration is not None:
         scene = with_values(scene, {"run.duration": duration})  # validates it
     sim = Simulation(scene, method)
-    total = scene.run.collisions if collisions is None else int(collisions)
+    total = scene.run.collisions if collisions is None else check_collisions(collisions)
     resolved = sim.resolved_scene(total)  # validates the impact count before any work
     if sample is not None:
         if not (isinstance(sample, (int, float)) and math.isfinite(sample) and sample > 0):

@@ -17,6 +17,7 @@ on aluminium), with a fixed parabola and the ball at rest at its bottom.
 from __future__ import annotations
 
 import math
+import operator
 from collections.abc import Iterable, Mapping
 from dataclasses import dataclass
 from typing import Any
@@ -52,6 +53,7 @@ __all__ = [
     "DriveSpec",
     "InitialSpec",
     "RunSpec",
+    "check_collisions",
     "curve_kind",
     "fowles_coefficients",
 ]
@@ -67,6 +69,28 @@ METHODS: tuple[str, ...] = ("event", "rk4")
 MAX_COLLISIONS = 10**9
 
 _DEFAULT_RADIUS = 1.55e-3
+
+
+def check_collisions(value: Any, name: str = "collisions") -> int:
+    """``value`` as a number of impacts: an integer (Python's or numpy's, not a bool) in
+    [1, :data:`MAX_COLLISIONS`]; a float, even a whole one, is refused rather than cut
+    (``2.5`` must not run 2 impacts).
+
+    Raises:
+        SceneError: one line naming ``name`` and the value.
+    """
+    try:
+        count = None if isinstance(value, bool) else operator.index(value)
+    except TypeError:
+        count = None
+    if count is None or count < 1:
+        raise error(f"{name} must be an integer >= 1, got {shown(value)}")
+    if count > MAX_COLLISIONS:
+        raise error(
+            f"{name} = {count} is out of range [1, {MAX_COLLISIONS}] (a longer run: extend "
+            "it with `billiard run --resume`)"
+        )
+    return count
 
 
 def fowles_coefficients(radius: float) -> tuple[float, float]:
@@ -392,16 +416,7 @@ class RunSpec:
     contact_span: float = 10.0
 
     def __post_init__(self) -> None:
-        collisions = self.collisions
-        if isinstance(collisions, bool) or not isinstance(collisions, int) or collisions < 1:
-            raise error(
-                f"scene key 'run.collisions' must be an integer >= 1, got {shown(collisions)}"
-            )
-        if collisions > MAX_COLLISIONS:
-            raise error(
-                f"scene key 'run.collisions' = {collisions} is out of range "
-                f"[1, {MAX_COLLISIONS}] (a longer run: extend it with `billiard run --resume`)"
-            )
+        _set(self, "collisions", check_collisions(self.collisions, "scene key 'run.collisions'"))
         check_choice("run.method", self.method, METHODS)
         _set(self, "rtol", limited("run.rtol", self.rtol))
         _set(self, "step", limited("run.step", self.step))

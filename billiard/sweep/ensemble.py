@@ -113,14 +113,26 @@ class EnsembleResult:
         return f"<EnsembleResult {self.scene.name!r}: {shape} on {self.device}: {classes}>"
 
     def to_pandas(self) -> Any:
-        """One row per start, the measured columns (``pip install pandas``)."""
-        import pandas as pd
+        """One row per start, the measured columns.
+
+        Raises:
+            MissingExtraError: (an ImportError) pandas is not installed.
+        """
+        from billiard.run.frames import require_extra
+
+        pd = require_extra("pandas", "EnsembleResult.to_pandas()")
 
         return pd.DataFrame({k: np.ravel(v) for k, v in self.columns.items()})
 
     def to_xarray(self) -> Any:
-        """An ``xarray.Dataset`` over the starts' dimensions (``start_0``, ...)."""
-        import xarray as xr
+        """An ``xarray.Dataset`` over the starts' dimensions (``start_0``, ...).
+
+        Raises:
+            MissingExtraError: (an ImportError) xarray is not installed.
+        """
+        from billiard.run.frames import require_extra
+
+        xr = require_extra("xarray", "EnsembleResult.to_xarray()")
 
         dims = tuple(f"start_{i}" for i in range(len(self.shape)))
         data = {

@@ -39,8 +39,10 @@ __all__ = [
     "DIRECTIONS",
     "REFUSED",
     "HysteresisResult",
+    "check_size",
     "continue_states",
     "drive_phases",
+    "estimate_size",
     "hysteresis_figure",
     "run_hysteresis",
     "start_grid",
@@ -63,6 +65,20 @@ _STATE = _BALL + _CARRIED
 #: trajectories per call of the kernel: bounds the memory of the state vectors (about
 #: 9 kB each) and rings (about 14 kB each); between values only _STATE is kept
 CHUNK = 4096
+
+# Memory of an up/down sweep, for :func:`estimate_size` (measured with tracemalloc on
+# hyperbola-4.5hz, 5 impacts per value: 300 starts x 3 values peak at 15.2 MB, 4,096 x 2
+# at 203 MB, 8,192 x 2 at 206 MB, 16,384 x 2 at 210 MB, 4 x 64 at 4.9 MB).
+#: bytes per trajectory of a chunk while the kernel runs (state vector, ring, statistics)
+TRAJECTORY_BYTES = 50_000
+#: bytes per value: its scene and set-up, kept for the way down
+VALUE_BYTES = 75_000
+#: bytes per start kept from value to value (carried state, start, flags, its grid)
+START_BYTES = 300
+#: bytes per (direction, value, start): the measured columns
+CELL_BYTES = 64
+#: bytes per row of hysteresis.csv (measured: 139 to 152)
+CSV_ROW_BYTES = 150
 
 
 @dataclass
@@ -180,18 +196,54 @@ def start_grid(scene: Any, setup: Any, count: int) -> tuple[np.ndarray, np.ndarr
         raise ValueError("no part of the container lies below the starts' top height")
     lo, hi = float(x[inside].min()), float(x[inside].max())
     side = max(2, math.ceil(math.sqrt(2 * count)))
-    from billiard.engine.ensemble import start as start_states
+    from billiard.engine.ensemble import start_verdicts
 
     for _ in range(8):
         q1, q2 = np.meshgrid(np.linspace(lo, hi, side), np.linspace(bottom, top, side))
         q1, q2 = q1.ravel(), q2.ravel()
-        _, ok = start_states(setup, q1, q2, t=initial.t)
-        valid = np.nonzero(ok)[0]
+        # checked in blocks: a state vector per grid point (9 kB) is not kept
+        valid = np.nonzero(start_verdicts(setup, q1, q2, t=initial.t) == 0)[0]
         if valid.size >= count:
             pick = valid[np.rint(np.linspace(0, valid.size - 1, count)).astype(np.int64)]
             return q1[pick], q2[pick]
         side *= 2
     raise ValueError(f"found no {count} valid starts in the container")
+
+
+def estimate_size(values: int, starts: int) -> tuple[float, float]:
+    """Bytes of memory an up/down sweep of ``values`` values and ``starts`` trajectories
+    takes at most, about, and bytes of the ``hysteresis.csv`` it writes (one row per
+    direction, value and start). Floats: they may exceed every integer type."""
+    values, starts = float(values), float(starts)
+    cells = 2.0 * values * starts
+    memory = (
+        TRAJECTORY_BYTES * min(starts, CHUNK)
+        + VALUE_BYTES * values
+        + START_BYTES * starts
+        + CELL_BYTES * cells
+    )
+    return memory, CSV_ROW_BYTES * (cells + 1)
+
+
+def check_size(values: int, starts: int, allow: str = "allow_large=True") -> None:
+    """Refuse, before anything is allocated, an up/down sweep whose memory or
+    ``hysteresis.csv`` (:func:`estimate_size`) is over the limit of
+    :data:`billiard.run.output_size.MAX_BYTES`, unless confirmed.
+
+    Raises:
+        OutputSizeError: one line naming the estimate, the values and the starts, and
+            ``allow`` as the way to go ahead.
+    """
+    from billiard.run.output_size import check_size as check
+
+    memory, table = estimate_size(values, starts)
+    plural = "" if starts == 1 else "s"
+    check(
+        {"memory": memory, "hysteresis.csv": table},
+        what=f"an up/down sweep of {values:,} values x {starts:,} start{plural}",
+        fewer="give fewer values (--vary ...:N) or starts (--starts)",
+        allow=allow,
+    )
 
 
 def run_hysteresis(
@@ -207,19 +259,23 @@ def run_hysteresis(
     rest_band: float = 0.01,
     threads: int | None = None,
     progress: Callable[[str, int, int], None] | None = None,
+    allow_large: bool = False,
 ) -> HysteresisResult:
     """Sweep ``key`` (a numeric scene key, not ``initial.*``) of ``scene`` (a scene or
     a built-in name) up through ``values`` (increasing order) and back down, ``starts``
     trajectories continued from value to value (see the module's text).
     ``progress(direction, step, steps)`` is called before each value. ``tolerance``
     (m), ``max_period`` (impacts) and ``rest_band`` (m) are the sweep's period test and
-    resting band.
+    resting band. ``allow_large``: go ahead when the sweep's memory or CSV file would be
+    over 1 GB (:func:`check_size`).
 
     Raises:
         ValueError: fewer than 2 values, a value that is not a number, a key of the
             ball's start or one of :data:`REFUSED`, impacts < 1 or transient < 0, or a
             scene the ensemble kernel does not take (contact phases, method rk4) or
             that cannot be simulated.
+        OutputSizeError: (a ``SceneError``) the sweep would take more than 1 GB of
+            memory or of CSV file and ``allow_large`` is False; checked first.
     """
     from billiard.engine import ensemble as EN
     from billiard.kernels import ensemble as E
@@ -227,6 +283,10 @@ def run_hysteresis(
     from billiard.sweep.attractor import PERIOD_WINDOW
     from billiard.sweep.ensemble import as_scene, measured_columns
 
+    if starts < 1:
+        raise ValueError(f"starts must be >= 1, got {starts}")
+    if not allow_large:  # first: nothing of the values or starts is made before
+        check_size(len(values), starts)
     scene = as_scene(scene)
     began = time.perf_counter()
     if key.startswith("initial."):

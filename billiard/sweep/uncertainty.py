@@ -33,9 +33,14 @@ from typing import Any
 import numpy as np
 
 __all__ = [
+    "MIN_SAMPLES",
+    "SAMPLES_WHY",
     "UncertaintyResult",
+    "check_size",
+    "estimate_size",
     "fit_exponent",
     "run_uncertainty",
+    "smallest_eps",
     "uncertain_counts",
     "uncertainty_figure",
     "write_results",
@@ -44,6 +49,23 @@ __all__ = [
 #: trajectories per call of the kernel: bounds the memory of the rings (256 impacts x 7
 #: floats each, about 14 kB per trajectory) and of the state vectors (about 9 kB each)
 CHUNK = 8192
+
+# Memory of an estimate, for :func:`estimate_size` (measured with tracemalloc on
+# hyperbola-4.5hz, 5 impacts each: 700 trajectories peak at 17 MB, 7,000 at 174 MB,
+# 60,000 at 333 MB, 120,000 at 348 MB).
+#: bytes per trajectory of a chunk while the kernel runs (state vector, ring, the checks
+#: of the starts), counted up to CHUNK trajectories: 25 kB while the chunk fills, 39 kB
+#: at the peak of a full one
+TRAJECTORY_BYTES = 39_000
+#: bytes per trajectory kept to the end (its start, its attractor's record and label)
+RECORD_BYTES = 300
+
+#: fewest starts, and why
+MIN_SAMPLES = 2
+SAMPLES_WHY = (
+    "with one start the uncertain fraction f is 0 or 1 at every eps, and alpha is fitted "
+    "over the eps with 0 < f < 1"
+)
 
 
 def uncertain_counts(center: np.ndarray, plus: np.ndarray, minus: np.ndarray) -> np.ndarray:
@@ -128,6 +150,44 @@ class UncertaintyResult:
         return 2.0 - self.alpha
 
 
+def smallest_eps(q1: tuple[float, float]) -> float:
+    """The smallest displacement (m) that moves every start of the box's q1 range: the
+    spacing of floats at its largest magnitude (a smaller eps leaves q1 + eps = q1 for
+    the starts there)."""
+    return float(np.spacing(max(abs(q1[0]), abs(q1[1]))))
+
+
+def estimate_size(samples: int, eps: int) -> float:
+    """Bytes of memory an estimate from ``samples`` starts and ``eps`` displacements
+    takes at most, about: every start runs with its 2 ``eps`` neighbours. A float: it
+    may exceed every integer type."""
+    trajectories = float(samples) * (2.0 * float(eps) + 1.0)
+    return TRAJECTORY_BYTES * min(trajectories, CHUNK) + RECORD_BYTES * trajectories
+
+
+def check_size(samples: int, eps: int, allow: str = "allow_large=True") -> None:
+    """Refuse, before anything is allocated, an estimate whose memory
+    (:func:`estimate_size`) is over :data:`billiard.run.output_size.MAX_BYTES`, unless
+    confirmed.
+
+    Raises:
+        OutputSizeError: one line naming the estimate, the starts and the eps, and
+            ``allow`` as the way to go ahead.
+    """
+    from billiard.run.output_size import check_size as check
+
+    trajectories = samples * (2 * eps + 1)
+    check(
+        {"memory": estimate_size(samples, eps)},
+        what=(
+            f"{samples:,} starts with {eps:,} eps each ({trajectories:,} trajectories: "
+            "every start and its 2 neighbours per eps)"
+        ),
+        fewer="give fewer --samples or eps (--eps LO:HI:N)",
+        allow=allow,
+    )
+
+
 def _draw(
     setup: Any,
     rng: np.random.Generator,
@@ -196,33 +256,47 @@ def run_uncertainty(
     rest_band: float = 0.01,
     threads: int | None = None,
     progress: Callable[[int, int], None] | None = None,
+    allow_large: bool = False,
 ) -> UncertaintyResult:
     """Estimate the uncertainty exponent of the basin boundaries of ``scene`` (a scene or
     a built-in name) in the box
     ``q1`` x ``q2`` (m; each (low, high)) from ``samples`` random starts at rest (random
     generator seeded with ``seed``), displaced by each of ``eps`` (m) along q1, each
     trajectory ``transient`` impacts then ``impacts`` measured ones.
-    ``progress(done, total)`` counts trajectories.
+    ``progress(done, total)`` counts trajectories. ``allow_large``: go ahead when the
+    memory would be over 1 GB (:func:`check_size`).
 
     Raises:
-        ValueError: an empty box, samples < 1, fewer than 2 eps or an eps <= 0, a scene
-            the ensemble kernel does not take, or no valid starts in the box.
+        ValueError: an empty box, samples < 2, fewer than 2 eps, an eps <= 0 or one too
+            small to move a start (below the spacing of floats at the box's largest
+            q1), a scene the ensemble kernel does not take, or no valid starts in the box.
+        OutputSizeError: (a ``SceneError``) the estimate would take more than 1 GB of
+            memory and ``allow_large`` is False; checked before anything is drawn.
     """
     from billiard.engine import ensemble as EN
     from billiard.sweep.attractor import PERIOD_WINDOW
     from billiard.sweep.basins import attractor_labels
     from billiard.sweep.ensemble import as_scene, measured_columns
 
+    if samples < MIN_SAMPLES:
+        raise ValueError(f"samples must be >= {MIN_SAMPLES}, got {samples}: {SAMPLES_WHY}")
+    if not allow_large:  # first: nothing is drawn before
+        check_size(samples, len(eps))
     scene = as_scene(scene)
     began = time.perf_counter()
     eps = np.sort(np.asarray(eps, dtype=np.float64))
     for name, (lo, hi) in (("q1", q1), ("q2", q2)):
         if not (math.isfinite(lo) and math.isfinite(hi) and lo < hi):
             raise ValueError(f"--{name} {lo:g}:{hi:g}: give LO:HI with LO < HI (m)")
-    if samples < 1:
-        raise ValueError(f"samples must be >= 1, got {samples}")
     if eps.size < 2 or not np.all(np.isfinite(eps)) or eps[0] <= 0.0:
         raise ValueError("eps: give at least 2 displacements, all > 0 (m)")
+    resolution = smallest_eps(q1)
+    if eps[0] < resolution:
+        raise ValueError(
+            f"eps {eps[0]:.3g} m is too small to move a start by eps: floats near q1 = "
+            f"{max(abs(q1[0]), abs(q1[1])):g} m are {resolution:.3g} m apart; give eps >= "
+            f"{resolution:.3g} m"
+        )
     if np.any(np.diff(eps) == 0.0):
         raise ValueError("eps: a displacement is given twice")
     if impacts < 1 or transient < 0:
@@ -355,6 +429,13 @@ def uncertainty_figure(result: UncertaintyResult, path: Path) -> Path:
         ax.plot(line, np.exp(intercept) * line**result.alpha, "-", color="tab:red", label=label)
     ax.set_xscale("log")
     ax.set_yscale("log")
+    # fixed limits: f is 0 or at least 1/n, at most 1, so the frame holds every f > 0;
+    # where no start is uncertain at any eps there is nothing to scale the axes by
+    ax.set_xlim(result.eps[0] / 2.0, result.eps[-1] * 2.0)
+    ax.set_ylim(0.5 / n, 1.5)
+    if not shown.any():
+        ax.text(0.5, 0.5, "no start is uncertain at these eps (f = 0)", ha="center",
+                va="center", transform=ax.transAxes)  # fmt: skip
     ax.set_xlabel("displacement eps along q1 (m)")
     ax.set_ylabel("uncertain fraction f (1)")
     text = (

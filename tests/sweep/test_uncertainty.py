@@ -147,7 +147,7 @@ def test_a_short_estimate_on_the_wedge(tmp_path):
     ("kwargs", "match"),
     [
         ({"q1": (0.01, -0.01)}, "LO < HI"),
-        ({"samples": 0}, "samples must be >= 1"),
+        ({"samples": 1}, "samples must be >= 2, got 1: with one start"),
         ({"eps": [1e-3]}, "at least 2"),
         ({"eps": [0.0, 1e-3]}, "all > 0"),
         ({"q2": (5.0, 6.0), "samples": 10}, "is the box inside the container"),
