@@ -72,6 +72,18 @@ def test_sympy_is_pinned_for_the_tests_only() -> None:
         assert pinned == f"sympy=={generating_sympy()}", extra
 
 
+def test_the_dask_extra_serves_the_dashboard_it_links() -> None:
+    """The sweep prints the scheduler's dashboard link; bokeh draws that page, at a
+    release the installed distributed accepts."""
+    extra = _metadata()["optional-dependencies"]["dask"]
+    bokeh = _requirement(extra, "bokeh")
+    minimum = re.fullmatch(r"bokeh>=([\d.]+)", bokeh)
+    assert minimum is not None, bokeh
+    versions = pytest.importorskip("distributed.versions")
+    accepted = versions.BOKEH_REQUIREMENT.specifier
+    assert accepted.contains(minimum.group(1)), (bokeh, str(accepted))
+
+
 def test_derive_check_under_another_sympy_names_the_release_it_needs(monkeypatch, capsys) -> None:
     import sympy
     from billiard.derivation import build
