@@ -246,6 +246,7 @@ _FAMILIES = {
     "billiard.kernels.surfaces": "the walls' offset surfaces",
     "billiard.kernels.float_text": "the CSV number formatting",
     "billiard.kernels.ryu": "the CSV number formatting",
+    "billiard.kernels.float_parse": "the CSV number reading",
 }
 #: the functions whose family is not their module's
 _FUNCTION_FAMILIES = {

@@ -450,8 +450,48 @@ def regenerate() -> list[Path]:
     return written
 
 
+class SympyVersionError(RuntimeError):
+    """The installed sympy is not the release that wrote ``generated/``: no regeneration
+    by it can equal the committed files byte for byte. The message is one line naming the
+    release needed."""
+
+
+def generating_sympy(generated_dir: Path = GENERATED) -> str | None:
+    """The sympy release that wrote ``generated_dir`` (the ``# sympy X`` line of its
+    ``ball.py`` header, :func:`codegen.generated_notice`), or None when it names none."""
+    try:
+        with open(generated_dir / "ball.py", encoding="utf-8") as handle:
+            header = [next(handle, "") for _ in range(8)]
+    except OSError:
+        return None
+    for line in header:
+        if line.startswith("# sympy "):
+            return line.removeprefix("# sympy ").strip()
+    return None
+
+
+def sympy_mismatch(generated_dir: Path = GENERATED) -> str | None:
+    """Why a byte-for-byte check of ``generated_dir`` cannot be made with the installed
+    sympy (one line naming the release needed), or None when it can."""
+    needed = generating_sympy(generated_dir)
+    if needed is None or needed == sm.__version__:
+        return None
+    return (
+        f"{generated_dir} was written by sympy {needed}, and only that release reproduces it "
+        f"byte for byte; sympy {sm.__version__} is installed "
+        f'(pip install "sympy=={needed}", or the test extra: pip install -e ".[test]")'
+    )
+
+
 def check(generated_dir: Path = GENERATED) -> list[str]:
-    """Problems found comparing the committed files with a fresh regeneration."""
+    """Problems found comparing the committed files with a fresh regeneration.
+
+    Raises:
+        SympyVersionError: the installed sympy is not the release that wrote them.
+    """
+    mismatch = sympy_mismatch(generated_dir)
+    if mismatch is not None:
+        raise SympyVersionError(mismatch)
     problems = []
     expected = expected_files(generated_dir)
     for path, text in expected.items():

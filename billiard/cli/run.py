@@ -80,7 +80,9 @@ class ProgressBar:
             # a rate needs two counts: the first one may come after a compile
             rate = counted / max(now - self.first_time, 1e-9)
             parts.append(f"{rate:,.0f} impacts/s")
-            parts.append(f"about {_duration((total - done) / rate)} left")
+            from billiard.engine.progress import duration_text
+
+            parts.append(f"about {duration_text((total - done) / rate)} left")
         return ", ".join(parts)
 
     def _simulated(self) -> float | None:
@@ -99,16 +101,6 @@ def _isatty(stream) -> bool:
         return bool(stream.isatty())
     except (AttributeError, ValueError):
         return False
-
-
-def _duration(seconds: float) -> str:
-    """A wall-clock duration for humans: 42 s, 3 min 5 s, 2 h 10 min."""
-    seconds = max(0.0, seconds)
-    if seconds < 60:
-        return f"{seconds:.0f} s"
-    if seconds < 3600:
-        return f"{seconds // 60:.0f} min {seconds % 60:.0f} s"
-    return f"{seconds // 3600:.0f} h {seconds % 3600 // 60:.0f} min"
 
 
 def _frame_interval(text: str | None) -> float | None:

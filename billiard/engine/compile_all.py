@@ -1,7 +1,7 @@
 """Every kernel a run can need, compiled together: one notice and one wait, once per
 install or update, instead of a wait for each family of kernels on the first run that
 needs it (the impact loop, again for a curve with another number of walls, the contact
-phases, the CSV formatting, the resting-position scan).
+phases, the CSV formatting and reading, the resting-position scan).
 
 :func:`compile_all` is :mod:`billiard.jit`'s first-compile hook
 (:func:`billiard.jit.on_first_compile`): before the first block of a process that may
@@ -120,6 +120,7 @@ def run_jobs(jobs: list[int | str]) -> None:
     import numpy as np
 
     from billiard.engine.simulation import Simulation
+    from billiard.runfile.csvbulk import read_lines
     from billiard.runfile.record import COLUMNS, MemoryRecorder
     from billiard.runfile.rows import format_rows_bytes
     from billiard.scene.scene import load_scene, with_values
@@ -144,7 +145,9 @@ def run_jobs(jobs: list[int | str]) -> None:
             changes = {**changes, **_rolling_start(scene)}
         scene = with_values(scene, changes)
         if csv:
-            format_rows_bytes(np.zeros((1, len(COLUMNS))), "\n")
+            # the CSV formatting, and its reading (a run's plots read its file back)
+            line = format_rows_bytes(np.zeros((1, len(COLUMNS))), "\n")
+            read_lines(line, list(COLUMNS), b"\n")
         sim = Simulation(scene)
         if sampled:
             sim.sample_dt = 0.01

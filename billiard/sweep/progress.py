@@ -7,18 +7,9 @@ import sys
 import time
 from typing import Any, TextIO
 
+from billiard.engine.progress import duration_text
+
 __all__ = ["SweepProgress"]
-
-
-def _duration(seconds: float) -> str:
-    if seconds != seconds or seconds == float("inf"):
-        return "?"
-    seconds = int(round(seconds))
-    if seconds < 60:
-        return f"{seconds} s"
-    if seconds < 3600:
-        return f"{seconds // 60} min {seconds % 60:02d} s"
-    return f"{seconds // 3600} h {seconds % 3600 // 60:02d} min"
 
 
 class SweepProgress:
@@ -63,7 +54,7 @@ class SweepProgress:
         return (
             f"{self.done}/{self.total} points, {rate:.3g} points/s, "
             f"{self.impacts / elapsed:,.0f} impacts/s, "
-            f"elapsed {_duration(elapsed)}, ETA {_duration(eta) if left else '0 s'}"
+            f"elapsed {duration_text(elapsed)}, ETA {duration_text(eta) if left else '0 s'}"
         )
 
     def tick(self, force: bool = False) -> None:

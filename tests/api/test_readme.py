@@ -3,6 +3,8 @@
 from __future__ import annotations
 
 import re
+import subprocess
+import sys
 from pathlib import Path
 
 import pytest
@@ -18,12 +20,30 @@ def test_readme_has_a_python_example():
     assert python_blocks()
 
 
+def shown_prints(block: str) -> list[str]:
+    """The lines a block shows as printed: ``print(...)  # <...>`` comments (``...``
+    stands for text that varies)."""
+    return re.findall(r"^print\(.*\)  # (<.*>)$", block, re.M)
+
+
 @pytest.mark.parametrize("index", range(len(python_blocks())))
 def test_readme_python_example_runs(index, capsys):
+    """Each block runs, and prints what its comments show it printing."""
+    block = python_blocks()[index]
     namespace: dict = {}
-    exec(compile(python_blocks()[index], f"README.md block {index}", "exec"), namespace)
+    exec(compile(block, f"README.md block {index}", "exec"), namespace)
     out = capsys.readouterr().out
     assert "impacts" in out
+    lines = out.splitlines()
+    for shown in shown_prints(block):
+        pattern = ".*".join(re.escape(part) for part in shown.split("..."))
+        assert any(re.fullmatch(pattern, line) for line in lines), (shown, lines)
+
+
+def test_readme_shows_the_notebook_result():
+    """The notebook example's comment is checked above (a Result's repr)."""
+    [first] = [b for b in python_blocks() if "to_pandas" in b]
+    assert shown_prints(first) and shown_prints(first)[0].startswith("<Result ")
 
 
 def test_readme_scene_example_shows_a_flying_ball(tmp_path, monkeypatch):
@@ -54,25 +74,42 @@ def test_readme_csv_table_lists_every_column():
     assert set(COLUMNS) <= listed, set(COLUMNS) - listed
 
 
-@pytest.mark.slow
-def test_readme_scene_example_prints_the_summary_shown(tmp_path):
-    """The summary the README shows for its scene example is the one a run prints (less
-    the wall-clock time and rate, which vary): a full run of the example, 25,000 impacts."""
-    from billiard.run.simulate import simulate
-    from billiard.scene.scene import load_scene
+def _timeless(line: str) -> str:
+    """A summary less its wall-clock time and rate, which vary from run to run."""
+    return re.sub(r" in \S+ s \([\d,]+ impacts/s\)", "", line)
 
+
+def _billiard(*args: str, cwd: Path) -> str:
+    """The stdout of the ``billiard`` command (the CLI's entry, in a fresh process)."""
+    done = subprocess.run(
+        [sys.executable, "-m", "billiard.cli", *args],
+        cwd=cwd,
+        capture_output=True,
+        text=True,
+        timeout=600,
+    )
+    assert done.returncode == 0, done.stderr
+    return done.stdout
+
+
+def test_readme_scene_example_prints_the_summaries_shown(tmp_path):
+    """The two summaries the README shows for its scene example are those the commands it
+    names print (less the wall-clock time and rate): `billiard run my-scene.toml`, 25,000
+    impacts, and the gentler drive whose ball only rolls."""
     text = README.read_text()
     scene = re.search(r"## Scene files\n\n```toml\n(.*?)```", text, re.S).group(1)
-    path = tmp_path / "my-scene.toml"
-    path.write_text(scene)
-    shown = re.search(r"the run prints[^`]*```\n(.*?)\n```", text, re.S).group(1)
+    (tmp_path / "my-scene.toml").write_text(scene)
+    command = re.search(r"Run it with `billiard (run my-scene\.toml)`", text).group(1).split()
+    shown = re.search(r"the run prints.*?```\n(.*?)\n```", text, re.S).group(1)
+    printed = _billiard(*command, "--no-plot", "--out", "thrown", cwd=tmp_path)
+    summary = printed.splitlines()[0]
+    assert _timeless(summary) != summary  # the time was there to leave out
+    assert _timeless(shown) == _timeless(summary)
 
-    def timeless(line: str) -> str:
-        return re.sub(r" in \S+ s \([\d,]+ impacts/s\)", "", line)
-
-    summary = simulate(load_scene(path)).summary()
-    assert timeless(shown) == timeless(summary)
-    assert timeless(summary) != summary  # the time was there to leave out
+    gentler = re.search(r"With a gentler drive[^`]*\(`(--set [^`]+)`", text).group(1).split()
+    shown = re.search(r"and says why:\n\n```\n(.*?)\n```", text, re.S).group(1)
+    printed = _billiard(*command, *gentler, "--no-plot", "--out", "rolls", cwd=tmp_path)
+    assert _timeless(shown) == _timeless(printed.splitlines()[0])
 
 
 def test_readme_plane_example_runs_and_needs_its_start(tmp_path):

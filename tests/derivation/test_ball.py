@@ -17,6 +17,7 @@ import pytest
 from billiard.generated import ball
 
 from billiard.geometry.curves import load_curve
+from tests.derivation import needs_generating_sympy
 
 M, R, K, G = 1.3028e-4, 1.55e-3, 0.4, 9.81
 
@@ -214,12 +215,14 @@ def test_nearest_point_polynomial_against_brute_force(name):
         assert best == pytest.approx(best_brute, abs=2e-9)
 
 
+@needs_generating_sympy
 def test_generated_modules_are_current():
     from billiard.derivation import build
 
     assert build.check() == []
 
 
+@needs_generating_sympy
 def test_check_detects_a_one_character_edit(tmp_path):
     from billiard.derivation import build
 
@@ -387,6 +390,7 @@ def test_derive_dir_problems_are_one_line(tmp_path, monkeypatch, capsys):
     assert f"cannot write the curve to {read_only}: Permission denied" in err[0]
 
 
+@needs_generating_sympy
 def test_derive_says_which_directory_it_acts_on(capsys, monkeypatch):
     from billiard.derivation import build
 

@@ -16,6 +16,7 @@ import pytest
 from billiard.generated import contact
 
 from billiard.geometry.curves import load_curve
+from tests.derivation import needs_generating_sympy
 
 M, R, G = 1.3028e-4, 1.55e-3, 9.81
 K = 2 / 5  # solid sphere
@@ -370,6 +371,7 @@ def test_user_curves_supply_the_third_derivative(tmp_path, monkeypatch):
 
 
 @pytest.mark.slow  # the whole derivation again (8 s); `derive --check` runs in test_derivation
+@needs_generating_sympy
 def test_check_detects_an_edit_of_the_contact_module(tmp_path):
     from billiard.derivation import build
 
