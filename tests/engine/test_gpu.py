@@ -3,7 +3,12 @@
 there and nowhere else) the device twin advanced by the ``advance`` kernel writes the
 rows of the CPU's ``run_chunk``, impact by impact, bit for bit (the simulator runs the
 kernels as Python on numpy floats); and :func:`available` says in one line why the
-backend cannot run."""
+backend cannot run.
+
+The twin reaches a curve's walls by branches on (function, wall)
+(:mod:`billiard.kernels.wallcall`): the wedge's walls are straight (f'' = 0 on both) and
+the parabola has one wall, so a curve with two curved walls of different curvature
+(:data:`CURVED`) is what sees a branch to the wrong wall's f, f' or f''."""
 
 from __future__ import annotations
 
@@ -23,23 +28,45 @@ from billiard.engine.simulation import Simulation
 from billiard.geometry.wall_functions import wall_functions
 from billiard.kernels import layout as L
 from billiard.kernels.loop import run_chunk
+from billiard.runfile.record import COLUMNS
 from billiard.scene.scene import load_scene, with_values
 
 #: impacts per trajectory
 IMPACTS = 40
-#: per scene, the trajectories: scene values changed (initial position, m; a curve
-#: parameter, which goes to the kernel per trajectory)
+#: two curved walls joined at a kink at x = 0 with different curvatures:
+#: f'' = 2 a + 6 c x on the right, 2 a - 6 c x on the left (1/m). Each wall's formula
+#: lies below the other wall for all x beyond the kink, so the container (the region above
+#: both formulas) is the curve's.
+CURVED = {
+    "boundary.curve": "a*x**2 + b*abs(x) + c*abs(x)**3 + 0.0063",
+    "boundary.parameters": {"a": 20.0, "b": 2.0, "c": 100.0},
+}
+#: per case, the built-in scene and the trajectories: scene values changed (initial
+#: position, m; a curve parameter, which goes to the kernel per trajectory)
 CASES = {
-    "wedge-6.6hz": [
-        {"initial.q1": -0.01, "initial.q2": 0.05},
-        {"initial.q1": 0.012, "initial.q2": 0.05},
-        {"initial.q1": 0.02, "initial.q2": 0.08, "boundary.parameters.b": 1.7},
-    ],
-    "parabola-5.4hz": [
-        {"initial.q1": 0.0, "initial.q2": 0.05},
-        {"initial.q1": -0.015, "initial.q2": 0.07},
-        {"initial.q1": 0.01, "initial.q2": 0.06, "boundary.parameters.a": 24.0},
-    ],
+    "wedge-6.6hz": (
+        "wedge-6.6hz",
+        [
+            {"initial.q1": -0.01, "initial.q2": 0.05},
+            {"initial.q1": 0.012, "initial.q2": 0.05},
+            {"initial.q1": 0.02, "initial.q2": 0.08, "boundary.parameters.b": 1.7},
+        ],
+    ),
+    "parabola-5.4hz": (
+        "parabola-5.4hz",
+        [
+            {"initial.q1": 0.0, "initial.q2": 0.05},
+            {"initial.q1": -0.015, "initial.q2": 0.07},
+            {"initial.q1": 0.01, "initial.q2": 0.06, "boundary.parameters.a": 24.0},
+        ],
+    ),
+    "two-curved-walls": (
+        "parabola-5.4hz",
+        [
+            {**CURVED, "initial.q1": -0.012, "initial.q2": 0.05},
+            {**CURVED, "initial.q1": 0.015, "initial.q2": 0.06, "boundary.parameters.c": 60.0},
+        ],
+    ),
 }
 
 _SIMULATED = """
@@ -50,8 +77,8 @@ from billiard.engine.simulation import Simulation
 from billiard.scene.scene import load_scene, with_values
 assert gpu.simulated() and gpu.available() is None
 cases, impacts, folder = json.loads(sys.argv[1]), int(sys.argv[2]), sys.argv[3]
-for name, changes in cases.items():
-    sims = [Simulation(with_values(load_scene(name), values)) for values in changes]
+for name, (scene, changes) in cases.items():
+    sims = [Simulation(with_values(load_scene(scene), values)) for values in changes]
     rows, ends, ctxs = gpu.run_rows_gpu(sims, impacts)
     np.savez(f"{folder}/{name}.npz", rows=rows, ends=ends, ctxs=ctxs)
 """
@@ -63,7 +90,8 @@ needs_numba_cuda = pytest.mark.skipif(
 
 
 def _sims(name: str) -> list[Simulation]:
-    return [Simulation(with_values(load_scene(name), values)) for values in CASES[name]]
+    scene, changes = CASES[name]
+    return [Simulation(with_values(load_scene(scene), values)) for values in changes]
 
 
 def _cpu_rows(sim: Simulation) -> tuple[np.ndarray, tuple[int, int], np.ndarray]:
@@ -78,6 +106,15 @@ def _cpu_rows(sim: Simulation) -> tuple[np.ndarray, tuple[int, int], np.ndarray]
 
 def _bits(a: np.ndarray) -> np.ndarray:
     return np.ascontiguousarray(a, dtype=np.float64).view(np.uint64)
+
+
+@pytest.fixture(autouse=True, scope="module")
+def billiard_home(tmp_path_factory):
+    """The curve with two curved walls is derived on first use into a temporary
+    BILLIARD_HOME (here and in the simulator's interpreter, which inherits it)."""
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setenv("BILLIARD_HOME", str(tmp_path_factory.mktemp("billiard_home")))
+        yield
 
 
 @pytest.fixture(scope="module")
@@ -99,6 +136,8 @@ def test_simulated_gpu_rows_are_the_cpu_rows(simulated, name):
     got = simulated[name]
     for i, sim in enumerate(_sims(name)):
         rows, ends, ctx = _cpu_rows(sim)
+        if name == "two-curved-walls":  # each trajectory takes both walls' branches
+            assert {0.0, 1.0} <= set(rows[:, COLUMNS.index("wall")]), i
         assert ends == (L.DONE, IMPACTS)
         assert tuple(got["ends"][i]) == ends
         for r in range(IMPACTS):  # impact by impact: the first that differs is named

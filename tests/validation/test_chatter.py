@@ -137,7 +137,10 @@ def test_a_shaken_table_lands_the_ball_at_the_accumulation_time_and_keeps_the_or
         if isinstance(record, ImpactRecord):
             impacts.append(record)
     lift = math.asin(1 / GAMMA) / W
-    assert phases[0].end == "lift-off" and phases[0].t_end == pytest.approx(lift, abs=1e-11)
+    assert phases[0].end == "lift-off"
+    print(f"[validation] chatter: first lift-off {phases[0].t_end - lift:+.1e} s")
+    # measured 0 here, 3.5e-16 s at Gamma 2.5 (test_contact.py): the same bound
+    assert abs(phases[0].t_end - lift) <= 3e-14
     # the engine leaves a wall at LIFT_OFF_SPEED (1e-6 m/s) along its normal, by design
     # (without it the ball lands 7.5e-7 s sooner)
     exact = accumulation(phases[0].t_end, LIFT_OFF_SPEED)
@@ -147,16 +150,23 @@ def test_a_shaken_table_lands_the_ball_at_the_accumulation_time_and_keeps_the_or
         f"exact accumulation {exact!r} s ({landed.t_start - exact:+.2g} s), "
         f"after {sum(1 for r in impacts if r.t < landed.t_start)} impacts"
     )
-    assert landed.t_start == pytest.approx(exact, abs=1e-9)
+    assert landed.t_start == pytest.approx(exact, abs=1e-9)  # measured -9.4e-11 s
     assert landed.t_settle == landed.t_start
     # it sticks: it moves with the table from the landing to the next lift-off, at
     # sin(w t) = 1 / Gamma one period on
     assert landed.mode == "roll" and landed.end == "lift-off"
-    assert landed.v2_start == pytest.approx(A * W * math.cos(W * landed.t_start), abs=1e-12)
-    assert landed.t_end == pytest.approx(lift + 1 / F, abs=1e-11)
+    speed = landed.v2_start - A * W * math.cos(W * landed.t_start)
+    second = landed.t_end - (lift + 1 / F)
     # period one: each later landing and lift-off is the one before, a period later
-    for before, after in zip(phases[1:], phases[2:], strict=False):
-        assert after.t_start - before.t_start == pytest.approx(1 / F, abs=1e-11)
-        assert after.t_end - before.t_end == pytest.approx(1 / F, abs=1e-11)
+    pairs = list(zip(phases[1:], phases[2:], strict=False))
+    shifts = [abs(b.t_start - a.t_start - 1 / F) for a, b in pairs]
+    shifts += [abs(b.t_end - a.t_end - 1 / F) for a, b in pairs]
+    print(
+        f"[validation] chatter: landing speed {speed:+.1e} m/s, second lift-off {second:+.1e} s, "
+        f"period {max(shifts):.1e} s"
+    )
+    assert abs(speed) <= 1e-14  # measured 1.5e-16 m/s
+    assert abs(second) <= 2e-12  # measured 2.0e-14 s
+    assert max(shifts) <= 1e-11  # measured 3.6e-13 s
     # and no run-away chatter: each landing follows a few tens of impacts
     assert len(impacts) < 40 * len(phases)

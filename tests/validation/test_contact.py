@@ -110,10 +110,12 @@ def test_down_a_straight_wall(theta, mu_s, mu_k, mode, accel):
     t = record.t_end - record.t_start
     dist, speed = along_wall(record, theta)
     assert t > 0.05
-    assert speed == pytest.approx(accel * t, rel=1e-9)
-    assert dist == pytest.approx(0.5 * accel * t * t, rel=1e-9)
+    errors = [speed / (accel * t) - 1, dist / (0.5 * accel * t * t) - 1]
     if mode == "roll":
-        assert record.omega_end == pytest.approx(speed / R, rel=1e-9)  # -v/r, v = -speed
+        errors.append(record.omega_end / (speed / R) - 1)  # -v/r, v = -speed
+    worst = max(abs(e) for e in errors)
+    print(f"[validation] down a wall, {mode} at {theta} rad: speed, distance, spin {worst:.1e}")
+    assert worst <= 4e-14  # measured 4.4e-16 (max over the 3 cases)
 
 
 def test_rolling_needs_enough_friction():
@@ -153,11 +155,15 @@ def test_small_oscillations_in_a_bowl(mu, factor):
     assert len(ups) == 100
     measured = (ups[-1] - ups[0]) / (len(ups) - 1)
     # amplitude 1e-4 m against rho = 0.05 m: the anharmonic shift is O((s0/rho)^2) = 4e-6
+    print(f"[validation] bowl, mu {mu}: period {measured / period - 1:+.2e} rel.")
+    # measured +1.02e-6 (both cases): the anharmonic shift, not an error of the engine
     assert measured == pytest.approx(period, rel=2e-5)
     energy = [row[6] for row in rows]
     swing = max(energy) - min(energy)
     # the oscillation's energy, m g s0^2 / (2 rho) (about), against the drift
-    assert swing < 1e-6 * 1.3028e-4 * G * s0 * s0 / (2 * rho)
+    oscillation = 1.3028e-4 * G * s0 * s0 / (2 * rho)
+    print(f"[validation] bowl, mu {mu}: energy swing {swing / oscillation:.2e} of its energy")
+    assert swing < 1e-6 * oscillation  # measured 5.5e-7 (max over the 2 cases)
 
 
 def test_rest_in_a_static_bowl_is_kept_cheaply(monkeypatch):
@@ -188,11 +194,13 @@ def test_chattering_on_a_floor_ends_at_the_geometric_sum():
         record = sim.step()
         assert isinstance(record, ImpactRecord)
         impacts.append(record)
-    assert impacts[0].t == pytest.approx(t0, rel=1e-12)
+    first = impacts[0].t / t0 - 1
     # landing: the last impact's rebound e |wn| is below contact.elastic_below
     assert impacts[-2].v2 > 0.01 >= impacts[-1].v2
-    settle = sim.state.contact[5]
-    assert settle == pytest.approx(t0 + 2 * e * v0 / (G * (1 - e)), rel=1e-12)
+    settle = sim.state.contact[5] / (t0 + 2 * e * v0 / (G * (1 - e))) - 1
+    print(f"[validation] floor: first impact {first:+.1e}, settle {settle:+.1e} rel.")
+    assert abs(first) <= 2e-13  # measured 2.4e-15
+    assert abs(settle) <= 1e-12  # measured 5.2e-14
     assert sim.step(until=10.0) is None  # then it rests: no impact, no lift-off
     assert sim.state.impacts == len(impacts)
 
@@ -228,7 +236,8 @@ def test_a_ball_resting_on_a_shaken_table_moves_with_it_at_the_cost_of_one_perio
     assert len(rows) == 20001
     q2_rest = 0.001 + R
     worst = max(abs(q2 - (q2_rest + amplitude * math.sin(w * t))) for t, _, q2, *_ in rows)
-    assert worst < 1e-12
+    print(f"[validation] resting on a shaken table: q2 {worst:.1e} m from the table's")
+    assert worst < 4e-17  # measured 4.3e-19 m, one ulp of q2
     assert len(calls) < 2_000  # 20 s at 20 Hz is 400 periods (56,000 calls); one is integrated
 
 
@@ -239,7 +248,9 @@ def test_a_shaken_table_throws_the_ball_where_it_falls_faster_than_g(gamma):
     assert sim.mode == "roll"
     record = sim.step()
     assert isinstance(record, ContactRecord) and record.end == "lift-off"
-    assert record.t_end == pytest.approx(math.asin(1 / gamma) / w, abs=1e-11)
+    error = record.t_end - math.asin(1 / gamma) / w
+    print(f"[validation] shaken table, Gamma {gamma}: lift-off {error:+.1e} s")
+    assert abs(error) <= 3e-14  # measured 0 (Gamma 1.2) and 3.5e-16 s (Gamma 2.5)
 
 
 def test_a_ball_resting_on_a_shaken_table_ends_an_unlimited_run():

@@ -61,7 +61,7 @@ def law(e, mu_s, mu_k):
 def test_impact_law_matches_the_closed_form_on_random_impacts():
     rng = np.random.default_rng(2024)
     regimes = set()
-    worst = 0.0
+    worst = worst_w = 0.0
     for _ in range(2000):
         z = rng.uniform(-1.3, 1.3)
         if rng.uniform() < 0.1:
@@ -85,14 +85,15 @@ def test_impact_law_matches_the_closed_form_on_random_impacts():
         want = np.array([ref[0], ref[1], R * ref[2], ref[3] / M, ref[4] / M])
         error = float(np.max(np.abs(got - want)) / scale)
         worst = max(worst, error)
-        assert error < 1e-13
+        assert error < 7e-14  # measured 7.6e-16 (the largest of the 2000)
         # the reported pre-impact contact velocity
-        assert out.wt == pytest.approx(vt + R * w, abs=1e-13 * (scale + abs(R * w)))
-        assert out.wn == pytest.approx(vn, abs=1e-13 * scale)
+        wt_err = abs(out.wt - (vt + R * w)) / (scale + abs(R * w))
+        worst_w = max(worst_w, wt_err, abs(out.wn - vn) / scale)
     print(
         f"[validation] impact law vs closed form, 2000 random impacts: largest error "
-        f"{worst:.1e} of the speed scale"
+        f"{worst:.1e} of the speed scale; contact velocity before it {worst_w:.1e}"
     )
+    assert worst_w < 3e-14  # measured 3.5e-16
     assert regimes == {"stick", "slip"}
 
 
@@ -207,8 +208,8 @@ def test_ball_thrown_onto_a_plane(case, tmp_path, monkeypatch):
     scene = thrown_scene(curve, q2_0, v1, v2, omega, **extra)
     row = {k: v[0] for k, v in simulate(scene, collisions=1).columns.items()}
     t, q1, q2 = first_contact_on_line(slope, q2_0, v1, v2)
-    assert row["t"] == pytest.approx(t, rel=1e-14)
-    assert (row["q1"], row["q2"]) == pytest.approx((q1, q2), abs=1e-15)
+    t_err = abs(row["t"] / t - 1)
+    q_err = max(abs(row["q1"] - q1), abs(row["q2"] - q2))
     vb1 = 0.0
     if drive is not None:
         w = 2 * math.pi * frequency
@@ -217,7 +218,16 @@ def test_ball_thrown_onto_a_plane(case, tmp_path, monkeypatch):
     ref = lab_impact(v1, v2 - G * t, omega, z, vb1, 0.0, 0.6, 0.5, 0.35)
     assert ref[5] == regime  # the case reaches the regime it is meant to test
     assert row["regime"] == ref[5]
-    assert (row["v1"], row["v2"]) == pytest.approx(ref[:2], rel=1e-12, abs=1e-14)
-    assert row["omega"] == pytest.approx(ref[2], rel=1e-12, abs=1e-10)
-    assert (row["Rt"], row["Rn"]) == pytest.approx(ref[3:5], rel=1e-12, abs=1e-18)
+    got = (row["v1"], row["v2"], row["omega"], row["Rt"], row["Rn"])
+    rel = max(abs(a - b) / abs(b) for a, b in zip(got, ref[:5], strict=True) if b != 0.0)
+    print(
+        f"[validation] thrown onto a plane, {case}: t {t_err:.1e} rel., q {q_err:.1e} m, "
+        f"v, omega, R {rel:.1e} rel., z {abs(row['z'] - z):.1e} rad"
+    )
+    # measured (max over the 8 cases): t 4.2e-15, q 1.9e-16 m, v, omega, R 3.3e-15
+    assert t_err <= 1e-14
+    assert q_err <= 1e-15
+    assert (row["v1"], row["v2"]) == pytest.approx(ref[:2], rel=3e-13, abs=1e-14)
+    assert row["omega"] == pytest.approx(ref[2], rel=3e-13, abs=1e-10)
+    assert (row["Rt"], row["Rn"]) == pytest.approx(ref[3:5], rel=3e-13, abs=1e-18)
     assert row["z"] == pytest.approx(z, abs=1e-15)

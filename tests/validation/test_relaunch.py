@@ -51,8 +51,9 @@ def test_a_ball_hopping_down_a_steep_wall_slides_at_coulombs_rate(elastic_below,
             relaunches.append((r.t, -(c * r.v1 + s * r.v2)))
     assert sim.counts["stick"] == 0 and len(relaunches) > 20
     (t0, v0), (t1, v1) = relaunches[3], relaunches[-1]
-    rate = (v1 - v0) / (t1 - t0)
-    assert rate == pytest.approx(G * (s - mu_k * c), rel=1e-12)
+    rate = (v1 - v0) / (t1 - t0) / (G * (s - mu_k * c)) - 1
+    print(f"[validation] relaunch, elastic_below {elastic_below}, mu_k {mu_k}: {rate:+.1e} rel.")
+    assert abs(rate) <= 2e-14  # measured 2.2e-16 (max over the 4 cases)
 
 
 def test_the_normal_impulse_of_a_sphere_does_not_depend_on_friction():
@@ -60,5 +61,6 @@ def test_the_normal_impulse_of_a_sphere_does_not_depend_on_friction():
     # same in the stick and slip maps, whatever the friction coefficient
     args = (0.3, -0.2, 40.0, 0.7, 0.05, -0.01, 1.3e-4, 1.55e-3, 0.4, 0.6)
     rn_stick = _ball.impact_stick(*args)[4]
-    for mu in (0.0, 0.3, 1.0):
-        assert _ball.impact_slip(*args, mu, 1.0)[4] == pytest.approx(rn_stick, rel=1e-14)
+    worst = max(abs(_ball.impact_slip(*args, mu, 1.0)[4] / rn_stick - 1) for mu in (0.0, 0.3, 1.0))
+    print(f"[validation] Rn of the slip map against the stick map: {worst:.1e} rel.")
+    assert worst <= 1e-14  # measured 0: the same Rn to the bit
