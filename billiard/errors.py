@@ -8,7 +8,7 @@ from __future__ import annotations
 
 from billiard.status import Status
 
-__all__ = ["BallAtRest", "GeometryError", "SimulationError"]
+__all__ = ["BallAtRest", "GeometryError", "SimulationError", "UnverifiedDataWarning"]
 
 
 class GeometryError(ValueError):
@@ -47,3 +47,10 @@ class BallAtRest(SimulationError):
             Status.AT_REST,
         )
         self.tau = tau
+
+
+class UnverifiedDataWarning(UserWarning):
+    """Files read without their checksums checked: a run folder without a readable
+    checkpoint or with one written before the checksums, a sweep folder written before
+    its ``checksums.json``. The message is one line; the command line prints it as
+    ``billiard: MESSAGE``."""

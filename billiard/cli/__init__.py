@@ -12,7 +12,9 @@ import argparse
 import atexit
 import gc
 import sys
-from collections.abc import Sequence
+import warnings
+from collections.abc import Callable, Sequence
+from typing import Any
 
 from billiard.cli import analyses, derive, export, run, study, sweep, view
 from billiard.cli.common import UserError, long_name_error
@@ -142,7 +144,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     parser = build_parser()
     args = parser.parse_args(argv)
     try:
-        return args.func(args)
+        with warnings.catch_warnings():
+            warnings.showwarning = _one_line_notices(warnings.showwarning)
+            return args.func(args)
     except Exception as exc:
         # a path given with a name too long for the file system fails wherever the
         # command first touches it: bad input, reported as such
@@ -155,6 +159,22 @@ def main(argv: Sequence[str] | None = None) -> int:
     except KeyboardInterrupt:
         print(f"billiard: interrupted; {_interrupted(args)}", file=sys.stderr)
         return 130
+
+
+def _one_line_notices(shown: Callable[..., None]) -> Callable[..., None]:
+    """``warnings.showwarning`` that shows billiard's own warnings (files read
+    unverified) as one line on stderr, like the other notices, and passes any other
+    warning to ``shown``."""
+
+    def show(message: Warning | str, category: type[Warning], *args: Any, **kwargs: Any) -> None:
+        from billiard.errors import UnverifiedDataWarning
+
+        if issubclass(category, UnverifiedDataWarning):
+            print(f"billiard: {message}", file=sys.stderr)
+        else:
+            shown(message, category, *args, **kwargs)
+
+    return show
 
 
 def _interrupted(args: argparse.Namespace) -> str:

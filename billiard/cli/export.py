@@ -10,6 +10,7 @@ from billiard.cli.common import UserError, check_output_folder
 
 
 def cmd_export(args: argparse.Namespace) -> int:
+    from billiard.run.verify import verify_run
     from billiard.runfile.npyfile import TABLES, export_csv
 
     folder = Path(args.dir)
@@ -26,6 +27,8 @@ def cmd_export(args: argparse.Namespace) -> int:
             f"export: {folder} holds no run ({first.npy_name} not found; "
             f"`billiard run SCENE --store npy --out {folder}` writes one)"
         )
+    # the binary files are the run's, as its checkpoint recorded them
+    verify_run(folder, absent_ok=True)
     out = Path(args.out) if args.out else folder
     check_output_folder(out, "--out")
     out.mkdir(parents=True, exist_ok=True)

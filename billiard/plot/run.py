@@ -27,6 +27,7 @@ from billiard.plot.maps import return_map, time_map
 from billiard.plot.phase import PHASE_CAPTION, phase_plot
 from billiard.plot.titles import scene_title
 from billiard.plot.trajectory import trajectory, window_rows
+from billiard.run.verify import verify_run
 from billiard.runfile.figure_files import (
     DEFAULT_DPI,
     DEFAULT_FORMAT,
@@ -70,12 +71,16 @@ def load_run(run_dir: str | os.PathLike[str]) -> tuple[dict[str, np.ndarray], Sc
     ``run_dir/scene.toml``.
 
     Raises:
-        RunDataError: a file is missing or malformed, or the CSV has no impacts.
+        RunDataError: a file is missing or malformed, or the CSV has no impacts, or
+            differs from what the run's checkpoint recorded
+            (:class:`~billiard.run.verify.DamagedRunError`).
         SceneError: the scene file is not a valid scene.
     """
     run_dir = Path(run_dir)
     if not run_dir.is_dir():
         raise RunDataError(f"{run_dir}: not a directory")
+    # the files are the run's, as its checkpoint recorded them
+    verify_run(run_dir, absent_ok=True)
     csv_path = data_file(run_dir)
     columns = read_collisions(csv_path)
     if columns["t"].size == 0:

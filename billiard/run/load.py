@@ -5,8 +5,9 @@ A folder written by ``billiard run`` (or ``simulate(..., out_dir=DIR)``) holds t
 resolved scene (``scene.toml``), the impacts (``collisions.npy`` or ``collisions.csv``),
 the checkpoint (``checkpoint.json``: how the run ended, its impact counts and final
 state) and, for some runs, the side tables ``contacts.csv`` and ``trajectory.csv``.
-:func:`open_run` reads the scene and the checkpoint, which are small, and leaves the
-tables on disk until they are asked for (``result.columns``, ``result.to_pandas()``...).
+:func:`open_run` reads the scene and the checkpoint, which are small, checks the tables
+against the checkpoint's checksums (:mod:`billiard.run.verify`), and leaves them on disk
+until they are asked for (``result.columns``, ``result.to_pandas()``...).
 """
 
 from __future__ import annotations
@@ -17,16 +18,22 @@ from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
 
-from billiard.run.persist import CHECKPOINT_NAME, CSV_NAME, SCENE_NAME
+from billiard.run.persist import CSV_NAME, SCENE_NAME
 from billiard.run.result import Result, RunFile
-from billiard.runfile.checkpoint import CheckpointError, read_checkpoint
+from billiard.run.verify import DamagedRunError, table_file, verify_run
 from billiard.runfile.folder import COLLISIONS_NPY, data_file, side_file
 from billiard.runfile.record import RunDataError
 from billiard.scene.scene import scene_from_toml
 from billiard.scene.userfile import MAX_SCENE_BYTES, FileRefused, read_limited
 from billiard.status import Status
 
-__all__ = ["NPY_NAME", "NotARunError", "impact_file", "open_run"]
+__all__ = [
+    "NPY_NAME",
+    "DamagedRunError",
+    "NotARunError",
+    "impact_file",
+    "open_run",
+]
 
 #: The binary impact table; read in preference to ``collisions.csv`` when both are there.
 NPY_NAME = COLLISIONS_NPY
@@ -49,19 +56,27 @@ def open_run(run_dir: str | os.PathLike[str]) -> Result:
     that ``simulate(scene, out_dir=run_dir)`` returned: the same scene, status, stop
     reason, impact counts, final time (s), motion state and tables, value for value.
 
-    Only ``scene.toml`` and ``checkpoint.json`` are read here; the impact table and the
-    side tables are read on first use (``result.columns``, ``result.contacts``,
-    ``result.trajectory``, ``result.to_pandas()``...). ``result.wall_time`` is NaN (a
-    folder does not keep it).
+    Every data file is checked against the checkpoint first (:mod:`billiard.run.verify`:
+    its format, and the CRC-32 of the bytes the checkpoint recorded; for a run that
+    ended, that nothing follows them): one read of each file, about 0.1 s for 10^6
+    impacts stored binary, 0.3 s as CSV. The tables are read on first use
+    (``result.columns``, ``result.contacts``, ``result.trajectory``,
+    ``result.to_pandas()``...). ``result.wall_time`` is NaN (a folder does not keep it).
 
     A run that has not ended (interrupted, still being written, or killed) opens too,
     with the rows on disk: its ``status`` is None and ``unfinished`` says why
-    (``billiard run --resume DIR`` continues it). So does a folder without a readable
-    checkpoint (``unfinished = "unknown"``, no impact counts).
+    (``billiard run --resume DIR`` continues it); rows after its last checkpoint are not
+    verified. So does a folder without a readable checkpoint (``unfinished =
+    "unknown"``, no impact counts), with an :class:`~billiard.run.verify.UnverifiedRunWarning`
+    saying that its files are not verified, and a run whose checkpoint predates the
+    checksums (version 2), with the same warning.
 
     Raises:
         NotARunError: ``run_dir`` is not a folder, or holds no ``collisions.npy`` or
             ``collisions.csv``, or no ``scene.toml``.
+        DamagedRunError: a data file is missing, of another format than its name says,
+            or differs from what the checkpoint recorded (a
+            :class:`~billiard.runfile.record.RunDataError`; one line naming the file).
         SceneError: ``scene.toml`` is not a valid scene.
     """
     out = Path(run_dir)
@@ -75,18 +90,22 @@ def open_run(run_dir: str | os.PathLike[str]) -> Result:
             f"(`billiard run SCENE --out {out}` writes one)"
         )
     scene = _scene(out / SCENE_NAME)
-    try:
-        checkpoint: dict[str, Any] | None = read_checkpoint(out / CHECKPOINT_NAME)
-    except CheckpointError:
-        checkpoint = None  # the tables are still there to read: only the outcome is lost
-    # the side tables are in the impact table's format (contacts.npy beside collisions.npy)
-    sides = {name: side_file(out, name) for name in ("contacts", "trajectory")}
-    if checkpoint is None:
+    verified = verify_run(out)
+    if verified is None:
+        # the side tables are in the impact table's format (contacts.npy beside
+        # collisions.npy)
+        sides = {name: side_file(out, name) for name in ("contacts", "trajectory")}
         return Result(
             scene, RunFile(table, None), None, None, math.nan, {}, math.nan,
             unfinished="unknown", **sides,
         )  # fmt: skip
-    return _from_checkpoint(scene, table, checkpoint, sides)
+    checkpoint, files = verified
+    # the side tables the run wrote and the folder still has
+    sides = {}
+    for name in ("contacts", "trajectory"):
+        path = out / table_file(name, files.store)
+        sides[name] = path if name in files.side_sizes and path.is_file() else None
+    return _from_checkpoint(scene, out / table_file("collisions", files.store), checkpoint, sides)
 
 
 def _scene(path: Path) -> Any:

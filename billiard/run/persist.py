@@ -57,18 +57,27 @@ from billiard.run.output_size import (
 from billiard.run.result import Result, RunFile
 from billiard.run.resume_checks import check_state
 from billiard.run.store import choose_store
+from billiard.run.verify import (
+    UNVERIFIED,
+    Recorded,
+    recorded,
+    table_file,
+    verify_files,
+    verify_sides,
+)
 from billiard.runfile.checkpoint import (
     CheckpointError,
     read_checkpoint,
     write_checkpoint,
     write_text_atomic,
 )
-from billiard.runfile.csvfile import _open_locked, is_crc32
+from billiard.runfile.csvfile import _open_locked
+from billiard.runfile.folder import CHECKPOINT_JSON
 from billiard.runfile.npyfile import COLLISIONS, CONTACTS, TABLES, TRAJECTORY
-from billiard.runfile.npystream import NpyMark, NpyRecorder, SideNpy, check_side_npy
+from billiard.runfile.npystream import NpyMark, NpyRecorder, SideNpy
 from billiard.runfile.record import CONTACT_COLUMNS, TRAJECTORY_COLUMNS
-from billiard.runfile.sidecsv import SideCsv, check_side
-from billiard.runfile.stream import CsvMark, CsvRecorder, RowMismatchError, RunBusyError, Truncation
+from billiard.runfile.sidecsv import SideCsv
+from billiard.runfile.stream import CsvRecorder, RowMismatchError, RunBusyError, Truncation
 from billiard.runfile.write_error import RunWriteError
 from billiard.scene.scene import scene_from_toml, scene_to_toml
 from billiard.scene.spec import check_collisions
@@ -89,7 +98,7 @@ __all__ = [
 CSV_NAME = "collisions.csv"
 NPY_NAME = COLLISIONS.npy_name
 SCENE_NAME = "scene.toml"
-CHECKPOINT_NAME = "checkpoint.json"
+CHECKPOINT_NAME = CHECKPOINT_JSON
 
 OnRecord = Callable[[int], None]
 Stream = CsvRecorder | NpyRecorder
@@ -101,14 +110,13 @@ def _store_of(stream: Stream) -> str:
 
 def _data_name(store: str) -> str:
     """The impacts' file of a run stored as ``store``."""
-    return NPY_NAME if store == "npy" else CSV_NAME
+    return table_file("collisions", store)
 
 
 def _side_name(name: str, store: str) -> str:
     """The file of the side table ``name`` (``contacts``, ``trajectory``) of a run
     stored as ``store``."""
-    table = CONTACTS if name == "contacts" else TRAJECTORY
-    return table.npy_name if store == "npy" else table.csv_name
+    return table_file(name, store)
 
 
 def _drop_other_store(out: Path, store: str) -> None:
@@ -226,21 +234,15 @@ def resume(
     data = read_checkpoint(checkpoint_path)
     try:
         status = data["status"]
-        store = data.get("store", "csv")
-        if store not in ("csv", "npy"):
-            raise CheckpointError(f"its store {store!r} is neither csv nor npy")
-        mark: CsvMark | NpyMark = (
-            NpyMark.from_dict(data["npy"]) if store == "npy" else CsvMark.from_dict(data["csv"])
-        )
+        files = recorded(data)
+        store, mark = files.store, files.mark
         fingerprint = data["scene_sha256"]
         engine = data["engine"]
         stop_reason = data.get("stop_reason")
         stop_status = Status(data.get("stop_status", Status.COMPLETE))
         sample = _sample_interval(data.get("sample"))
-        side_sizes = {str(k): int(v) for k, v in data.get("side", {}).items()}
-        side_crcs = _side_crcs(data.get("side_crc32", {}), side_sizes)
+        side_sizes, side_crcs = files.side_sizes, files.side_crcs
         scene_file_sha256 = data.get("scene_toml_sha256")
-        checked = data["version"] >= 3  # earlier ones have neither checksum
     except CheckpointError as exc:  # first: it is a ValueError too
         raise CheckpointError(f"{checkpoint_path}: {exc}") from None
     except (KeyError, TypeError, ValueError):
@@ -288,6 +290,14 @@ def resume(
             raise CheckpointError(
                 f"the run in {out} already has {rows} impacts; to extend it, ask for more"
             )
+        # a finished run is read as it is: its files must be the ones its checkpoint
+        # describes, whole
+        try:
+            verify_files(out, files)
+        except CheckpointError as exc:
+            raise type(exc)(f"{exc}; {_restart_hint(out)}") from None
+        if not files.checked and notify is not None:
+            notify(f"{out}: {UNVERIFIED}")
         final_time = math.nan
         with contextlib.suppress(CheckpointError):
             last = EngineState.from_dict(engine, COLLAPSE_COUNT + 1)
@@ -323,7 +333,7 @@ def resume(
         check_state(state, sim, rows=rows, sample=sample, regimes=tuple(sim.impact.regimes))
     except CheckpointError as exc:
         raise CheckpointError(f"{checkpoint_path}: {exc}") from None
-    _check_sides(out, side_sizes, side_crcs, state.samples, store)
+    _check_sides(out, files, state.samples)
     sim.resolved_scene(total)  # validates the new total
     samples = _samples(sim, total, state.ball.t, state.impacts, allow_large)
     try:
@@ -346,11 +356,8 @@ def resume(
         if cut.partial_bytes:
             what = "a row cut short" if store == "npy" else "an unterminated last line"
             notes.append(f"dropped {what} ({cut.partial_bytes} bytes)")
-        if not checked:
-            notes.append(
-                "its checkpoint is of an earlier version, without the checksums of the "
-                "rows before it: they are not checked"
-            )
+        if not files.checked:
+            notes.append(UNVERIFIED)
         note = f"; {'; '.join(notes)}" if notes else ""
         notify(f"resuming {out} after impact {rows} of {total}{note}")
     return _continue(
@@ -473,37 +480,16 @@ def _samples(
     return estimate
 
 
-def _side_crcs(data: Any, sizes: Mapping[str, int]) -> dict[str, int | None]:
-    """The checkpoint's CRC-32 of each side file (None where it has none)."""
-    if not isinstance(data, Mapping) or not set(data) <= set(sizes):
-        raise CheckpointError("its 'side_crc32' entry is malformed")
-    crcs = {name: data.get(name) for name in sizes}
-    if not all(crc is None or is_crc32(crc) for crc in crcs.values()):
-        raise CheckpointError("its 'side_crc32' entry is malformed")
-    return crcs
-
-
-def _check_sides(
-    out: Path,
-    sizes: Mapping[str, int],
-    crcs: Mapping[str, int | None],
-    samples: int,
-    store: str = "csv",
-) -> None:
+def _check_sides(out: Path, files: Recorded, samples: int) -> None:
     """Check the side files' rows before the checkpoint (unchanged, and as many samples
     in trajectory.csv as the engine state made) before anything is written."""
-    for name, size in sizes.items():
-        path = out / _side_name(name, store)
-        if store == "npy":
-            table = CONTACTS if name == "contacts" else TRAJECTORY
-            rows = check_side_npy(path, table, size, crcs.get(name))
-        else:
-            rows = check_side(path, size, crcs.get(name))
-        if name == "trajectory" and rows != samples:
-            raise CheckpointError(
-                f"{path} holds {rows} samples before the checkpoint, its engine state "
-                f"says {samples} (was the file edited?)"
-            )
+    rows = verify_sides(out, files, whole=False)
+    if "trajectory" in rows and rows["trajectory"] != samples:
+        path = out / _side_name("trajectory", files.store)
+        raise CheckpointError(
+            f"{path} holds {rows['trajectory']} samples before the checkpoint, its engine "
+            f"state says {samples} (was the file edited?)"
+        )
 
 
 def _sha256(data: bytes) -> str:
@@ -586,6 +572,15 @@ def _run_streamed(
             # only a stopped run can get here (a fault left a memory non-finite); its
             # checkpoint then records the stop without a state to continue from
             engine = None
+        side_bytes = {name: opened.flush() for name, opened in sides.items()}
+        side_crc32 = {name: opened.crc32 for name, opened in sides.items()}
+        ends: dict[str, Any] = {}
+        if status != "running":
+            # the last checkpoint: the phase the end cut goes after the sizes a resume
+            # cuts back to, and the whole files' lengths and CRC-32s let a reader check
+            # every byte of them (billiard.run.verify)
+            write_cut()
+            ends = {"side_end": {n: [o.flush(), o.crc32] for n, o in sides.items()}}
         write_checkpoint(
             checkpoint_path,
             {
@@ -599,8 +594,9 @@ def _run_streamed(
                 **({"csv": mark.as_dict()} if store == "csv" else {}),
                 "engine": engine,
                 "sample": sim.sample_dt,
-                "side": {name: opened.flush() for name, opened in sides.items()},
-                "side_crc32": {name: opened.crc32 for name, opened in sides.items()},
+                "side": side_bytes,
+                "side_crc32": side_crc32,
+                **ends,
                 "scene_toml_sha256": scene_file_sha256,
                 **({"outcome": _outcome(sim)} if end else {}),
             },

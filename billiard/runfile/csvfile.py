@@ -7,7 +7,7 @@ from __future__ import annotations
 
 import os
 import zlib
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -20,7 +20,7 @@ except ImportError:  # pragma: no cover
     fcntl = None  # type: ignore[assignment]
 
 
-__all__ = ["CsvMark", "RowMismatchError", "RunBusyError", "Truncation"]
+__all__ = ["CsvMark", "RowMismatchError", "RunBusyError", "Truncation", "crc32_range"]
 
 
 @dataclass(frozen=True)
@@ -71,15 +71,33 @@ def prefix_crc32(fd: int, size: int) -> tuple[int, int]:
     """(CRC-32, number of line ends) of the first ``size`` bytes of the open file ``fd``
     (fewer when the file is shorter), read in chunks: a checkpoint's check of what a
     file holds before it."""
-    crc, lines, offset = 0, 0, 0
-    while offset < size:
-        chunk = _read_at(fd, min(_SCAN_CHUNK, size - offset), offset)
+    lines = 0
+
+    def count(chunk: bytes) -> None:
+        nonlocal lines
+        lines += chunk.count(b"\n")
+
+    crc = crc32_range(fd, 0, size, each=count)
+    return crc, lines
+
+
+def crc32_range(
+    fd: int, start: int, stop: int, crc: int = 0, each: Callable[[bytes], object] | None = None
+) -> int:
+    """The CRC-32 ``crc`` continued over the bytes ``start .. stop`` of the open file
+    ``fd`` (fewer when the file is shorter), read in chunks of 1 MiB (``each`` is given
+    every chunk too). A running CRC-32 continues from its value, so a checkpoint's
+    checksum of a file that grows by appending is extended without reading it again."""
+    offset = start
+    while offset < stop:
+        chunk = _read_at(fd, min(_SCAN_CHUNK, stop - offset), offset)
         if not chunk:
             break
         crc = zlib.crc32(chunk, crc)
-        lines += chunk.count(b"\n")
+        if each is not None:
+            each(chunk)
         offset += len(chunk)
-    return crc, lines
+    return crc
 
 
 @dataclass(frozen=True)

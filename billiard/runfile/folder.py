@@ -7,6 +7,7 @@ import os
 from pathlib import Path
 
 __all__ = [
+    "CHECKPOINT_JSON",
     "COLLISIONS_CSV",
     "COLLISIONS_NPY",
     "FIGURE_NAMES",
@@ -18,6 +19,8 @@ __all__ = [
 #: The file of a run's impacts: CSV text, or typed binary rows (billiard.runfile.npyfile).
 COLLISIONS_CSV = "collisions.csv"
 COLLISIONS_NPY = "collisions.npy"
+#: The checkpoint of a run: where its rows end, their checksums, the engine state.
+CHECKPOINT_JSON = "checkpoint.json"
 
 #: Figures written by :func:`billiard.plot.plot_run`, in order.
 FIGURE_NAMES: tuple[str, ...] = (

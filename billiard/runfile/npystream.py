@@ -38,6 +38,7 @@ from billiard.runfile.csvfile import (
     _read_at,
     _ShortWrite,
     _write_all,
+    crc32_range,
     is_crc32,
 )
 from billiard.runfile.npyfile import (
@@ -53,14 +54,13 @@ from billiard.runfile.npyfile import (
 )
 from billiard.runfile.rows import NCOL, row_of
 
-__all__ = ["NpyMark", "NpyRecorder", "SideNpy", "check_side_npy"]
+__all__ = ["NpyMark", "NpyRecorder", "SideNpy", "check_mark", "check_side_npy"]
 
 #: Wall-clock seconds between flushes of a streamed file (when it flushes by itself).
 FLUSH_INTERVAL = 1.0
 #: Bytes of rows collected before they are written, synced or not, whatever the time
 #: since the last flush (a compiled run makes hundreds of thousands of rows a second).
 SPILL_BYTES = 1 << 22
-_CRC_CHUNK = 1 << 20
 
 
 @dataclass(frozen=True)
@@ -92,18 +92,6 @@ def _is_count(value: Any) -> bool:
     return isinstance(value, int) and not isinstance(value, bool) and value >= 0
 
 
-def _rows_crc32(fd: int, start: int, stop: int) -> int:
-    """CRC-32 of the bytes ``start .. stop`` of the open file ``fd``, read in chunks."""
-    crc, offset = 0, start
-    while offset < stop:
-        chunk = _read_at(fd, min(_CRC_CHUNK, stop - offset), offset)
-        if not chunk:
-            break
-        crc = zlib.crc32(chunk, crc)
-        offset += len(chunk)
-    return crc
-
-
 def _check_header(path: Path, head: bytes, table: Table) -> None:
     """Refuse a file whose header is not that of ``table``'s binary file."""
     try:
@@ -113,6 +101,60 @@ def _check_header(path: Path, head: bytes, table: Table) -> None:
     if dtype != table.dtype or offset != header_size(table.dtype):
         raise CheckpointError(
             f"{path} does not start with the header of a binary {table.name} file"
+        )
+
+
+def _check_place(path: Path, mark: NpyMark) -> None:
+    """Refuse a mark that is not the end of a row of ``collisions.npy``."""
+    if mark.size != header_size(COLLISIONS.dtype) + mark.rows * COLLISIONS.dtype.itemsize:
+        raise CheckpointError(
+            f"{path}: the checkpoint's place ({mark.size} bytes) is not the end of its "
+            f"{mark.rows} impacts"
+        )
+
+
+def check_mark(fd: int, path: Path, mark: NpyMark, *, whole: bool = False) -> None:
+    """Check that the binary impact file open as ``fd`` holds what ``mark`` describes:
+    the header of ``collisions.npy``, at least the mark's bytes, and the CRC-32 of its
+    rows before the mark; with ``whole`` (the last checkpoint of a run that ended), also
+    nothing after them and a header that counts them. Nothing is changed.
+
+    Raises:
+        CheckpointError: the file differs from what the mark describes (one line naming
+            ``path`` and what differs).
+    """
+    _check_place(path, mark)
+    head_size = header_size(COLLISIONS.dtype)
+    head = _read_at(fd, head_size, 0)
+    _check_header(path, head, COLLISIONS)
+    size = os.fstat(fd).st_size
+    if size < mark.size:
+        raise CheckpointError(
+            f"{path} holds {size} bytes, fewer than the {mark.size} bytes of the "
+            f"{mark.rows} impacts the checkpoint describes (was it replaced?)"
+        )
+    if crc32_range(fd, head_size, mark.size) != mark.crc32:
+        raise CheckpointError(
+            f"{path} does not match the checkpoint (its first {mark.rows} impacts "
+            f"were changed since: their CRC-32 differs; was the file edited?)"
+        )
+    if whole:
+        _check_end(path, head, size, mark.size, mark.rows, "impacts")
+
+
+def _check_end(path: Path, head: bytes, size: int, end: int, rows: int, what: str) -> None:
+    """Refuse a finished binary file that goes on after its last checkpointed byte
+    ``end`` (of ``rows`` rows) or whose header counts other rows."""
+    if size > end:
+        raise CheckpointError(
+            f"{path} holds {size - end} bytes after the {rows} {what} of the finished "
+            f"run its checkpoint describes (was the file edited?)"
+        )
+    counted = read_header(head)[1]
+    if counted != rows:
+        raise CheckpointError(
+            f"{path}: its header counts {counted} rows, its checkpoint {rows} {what} "
+            f"(was the file edited?)"
         )
 
 
@@ -218,27 +260,12 @@ class NpyRecorder:
             raise CheckpointError(
                 f"{path} is missing" if not path.exists() else f"{path} is not a file"
             )
-        head_size = header_size(COLLISIONS.dtype)
         itemsize = COLLISIONS.dtype.itemsize
-        if mark.size != head_size + mark.rows * itemsize:
-            raise CheckpointError(
-                f"{path}: the checkpoint's place ({mark.size} bytes) is not the end of its "
-                f"{mark.rows} impacts"
-            )
+        _check_place(path, mark)
         fd = _open_locked(path)
         try:
+            check_mark(fd, path, mark)
             size = os.fstat(fd).st_size
-            _check_header(path, _read_at(fd, head_size, 0), COLLISIONS)
-            if size < mark.size:
-                raise CheckpointError(
-                    f"{path} holds {size} bytes, fewer than the {mark.size} bytes of the "
-                    f"{mark.rows} impacts the checkpoint describes (was it replaced?)"
-                )
-            if _rows_crc32(fd, head_size, mark.size) != mark.crc32:
-                raise CheckpointError(
-                    f"{path} does not match the checkpoint (its first {mark.rows} impacts "
-                    f"were changed since: their CRC-32 differs; was the file edited?)"
-                )
             rows, partial = divmod(size - mark.size, itemsize)
             if not rows:
                 _cut(fd, mark, durable)
@@ -464,7 +491,7 @@ class SideNpy:
             if os.fstat(fd).st_size < size or (size - self._head) % table.dtype.itemsize:
                 self._file.close()
                 raise CheckpointError(f"{self.path} is shorter than its checkpoint says")
-            self.crc32 = _rows_crc32(fd, self._head, size) if crc32 is None else crc32
+            self.crc32 = crc32_range(fd, self._head, size) if crc32 is None else crc32
             self.rows = (size - self._head) // table.dtype.itemsize
             self._file.truncate(size)
             os.pwrite(fd, header_bytes(table.dtype, self.rows), 0)
@@ -504,33 +531,56 @@ class SideNpy:
             self._file.close()
 
 
-def check_side_npy(path: Path, table: Table, size: int, crc32: int | None) -> int:
-    """Check, before a run resumes, that the binary side file ``path`` still holds the
-    ``size`` bytes its checkpoint recorded, unchanged (the CRC-32 of its rows is
-    ``crc32``), without changing it.
+def check_side_npy(
+    path: Path,
+    table: Table,
+    size: int,
+    crc32: int | None,
+    end: tuple[int, int] | None = None,
+) -> int:
+    """Check that the binary side file ``path`` still holds the ``size`` bytes its
+    checkpoint recorded, unchanged (the CRC-32 of its rows is ``crc32``), without
+    changing it: before a run resumes, and when a run is opened. ``end`` (the last
+    checkpoint of a run that ended): the file's whole length and the CRC-32 of all its
+    rows, the phase its end cut included; the file must end there, its header counting
+    them.
 
     Returns:
-        The number of rows in those bytes.
+        The number of rows in the first ``size`` bytes.
 
     Raises:
         CheckpointError: the file is missing, not a regular file, not a binary file of
-            ``table``, shorter than ``size``, or its rows before it were changed.
+            ``table``, shorter than ``size``, or its rows before it were changed; with
+            ``end``, it differs after ``size`` or goes on after ``end``.
     """
     fd = open_checked(path)
-    head = header_size(table.dtype)
+    head_size = header_size(table.dtype)
     try:
-        _check_header(path, _read_at(fd, head, 0), table)
-        if os.fstat(fd).st_size < size or size < head:
+        head = _read_at(fd, head_size, 0)
+        _check_header(path, head, table)
+        length = os.fstat(fd).st_size
+        if length < size or size < head_size:
             raise CheckpointError(f"{path} is shorter than its checkpoint says")
-        rows, rest = divmod(size - head, table.dtype.itemsize)
+        rows, rest = divmod(size - head_size, table.dtype.itemsize)
         if rest:
             raise CheckpointError(f"{path}: the checkpoint's size is not the end of a row")
-        crc = _rows_crc32(fd, head, size)
+        crc = crc32_range(fd, head_size, size)
+        if crc32 is not None and crc != crc32:
+            raise CheckpointError(
+                f"{path} does not match the checkpoint (its rows before it were changed "
+                f"since: their CRC-32 differs; was the file edited?)"
+            )
+        if end is not None:
+            stop, final = end
+            total, rest = divmod(stop - head_size, table.dtype.itemsize)
+            if rest or stop < size or length < stop:
+                raise CheckpointError(f"{path} is shorter than its checkpoint says")
+            if crc32_range(fd, size, stop, crc) != final:
+                raise CheckpointError(
+                    f"{path} does not match the checkpoint (its last rows were changed "
+                    f"since: their CRC-32 differs; was the file edited?)"
+                )
+            _check_end(path, head, length, stop, total, "rows")
     finally:
         os.close(fd)
-    if crc32 is not None and crc != crc32:
-        raise CheckpointError(
-            f"{path} does not match the checkpoint (its rows before it were changed "
-            f"since: their CRC-32 differs; was the file edited?)"
-        )
     return rows

@@ -16,7 +16,7 @@ from typing import Any
 import numpy as np
 
 from billiard.runfile.checkpoint import CheckpointError, open_checked
-from billiard.runfile.csvfile import prefix_crc32
+from billiard.runfile.csvfile import crc32_range, prefix_crc32
 from billiard.runfile.record import format_field
 from billiard.scene.userfile import read_limited
 
@@ -102,31 +102,48 @@ class SideCsv:
             self._file.close()
 
 
-def check_side(path: Path, size: int, crc32: int | None) -> int:
-    """Check, before a run resumes, that the side file ``path`` still holds the
-    ``size`` bytes its checkpoint recorded, unchanged (their CRC-32 is ``crc32``; None:
-    not recorded, by an earlier version), without changing it.
+def check_side(path: Path, size: int, crc32: int | None, end: tuple[int, int] | None = None) -> int:
+    """Check that the side file ``path`` still holds the ``size`` bytes its checkpoint
+    recorded, unchanged (their CRC-32 is ``crc32``; None: not recorded, by an earlier
+    version), without changing it: before a run resumes, and when a run is opened.
+    ``end`` (the last checkpoint of a run that ended): the file's whole length and the
+    CRC-32 of all of it, the phase its end cut included; the file must end there.
 
     Returns:
-        The number of rows (line ends after the header's) in those bytes.
+        The number of rows (line ends after the header's) in the first ``size`` bytes.
 
     Raises:
         CheckpointError: the file is missing, not a regular file, shorter than ``size``,
-            or its first ``size`` bytes were changed.
+            or its first ``size`` bytes were changed; with ``end``, it differs after
+            ``size`` or goes on after ``end``.
     """
     fd = open_checked(path)
     try:
-        info = os.fstat(fd)
-        if info.st_size < size:
+        length = os.fstat(fd).st_size
+        if length < size:
             raise CheckpointError(f"{path} is shorter than its checkpoint says")
         crc, lines = prefix_crc32(fd, size)
+        if crc32 is not None and crc != crc32:
+            raise CheckpointError(
+                f"{path} does not match the checkpoint (its rows before it were changed "
+                f"since: their CRC-32 differs; was the file edited?)"
+            )
+        if end is not None:
+            stop, final = end
+            if stop < size or length < stop:
+                raise CheckpointError(f"{path} is shorter than its checkpoint says")
+            if crc32_range(fd, size, stop, crc) != final:
+                raise CheckpointError(
+                    f"{path} does not match the checkpoint (its last rows were changed "
+                    f"since: their CRC-32 differs; was the file edited?)"
+                )
+            if length > stop:
+                raise CheckpointError(
+                    f"{path} holds {length - stop} bytes after the rows of the finished "
+                    f"run its checkpoint describes (was the file edited?)"
+                )
     finally:
         os.close(fd)
-    if crc32 is not None and crc != crc32:
-        raise CheckpointError(
-            f"{path} does not match the checkpoint (its rows before it were changed "
-            f"since: their CRC-32 differs; was the file edited?)"
-        )
     return lines - 1
 
 

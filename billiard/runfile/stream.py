@@ -55,7 +55,14 @@ from billiard.runfile.record import (
 )
 from billiard.runfile.rows import format_rows_bytes
 
-__all__ = ["CsvMark", "CsvRecorder", "RowMismatchError", "RunBusyError", "Truncation"]
+__all__ = [
+    "CsvMark",
+    "CsvRecorder",
+    "RowMismatchError",
+    "RunBusyError",
+    "Truncation",
+    "check_mark",
+]
 
 #: Wall-clock seconds between flushes of a streamed file.
 FLUSH_INTERVAL = 1.0
@@ -196,41 +203,12 @@ class CsvRecorder:
             raise CheckpointError(
                 f"{path} is missing" if not path.exists() else f"{path} is not a file"
             )
-        line = mark.last_line.encode()
         line_end = "\r\n" if mark.last_line.endswith("\r\n") else "\n"
-        header = header_line(columns, line_end).encode()
         fd = _open_locked(path)
         check: BinaryIO | None = None
         try:
+            mark = check_mark(fd, path, mark, columns)
             size = os.fstat(fd).st_size
-            if size < mark.size:
-                raise CheckpointError(
-                    f"{path} holds {size} bytes, fewer than the {mark.size} bytes of the "
-                    f"{mark.rows} impacts the checkpoint describes (was it replaced?)"
-                )
-            start = _read_at(fd, len(header), 0)
-            at_mark = b""
-            if mark.size >= max(len(line), len(header)):
-                at_mark = _read_at(fd, len(line), mark.size - len(line))
-            if start != header or at_mark != line:
-                raise CheckpointError(
-                    f"{path} does not match the checkpoint (impact {mark.rows} is not "
-                    f"where the checkpoint says; was the file edited or replaced?)"
-                )
-            # everything before the mark, byte for byte: its checksum (one byte edited in
-            # the middle leaves the mark's line in place) and its rows
-            crc, lines = prefix_crc32(fd, mark.size)
-            if mark.crc32 is not None and crc != mark.crc32:
-                raise CheckpointError(
-                    f"{path} does not match the checkpoint (its first {mark.rows} impacts "
-                    f"were changed since: their CRC-32 differs; was the file edited?)"
-                )
-            if lines != mark.rows + 1:
-                raise CheckpointError(
-                    f"{path} does not match the checkpoint ({lines - 1} rows before the "
-                    f"checkpoint's place, which follows impact {mark.rows}; was the file edited?)"
-                )
-            mark = dataclasses.replace(mark, crc32=crc)
             rows, whole = _scan_rows(fd, mark.size, size)
             if rows:
                 check = open(path, "rb")  # noqa: SIM115 - closed by the recorder
@@ -486,3 +464,57 @@ class CsvRecorder:
             self.flush()
         if Path(path).resolve() != self.path.resolve():
             shutil.copyfile(self.path, path)
+
+
+def check_mark(
+    fd: int, path: Path, mark: CsvMark, columns: Sequence[str] = COLUMNS, *, whole: bool = False
+) -> CsvMark:
+    """Check that the CSV run file open as ``fd`` holds what ``mark`` describes: at least
+    its bytes, the header, the mark's last line where the mark says, its rows before it,
+    and their CRC-32 (when the mark has one); with ``whole`` (the last checkpoint of a
+    run that ended), also nothing after them. Nothing is changed.
+
+    Returns:
+        ``mark`` with the CRC-32 of the bytes before it (also where it had none).
+
+    Raises:
+        CheckpointError: the file differs from what the mark describes (one line naming
+            ``path`` and what differs).
+    """
+    line = mark.last_line.encode()
+    line_end = "\r\n" if mark.last_line.endswith("\r\n") else "\n"
+    header = header_line(columns, line_end).encode()
+    size = os.fstat(fd).st_size
+    if size < mark.size:
+        raise CheckpointError(
+            f"{path} holds {size} bytes, fewer than the {mark.size} bytes of the "
+            f"{mark.rows} impacts the checkpoint describes (was it replaced?)"
+        )
+    start = _read_at(fd, len(header), 0)
+    at_mark = b""
+    if mark.size >= max(len(line), len(header)):
+        at_mark = _read_at(fd, len(line), mark.size - len(line))
+    if start != header or at_mark != line:
+        raise CheckpointError(
+            f"{path} does not match the checkpoint (impact {mark.rows} is not "
+            f"where the checkpoint says; was the file edited or replaced?)"
+        )
+    # everything before the mark, byte for byte: its checksum (one byte edited in the
+    # middle leaves the mark's line in place) and its rows
+    crc, lines = prefix_crc32(fd, mark.size)
+    if mark.crc32 is not None and crc != mark.crc32:
+        raise CheckpointError(
+            f"{path} does not match the checkpoint (its first {mark.rows} impacts "
+            f"were changed since: their CRC-32 differs; was the file edited?)"
+        )
+    if lines != mark.rows + 1:
+        raise CheckpointError(
+            f"{path} does not match the checkpoint ({lines - 1} rows before the "
+            f"checkpoint's place, which follows impact {mark.rows}; was the file edited?)"
+        )
+    if whole and size > mark.size:
+        raise CheckpointError(
+            f"{path} holds {size - mark.size} bytes after the {mark.rows} impacts of the "
+            f"finished run its checkpoint describes (was the file edited?)"
+        )
+    return dataclasses.replace(mark, crc32=crc)

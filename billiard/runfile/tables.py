@@ -1,4 +1,4 @@
-"""The tables of a run, CSV or binary (the file's contents tell which), read by one
+"""The tables of a run, CSV or binary (the file's name tells which), read by one
 function each: :func:`read_collisions` (``collisions.csv`` / ``collisions.npy``, one row
 per impact), :func:`read_contacts` (``contacts.csv`` / ``contacts.npy``, one row per
 contact phase of a run with ``contact.model = "phases"``) and :func:`read_trajectory`
@@ -8,6 +8,7 @@ contact phase of a run with ``contact.model = "phases"``) and :func:`read_trajec
 from __future__ import annotations
 
 import os
+from pathlib import Path
 
 import numpy as np
 
@@ -21,8 +22,9 @@ __all__ = ["read_collisions", "read_contacts", "read_trajectory"]
 
 def read_collisions(path: str | os.PathLike[str]) -> dict[str, np.ndarray]:
     """Read a run's impacts, ``collisions.csv`` or ``collisions.npy``, into numpy arrays,
-    one per column; the file's contents tell which it is (a ``.npy`` file starts with
-    NumPy's magic bytes).
+    one per column; the file's name tells which format it is read as (``.npy`` binary,
+    ``.csv`` text; a file of the other format is refused, not read as it), and for
+    another name its contents (a ``.npy`` file starts with NumPy's magic bytes).
 
     CSV: as :func:`billiard.runfile.record.read_collisions_csv` (bulk parsing, bit-exact
     values, an unterminated last row skipped). Binary (:mod:`billiard.runfile.npyfile`):
@@ -42,17 +44,32 @@ def read_collisions(path: str | os.PathLike[str]) -> dict[str, np.ndarray]:
             not that of a run file or promises more rows than it holds.
     """
     try:
-        check_regular(path)  # /dev/zero or a pipe would be read without end
-        with open(path, "rb") as handle:
-            binary = handle.read(len(NPY_MAGIC)) == NPY_MAGIC
+        binary = _is_binary(path)
     except (FileRefused, OSError):
         binary = False  # the CSV reader says what is wrong with the file, in its words
     return read_table(path, COLLISIONS) if binary else read_collisions_csv(path)
 
 
+def _is_binary(path: str | os.PathLike[str]) -> bool:
+    """Is ``path`` to be read as a binary table? Its name says so (``.npy``) or not
+    (``.csv``): a file whose contents are of the other format is refused by the reader of
+    its name's, never read as the other (CSV text in ``collisions.npy`` is not a binary
+    run file). Only a file named otherwise is told by its first bytes.
+
+    Raises:
+        FileRefused, OSError: the file cannot be opened to look (another name only).
+    """
+    suffix = Path(path).suffix.lower()
+    if suffix in (".npy", ".csv"):
+        return suffix == ".npy"
+    check_regular(path)  # /dev/zero or a pipe would be read without end
+    with open(path, "rb") as handle:
+        return handle.read(len(NPY_MAGIC)) == NPY_MAGIC
+
+
 def read_contacts(path: str | os.PathLike[str]) -> dict[str, np.ndarray]:
     """The contact phases of a run: ``contacts.csv`` or ``contacts.npy`` (the file's
-    contents tell which).
+    name tells which, as for :func:`read_collisions`).
 
     Returns:
         Column name -> 1-D array, one entry per phase, in the columns' order
@@ -85,9 +102,7 @@ def read_trajectory(path: str | os.PathLike[str]) -> dict[str, np.ndarray]:
 def _read(path: str | os.PathLike[str], table: Table) -> dict[str, np.ndarray]:
     try:
         check_regular(path)
-        with open(path, "rb") as handle:
-            binary = handle.read(len(NPY_MAGIC)) == NPY_MAGIC
-        if binary:
+        if _is_binary(path):
             return read_table(path, table)
         columns = read_side_csv(path)
     except FileRefused as exc:

@@ -28,6 +28,7 @@ import signal
 import sys
 import threading
 import time
+import warnings
 from collections import Counter, OrderedDict
 from collections.abc import Callable, Iterator
 from concurrent.futures import FIRST_COMPLETED, Executor, Future, ProcessPoolExecutor, wait
@@ -46,6 +47,7 @@ from billiard.sweep.measure import ChunkTask, measure_chunk
 from billiard.sweep.netcdf import RESULT_NAME, write_result
 from billiard.sweep.progress import SweepProgress
 from billiard.sweep.store import (
+    CHECKSUMS_NAME,
     DIGEST_NAME,
     LEGACY_POINTS_NAME,
     LOG_NAME,
@@ -55,11 +57,12 @@ from billiard.sweep.store import (
     SWEEP_NAME,
     ChunkStore,
     StoreError,
+    UnverifiedSweepWarning,
     definition_digest,
     digest_lines,
-    iter_rows,
     points_table,
     read_reasons,
+    stored_points,
 )
 
 __all__ = [
@@ -705,6 +708,7 @@ _RUN_FILES = (
 _SWEEP_OUTPUTS = (
     SCENE_NAME,
     DIGEST_NAME,
+    CHECKSUMS_NAME,
     RESULT_NAME,
     REASONS_NAME,
     LOG_NAME,
@@ -752,36 +756,14 @@ def _start_dir(directory: Path, sweep: Sweep) -> None:
 
 
 def _finished(directory: Path, sweep: Sweep) -> bytearray:
-    """One byte per point, 1 for a point stored in the folder (read-only; no lock)."""
-    done = bytearray(sweep.size)
-    path = directory / POINTS_NAME
-    if not path.exists():
-        if (directory / LEGACY_POINTS_NAME).exists():
-            raise StoreError(
-                f"{directory} holds a sweep of an older version ({LEGACY_POINTS_NAME}); "
-                f"run it again: `billiard sweep {directory / SWEEP_NAME} --out OTHER_DIR`"
-            )
-        return done
-    from billiard.runfile.npyfile import header_size, read_header
-
-    dtype = points_table(sweep.keep).dtype
-    flags = np.frombuffer(done, dtype=np.uint8)
-    fd = os.open(path, os.O_RDONLY)
-    try:
-        try:
-            found, rows, _ = read_header(os.pread(fd, 1 << 16, 0))
-        except ValueError as exc:
-            raise StoreError(f"{path} is not a sweep's points file ({exc})") from None
-        if found != dtype:
-            raise StoreError(f"{path} holds rows of another kind than this sweep's")
-        # rows past the header's count are not points: the store cuts them
-        rows = min(rows, (os.fstat(fd).st_size - header_size(dtype)) // dtype.itemsize)
-        for block in iter_rows(fd, dtype, rows):
-            index = np.asarray(block["index"], dtype=np.int64)
-            flags[index[(index >= 0) & (index < sweep.size)]] = 1
-    finally:
-        os.close(fd)
-    return done
+    """One byte per point, 1 for a point stored in the folder (read-only; no lock),
+    checked against the folder's checksums before any worker starts."""
+    if not (directory / POINTS_NAME).exists() and (directory / LEGACY_POINTS_NAME).exists():
+        raise StoreError(
+            f"{directory} holds a sweep of an older version ({LEGACY_POINTS_NAME}); "
+            f"run it again: `billiard sweep {directory / SWEEP_NAME} --out OTHER_DIR`"
+        )
+    return stored_points(directory, sweep.size, sweep.keep)
 
 
 #: points per chunk on the GPU: enough threads to fill a GPU (a chunk's state vectors
@@ -887,6 +869,9 @@ def run_sweep(
             store = stack.enter_context(ChunkStore(directory, sweep.size, sweep.keep))
         except StoreError as exc:
             raise SweepError(str(exc)) from None
+        if store.unverified:
+            warnings.warn(store.unverified, UnverifiedSweepWarning, stacklevel=2)
+            store.log(store.unverified)
         _store_invalid(store, sweep, invalid)  # skipped invalid points are recorded at once
         del invalid
         todo = sweep.size - store.count

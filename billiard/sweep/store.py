@@ -19,6 +19,15 @@
     one JSON line ``{"index": I, "reason": "..."}`` per point that failed or was invalid
     (written and synced before its chunk's rows; a line whose point is not counted in
     points.npy is ignored, a partial last line cut off).
+``DIR/checksums.json``
+    the commit of each chunk, written atomically after its rows and their count: how
+    many rows of points.npy and bytes of reasons.jsonl are stored, and the CRC-32 of
+    each (continued chunk by chunk from the stored value: nothing is read again). Opening
+    the folder again (a resume) reads both files once and refuses one that differs
+    (:class:`StoreError` naming the file); what follows the committed bytes (a chunk
+    whose commit a kill prevented) is cut off. A folder of a sweep started before the
+    checksums has none: it is resumed unverified, said once (:attr:`ChunkStore.unverified`),
+    and the checksums are written from then on.
 ``DIR/sweep.log``
     timings and progress (the only file with wall-clock times).
 
@@ -34,17 +43,23 @@ import hashlib
 import json
 import os
 import time
+import zlib
 from collections.abc import Iterator
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
+from billiard.errors import UnverifiedDataWarning
+from billiard.runfile.checkpoint import write_text_atomic
+from billiard.runfile.csvfile import crc32_range, is_crc32
 from billiard.runfile.npyfile import Table, header_bytes, header_size, open_rows, read_header
 from billiard.runfile.record import RunDataError
 from billiard.sweep.columns import ChunkResult, disk_dtype
 
 __all__ = [
+    "CHECKSUMS_NAME",
     "DIGEST_NAME",
     "LEGACY_POINTS_NAME",
     "LOG_NAME",
@@ -54,9 +69,11 @@ __all__ = [
     "SWEEP_NAME",
     "ChunkStore",
     "StoreError",
+    "UnverifiedSweepWarning",
     "points_table",
     "iter_rows",
     "read_reasons",
+    "stored_points",
 ]
 
 SWEEP_NAME = "sweep.toml"
@@ -65,6 +82,12 @@ POINTS_NAME = "points.npy"
 REASONS_NAME = "reasons.jsonl"
 LOG_NAME = "sweep.log"
 DIGEST_NAME = "sweep.sha256"
+CHECKSUMS_NAME = "checksums.json"
+#: ``format`` and ``version`` of checksums.json.
+CHECKSUMS_FORMAT = "billiard-sweep-checksums"
+CHECKSUMS_VERSION = 1
+#: Largest checksums.json read (bytes): it holds four numbers.
+MAX_CHECKSUMS_BYTES = 1 << 12
 #: The points file of sweeps made before points.npy (one JSON line per point).
 LEGACY_POINTS_NAME = "points.jsonl"
 
@@ -74,6 +97,11 @@ MAX_LINE = 1 << 20
 
 class StoreError(Exception):
     """A sweep folder that cannot be used; one-line message."""
+
+
+class UnverifiedSweepWarning(UnverifiedDataWarning):
+    """A sweep folder resumed without its stored points checked: it was written before
+    its checksums.json."""
 
 
 def points_table(keep: int) -> Table:
@@ -145,6 +173,130 @@ def definition_digest(directory: Path) -> str:
     return digest_lines({name: (directory / name).read_bytes() for name in names})
 
 
+@dataclass(frozen=True)
+class Committed:
+    """What checksums.json commits: the rows of points.npy and their CRC-32, the bytes
+    of reasons.jsonl and theirs."""
+
+    rows: int
+    crc32: int
+    reasons_bytes: int
+    reasons_crc32: int
+
+    def as_text(self) -> str:
+        return (
+            json.dumps(
+                {
+                    "format": CHECKSUMS_FORMAT,
+                    "version": CHECKSUMS_VERSION,
+                    "points": {"rows": self.rows, "crc32": self.crc32},
+                    "reasons": {"bytes": self.reasons_bytes, "crc32": self.reasons_crc32},
+                },
+                indent=1,
+            )
+            + "\n"
+        )
+
+
+def read_committed(directory: Path) -> Committed | None:
+    """The folder's checksums.json; None when it has none (a sweep started before it).
+
+    Raises:
+        StoreError: the file cannot be read or is not a sweep's checksums.
+    """
+    path = directory / CHECKSUMS_NAME
+    try:
+        with open(path, "rb") as handle:
+            data = json.loads(handle.read(MAX_CHECKSUMS_BYTES + 1).decode("utf-8"))
+        if data["format"] != CHECKSUMS_FORMAT or data["version"] != CHECKSUMS_VERSION:
+            raise ValueError
+        done = Committed(
+            data["points"]["rows"],
+            data["points"]["crc32"],
+            data["reasons"]["bytes"],
+            data["reasons"]["crc32"],
+        )
+    except FileNotFoundError:
+        return None
+    except OSError as exc:
+        raise StoreError(f"{path} cannot be read: {exc.strerror or exc}") from None
+    except (ValueError, KeyError, TypeError, UnicodeDecodeError):
+        raise StoreError(f"{path} is damaged (not a sweep's checksums)") from None
+    counts = (done.rows, done.reasons_bytes)
+    if not all(isinstance(n, int) and not isinstance(n, bool) and n >= 0 for n in counts) or not (
+        is_crc32(done.crc32) and is_crc32(done.reasons_crc32)
+    ):
+        raise StoreError(f"{path} is damaged (not a sweep's checksums)")
+    return done
+
+
+def _points(
+    fd: int, path: Path, dtype: np.dtype, size: int, committed: Committed | None
+) -> tuple[int, int, bytearray]:
+    """(rows, CRC-32, one byte per point of the sweep, 1 where stored) of the points
+    file open as ``fd``: the rows ``committed`` counts, checked against its CRC-32, or
+    without it (an older sweep) those the header counts. Reads the file once, a block at
+    a time; changes nothing.
+
+    Raises:
+        StoreError: the file is not this sweep's points file, is shorter than what is
+            committed, differs from its checksum, or holds a point outside the sweep.
+    """
+    head = header_size(dtype)
+    try:
+        found, counted, offset = read_header(os.pread(fd, head, 0))
+    except ValueError as exc:
+        raise StoreError(f"{path} is not a sweep's points file ({exc})") from None
+    if found != dtype or offset != head:
+        raise StoreError(f"{path} holds rows of another kind than this sweep's (another --keep?)")
+    on_disk = (os.fstat(fd).st_size - head) // dtype.itemsize
+    if committed is None:
+        rows = counted
+        if on_disk < rows:
+            raise StoreError(f"{path} holds fewer rows than its header counts (cut?)")
+    else:
+        rows = committed.rows
+        if on_disk < rows or counted < rows:
+            raise StoreError(
+                f"{path} holds {min(on_disk, counted)} whole rows, fewer than the {rows} "
+                f"points {CHECKSUMS_NAME} stores (cut short?)"
+            )
+    done = bytearray(size)
+    flags = np.frombuffer(done, dtype=np.uint8)
+    crc = 0
+    for block in iter_rows(fd, dtype, rows):
+        crc = zlib.crc32(block, crc)
+        index = np.asarray(block["index"], dtype=np.int64)
+        if index.size and (index.min() < 0 or index.max() >= size):
+            bad = int(index[(index < 0) | (index >= size)][0])
+            raise StoreError(f"{path}: point {bad} is not in the sweep (0 to {size - 1})")
+        flags[index] = 1
+    if committed is not None and crc != committed.crc32:
+        raise StoreError(
+            f"{path} differs from what {CHECKSUMS_NAME} stores: the CRC-32 of its {rows} "
+            f"points does not match (was the file edited?)"
+        )
+    return rows, crc, done
+
+
+def stored_points(directory: Path, size: int, keep: int) -> bytearray:
+    """One byte per point of a sweep of ``size`` points keeping ``keep`` impacts, 1 for
+    a point stored in ``directory`` (read-only, no lock: what a resume has left to do),
+    the points file checked against checksums.json as :class:`ChunkStore` checks it.
+
+    Raises:
+        StoreError: as :class:`ChunkStore`.
+    """
+    path = directory / POINTS_NAME
+    if not path.exists():
+        return bytearray(size)
+    fd = os.open(path, os.O_RDONLY)
+    try:
+        return _points(fd, path, points_table(keep).dtype, size, read_committed(directory))[2]
+    finally:
+        os.close(fd)
+
+
 class ChunkStore:
     """Appends finished chunks to ``DIR/points.npy`` (durably), their reasons to
     ``DIR/reasons.jsonl``, and lines to the log.
@@ -157,10 +309,13 @@ class ChunkStore:
     Attributes:
         done: one byte per point of the sweep, 1 once the point is stored.
         count: points stored.
+        unverified: None, or a one-line notice that the stored points were written
+            before checksums.json and are not verified.
 
     Raises:
         StoreError: another process writes the folder, or its points file is not this
-            sweep's (another row type, a point outside the sweep).
+            sweep's (another row type, a point outside the sweep), or points.npy or
+            reasons.jsonl differ from what checksums.json stores.
     """
 
     def __init__(self, directory: Path, size: int, keep: int):
@@ -178,57 +333,78 @@ class ChunkStore:
         except OSError:
             os.close(self.fd)
             raise StoreError(f"another sweep is writing {directory}") from None
+        self.unverified: str | None = None
         try:
+            committed = read_committed(directory)
             self.done = bytearray(size)
             self.count = 0
-            self.rows = self._open_rows(size)
-            self._open_reasons()
+            self.rows = self._open_rows(size, committed)
+            self._open_reasons(committed)
+            if committed is None:
+                if self.rows or self.reasons_size:
+                    self.unverified = (
+                        f"{directory} was written before {CHECKSUMS_NAME}: its {self.rows} "
+                        f"stored points are not verified (they are from now on)"
+                    )
+                self._commit()
         except BaseException:
             self.close()
             raise
         self.log_file = open(directory / LOG_NAME, "a", encoding="utf-8")  # noqa: SIM115
 
-    def _open_rows(self, size: int) -> int:
-        """Check the file's header, cut rows past its count (a chunk being written when
-        the sweep was killed) and mark the stored points; returns the rows."""
+    def _open_rows(self, size: int, committed: Committed | None) -> int:
+        """Check the file's header and its committed rows' checksum, cut rows after
+        them (a chunk being written when the sweep was killed) and mark the stored
+        points; returns the rows."""
         length = os.fstat(self.fd).st_size
-        if length == 0:  # a new file
+        if length == 0 and committed is None:  # a new file
             self._write(header_bytes(self.dtype, 0))
             os.fsync(self.fd)
+            self.crc32 = 0
             return 0
-        try:
-            dtype, rows, offset = read_header(os.pread(self.fd, self.head, 0))
-        except ValueError as exc:
-            raise StoreError(f"{self.path} is not a sweep's points file ({exc})") from None
-        if dtype != self.dtype or offset != self.head:
-            raise StoreError(
-                f"{self.path} holds rows of another kind than this sweep's (another --keep?)"
-            )
+        rows, self.crc32, done = _points(self.fd, self.path, self.dtype, size, committed)
         end = self.head + rows * self.dtype.itemsize
-        if length < end:
-            raise StoreError(f"{self.path} holds fewer rows than its header counts (cut?)")
-        if length > end:  # a chunk's rows written, not yet counted: cut off
+        if length > end:  # a chunk's rows written, not yet committed: cut off
             os.ftruncate(self.fd, end)
+            os.pwrite(self.fd, header_bytes(self.dtype, rows), 0)
             os.fsync(self.fd)
-        for block in iter_rows(self.fd, self.dtype, rows):
-            index = np.asarray(block["index"], dtype=np.int64)
-            if index.size and (index.min() < 0 or index.max() >= size):
-                bad = int(index[(index < 0) | (index >= size)][0])
-                raise StoreError(f"{self.path}: point {bad} is not in the sweep (0 to {size - 1})")
-            self._mark(index)
+        self.done = done
+        self.count = int(np.count_nonzero(np.frombuffer(done, dtype=np.uint8)))
         os.lseek(self.fd, end, os.SEEK_SET)
         return rows
 
-    def _open_reasons(self) -> None:
+    def _open_reasons(self, committed: Committed | None) -> None:
         path = self.directory / REASONS_NAME
         end = 0
-        for _, offset in _lines(path):
-            end = offset
+        if committed is None:
+            for _, offset in _lines(path):
+                end = offset
+        else:
+            end = committed.reasons_bytes
         self.reasons_fd = os.open(path, os.O_RDWR | os.O_CREAT, 0o644)
-        if os.fstat(self.reasons_fd).st_size != end:  # cut off a partial last line
+        length = os.fstat(self.reasons_fd).st_size
+        if length < end:
+            raise StoreError(
+                f"{path} holds {length} bytes, fewer than the {end} bytes {CHECKSUMS_NAME} "
+                f"stores (cut short?)"
+            )
+        self.reasons_crc32 = crc32_range(self.reasons_fd, 0, end)
+        if committed is not None and self.reasons_crc32 != committed.reasons_crc32:
+            raise StoreError(
+                f"{path} differs from what {CHECKSUMS_NAME} stores: the CRC-32 of its "
+                f"{end} bytes does not match (was the file edited?)"
+            )
+        if length != end:  # cut off a partial last line, or a chunk's not committed
             os.ftruncate(self.reasons_fd, end)
             os.fsync(self.reasons_fd)
+        self.reasons_size = end
         os.lseek(self.reasons_fd, end, os.SEEK_SET)
+
+    def _commit(self) -> None:
+        """Write checksums.json for what the files hold now (atomically: the old one or
+        the new one, never a mixture)."""
+        committed = Committed(self.rows, self.crc32, self.reasons_size, self.reasons_crc32)
+        write_text_atomic(self.directory / CHECKSUMS_NAME, committed.as_text())
 
     def _mark(self, indices: np.ndarray) -> None:
         done = np.frombuffer(self.done, dtype=np.uint8)
@@ -249,7 +425,8 @@ class ChunkStore:
         self._write_fd(self.fd, data)
 
     def append(self, chunk: ChunkResult) -> None:
-        """Store a chunk: its reasons (synced), its rows (synced), then the row count."""
+        """Store a chunk: its reasons (synced), its rows (synced), the row count, then
+        the commit (checksums.json, the CRC-32s continued over the new bytes)."""
         if not len(chunk):
             return
         if chunk.reasons:
@@ -257,15 +434,21 @@ class ChunkStore:
                 json.dumps({"index": int(i), "reason": r}) + "\n"
                 for i, r in sorted(chunk.reasons.items())
             )
-            self._write_fd(self.reasons_fd, text.encode("utf-8"))
+            data = text.encode("utf-8")
+            self._write_fd(self.reasons_fd, data)
             os.fsync(self.reasons_fd)
+            self.reasons_size += len(data)
+            self.reasons_crc32 = zlib.crc32(data, self.reasons_crc32)
         rows = chunk.rows(self.dtype["last_height"].shape[0])
-        self._write(memoryview(rows.tobytes()))
+        data = rows.tobytes()
+        self._write(memoryview(data))
         os.fsync(self.fd)
         self.rows += len(rows)
+        self.crc32 = zlib.crc32(data, self.crc32)
         # after the rows are on disk: the header never counts a row that is not
         os.pwrite(self.fd, header_bytes(self.dtype, self.rows), 0)
         os.fsync(self.fd)
+        self._commit()
         self._mark(rows["index"])
 
     def stored(self) -> np.ndarray:

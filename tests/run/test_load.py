@@ -15,6 +15,7 @@ from billiard import load_scene, open_run, simulate, with_values
 from billiard.cli import _user_errors, main
 from billiard.run.load import NotARunError
 from billiard.run.persist import CHECKPOINT_NAME, CSV_NAME, SCENE_NAME
+from billiard.run.verify import UnverifiedRunWarning
 from billiard.runfile.checkpoint import read_checkpoint, write_checkpoint
 from billiard.runfile.record import RunDataError
 from billiard.status import Status
@@ -103,20 +104,30 @@ def test_open_run_reads_no_table_until_asked(tmp_path, monkeypatch):
 
 
 def test_open_run_prefers_the_binary_table(tmp_path, monkeypatch):
-    """With collisions.npy beside collisions.csv, the impacts are read from the .npy file,
-    through the one reader of impact tables."""
-    simulate(load_scene("parabola-5.4hz"), collisions=50, out_dir=tmp_path)
-    (tmp_path / "collisions.npy").write_bytes(b"")
+    """With the CSV copy `billiard export DIR --csv` writes beside collisions.npy, the
+    impacts are read from the .npy file, through the one reader of impact tables."""
+    simulate(load_scene("parabola-5.4hz"), collisions=50, out_dir=tmp_path, store="npy")
+    assert main(["export", str(tmp_path), "--csv"]) == 0
     reads = []
     real = result_module.read_collisions
     monkeypatch.setattr(
-        result_module,
-        "read_collisions",
-        lambda path: reads.append(path) or real(tmp_path / CSV_NAME),
+        result_module, "read_collisions", lambda path: reads.append(path) or real(path)
     )
     opened = open_run(tmp_path)
     assert opened.path == tmp_path / "collisions.npy"
     assert len(opened.columns["t"]) == 50 and reads == [tmp_path / "collisions.npy"]
+
+
+def test_a_binary_table_beside_a_csv_run_is_not_read_as_its_impacts(tmp_path):
+    """A collisions.npy in a folder whose checkpoint describes a CSV run is not the run's
+    (a run of one store removes the other's files): refused in one line, not read."""
+    simulate(load_scene("parabola-5.4hz"), collisions=50, out_dir=tmp_path)
+    simulate(load_scene("wedge-6.6hz"), collisions=20, out_dir=tmp_path / "other", store="npy")
+    (tmp_path / "collisions.npy").write_bytes((tmp_path / "other/collisions.npy").read_bytes())
+    with pytest.raises(
+        RunDataError, match="collisions.npy is not part of the run in .*stored as collisions.csv"
+    ):
+        open_run(tmp_path)
 
 
 def test_an_interrupted_run_opens_with_its_rows_and_how_to_continue(tmp_path):
@@ -137,7 +148,8 @@ def test_an_interrupted_run_opens_with_its_rows_and_how_to_continue(tmp_path):
 def test_a_folder_without_a_checkpoint_still_opens(tmp_path):
     memory = simulate(load_scene("parabola-5.4hz"), collisions=60, out_dir=tmp_path)
     (tmp_path / CHECKPOINT_NAME).unlink()
-    opened = open_run(tmp_path)
+    with pytest.warns(UnverifiedRunWarning, match="checkpoint.json is missing: the run's files"):
+        opened = open_run(tmp_path)
     assert opened.status is None and opened.unfinished == "unknown" and opened.counts == {}
     assert "not known" in opened.message
     _same_tables(memory, opened)

@@ -186,6 +186,30 @@ def test_a_damaged_file_is_refused_in_one_line(tmp_path, runs, how, message):
     assert str(caught.value).startswith(f"{path}: ") and "\n" not in str(caught.value)
 
 
+@pytest.mark.parametrize("name", ["collisions", "contacts", "trajectory"])
+def test_a_file_of_the_other_format_is_refused_by_its_name(tmp_path, runs, name):
+    """A file is read in the format its name says: another run's CSV text in a .npy
+    file (or binary rows in a .csv file) is refused in one line, never read as the
+    other format's rows."""
+    csv_dir, npy_dir, _ = runs["phases"]
+    read = {
+        "collisions": read_collisions,
+        "contacts": billiard.read_contacts,
+        "trajectory": billiard.read_trajectory,
+    }[name]
+    assert len(read(csv_dir / f"{name}.csv")["t" if name != "contacts" else "t_start"])
+    text_in_npy = tmp_path / f"{name}.npy"
+    text_in_npy.write_bytes((csv_dir / f"{name}.csv").read_bytes())
+    with pytest.raises(RunDataError, match=f"{name}.npy: not a binary run file") as caught:
+        read(text_in_npy)
+    assert "\n" not in str(caught.value)
+    rows_in_csv = tmp_path / f"{name}.csv"
+    rows_in_csv.write_bytes((npy_dir / f"{name}.npy").read_bytes())
+    with pytest.raises(RunDataError, match=f"{name}.csv: ") as caught:
+        read(rows_in_csv)
+    assert "\n" not in str(caught.value)
+
+
 def test_a_text_too_long_for_its_column_is_refused_not_cut():
     row = ("0", "roll", "lift-off") + (0.0,) * 13
     record = list(row[3:5]) + list(row[:3]) + list(row[5:])  # t_start, t_end, wall, ...

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import io
 import re
+import shutil
 import sys
 
 import numpy as np
@@ -16,9 +17,11 @@ import pytest
 
 from billiard import load_scene, with_values
 from billiard.cli import main
+from billiard.runfile.npyfile import header_size
 from billiard.sweep import (
     StopSweep,
     Sweep,
+    SweepError,
     SweepInterrupted,
     parse_vary,
     read_result,
@@ -169,6 +172,48 @@ def test_interrupted_sweep_resumes_to_the_same_bytes_without_recomputing(referen
     again = run_sweep(None, directory, resume=True, progress=_quiet(sweep))
     assert list(again.computed) == []
     assert again.result.read_bytes() == outcome.result.read_bytes()
+
+
+def test_an_edited_point_is_not_published_on_resume(reference, tmp_path, capsys):
+    """A value edited in points.npy after the sweep: the resume refuses the folder in one
+    line naming the file (exit status 2), and sweep.nc keeps the measured values."""
+    sweep, outcome = reference
+    directory = shutil.copytree(outcome.directory, tmp_path / "edited")
+    path = directory / "points.npy"
+    rows = np.load(path)
+    dtype = rows.dtype
+    where = header_size(dtype) + dtype.fields["height_mean"][1]  # the first row's
+    with open(path, "r+b") as f:
+        f.seek(where)
+        f.write(np.float64(rows["height_mean"][0] + 0.01).tobytes())
+    (directory / "sweep.nc").unlink()  # a resume would write it again from points.npy
+    with pytest.raises(SweepError, match=f"{path} differs from what checksums.json stores"):
+        run_sweep(None, directory, resume=True, progress=_quiet(sweep))
+    capsys.readouterr()
+    assert main(["sweep", "--resume", str(directory), "--no-plot"]) == 2
+    err = capsys.readouterr().err
+    assert (
+        err.startswith(f"billiard: error: cannot resume: {path} differs") and err.count("\n") == 1
+    )
+    assert not (directory / "sweep.nc").exists()
+
+
+def test_a_sweep_without_checksums_is_resumed_with_a_one_line_notice(reference, tmp_path, capsys):
+    """A folder written before checksums.json: the resume says in one line that its
+    points are not verified, publishes them, and writes the checksums."""
+    sweep, outcome = reference
+    directory = shutil.copytree(outcome.directory, tmp_path / "older")
+    (directory / "checksums.json").unlink()
+    capsys.readouterr()
+    assert main(["sweep", "--resume", str(directory), "--no-plot"]) == 0
+    err = capsys.readouterr().err
+    notice = (
+        f"billiard: {directory} was written before checksums.json: its {sweep.size} stored "
+        f"points are not verified (they are from now on)\n"
+    )
+    assert notice in err and "Warning" not in err
+    assert (directory / "sweep.nc").read_bytes() == outcome.result.read_bytes()
+    assert (directory / "checksums.json").is_file()
 
 
 def test_chunk_size_does_not_change_the_bytes(reference, tmp_path):
