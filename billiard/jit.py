@@ -51,6 +51,7 @@ __all__ = [
     "cache_stamped",
     "cfunc",
     "compile_family",
+    "compiles",
     "compiling",
     "jit",
     "kernel_source_hash",
@@ -219,18 +220,16 @@ F = TypeVar("F", bound=Callable[..., Any])
 
 _problem: str | None = None
 _noticed = False
-#: printed when numba has been compiling a function of billiard's for
-#: :data:`COMPILE_NOTICE_AFTER` seconds (a function that is not in the cache: an empty
-#: or outdated cache, or a kind of argument, e.g. a curve's number of walls, not
-#: compiled before): what it is and the function; one line per family and process
+#: printed when numba starts compiling a function of billiard's (one not in the cache:
+#: an empty or outdated cache, or a kind of argument, e.g. a curve's number of walls,
+#: not compiled before): what it is and the function; one line per family and process
 COMPILE_NOTICE = "billiard: compiling {family} with numba ({function}); cached for later runs"
 #: printed when such a compile ends, if it took a second or more
 COMPILED_NOTICE = "billiard: compiled {family} in {seconds:.1f} s"
-#: a load from numba's cache takes milliseconds: what is still running after this
-#: many seconds compiles
-COMPILE_NOTICE_AFTER = 0.3
 #: the compiles shorter than this (s) end without a line
 COMPILED_NOTICE_AFTER = 1.0
+#: how often a block that may compile asks numba whether it does (s)
+COMPILE_POLL_S = 0.05
 #: what the functions of each module are, for the compile notices
 _FAMILIES = {
     "billiard.kernels.loop": "the impact loop",
@@ -298,22 +297,23 @@ def _say(line: str) -> None:
 
 @contextlib.contextmanager
 def compiling(function: Any) -> Iterator[None]:
-    """The notices of a block that may compile ``function`` (a Python function, or a
-    numba dispatcher: its ``py_func``): its first call, or the construction of a
-    :func:`cfunc`. numba loads a function from its cache in milliseconds, so a block
-    still running after :data:`COMPILE_NOTICE_AFTER` seconds is compiling: then the
-    function's family is named (once per process), and how long the block took when
-    that was :data:`COMPILED_NOTICE_AFTER` or more. A warm start prints nothing. Of
-    the blocks running at the same time (nested, or in other threads) only the first
-    speaks."""
+    """The notices of a block that may compile ``function`` (a numba dispatcher, or its
+    Python function): its first call. numba is asked, not timed (a load from the cache
+    can take seconds on a loaded machine): the block's line names the function's family
+    (once per process) as soon as numba counts a miss of its cache for ``function``
+    (:func:`compiles`), and gives how long the compile took when that was
+    :data:`COMPILED_NOTICE_AFTER` or more. A start from the cache, or a block that only
+    runs long, prints nothing. Of the blocks running at the same time (nested, or in
+    other threads) only the first speaks."""
     global _running
-    function = getattr(function, "py_func", function)
-    family = compile_family(function)
+    python = getattr(function, "py_func", function)
+    family = compile_family(python)
     if family is None or numba is None:
         yield
         return
     _ready()
     _first_compile()
+    ask = compiles(function)  # before another thread's block can start its compile
     with _running_lock:
         _running += 1
         first = _running == 1
@@ -321,11 +321,89 @@ def compiling(function: Any) -> Iterator[None]:
         if not first:
             yield
             return
-        with _notices(function, family):
+        with _notices(python, family, ask):
             yield
     finally:
         with _running_lock:
             _running -= 1
+
+
+def compiles(function: Any) -> Callable[[], bool | None]:
+    """Asks numba whether it compiles ``function`` (a dispatcher) from now on: the
+    answer is False while numba has only loaded or reused machine code for it, True
+    from the moment it counted a miss of its cache (numba then compiles; without a
+    cache every new kind of argument is a miss), and None once the compile's machine
+    code is in place (a new overload beside the misses). For what is not a dispatcher
+    the answer is always False."""
+    stats = getattr(function, "stats", None)
+    overloads = getattr(function, "overloads", None)
+    if stats is None or overloads is None:
+        return lambda: False
+
+    def misses() -> int:
+        # a copy first: the compiling thread may add a signature meanwhile
+        return sum(list(function.stats.cache_misses.values()))
+
+    missed, loaded = misses(), len(overloads)
+
+    def ask() -> bool | None:
+        if misses() == missed:
+            return False
+        return None if len(function.overloads) > loaded else True
+
+    return ask
+
+
+@contextlib.contextmanager
+def _notices(function: Any, family: str, ask: Callable[[], bool | None]) -> Iterator[None]:
+    """The lines of :func:`compiling` for a block that may compile ``function``:
+    ``ask`` (:func:`compiles`) is polled from a thread while the block runs."""
+    started = time.perf_counter()
+    ended: list[float] = []  # when the compile was seen to end
+    said: list[bool] = []
+    done = threading.Event()
+
+    def watch() -> None:
+        while not done.wait(COMPILE_POLL_S):
+            if _seen(ask(), function, family, said, ended):
+                return
+
+    watcher = threading.Thread(target=watch, daemon=True)
+    watcher.start()
+    try:
+        yield
+    finally:
+        done.set()
+        watcher.join()
+        _seen(ask(), function, family, said, ended)
+        if said:
+            seconds = (ended[0] if ended else time.perf_counter()) - started
+            if seconds >= COMPILED_NOTICE_AFTER:
+                _say(COMPILED_NOTICE.format(family=family, seconds=seconds))
+
+
+def _seen(
+    answer: bool | None, function: Any, family: str, said: list[bool], ended: list[float]
+) -> bool:
+    """Acts on numba's answer (:func:`compiles`) in a block: a compile is announced
+    (its family once per process), and its end noted; True once it ended."""
+    if answer is False:
+        return False
+    if not said:
+        said.append(True)
+        _announce(function, family)
+    if answer is None:
+        ended.append(time.perf_counter())
+        return True
+    return False
+
+
+def _announce(function: Any, family: str) -> None:
+    """The line saying that numba compiles ``function`` (once per family and process)."""
+    if family not in _announced:
+        _announced.add(family)
+        where = f"{function.__module__}.{function.__qualname__}"
+        _say(COMPILE_NOTICE.format(family=family, function=where))
 
 
 def _first_compile() -> None:
@@ -342,32 +420,6 @@ def _first_compile() -> None:
             _compile_all()
         finally:
             _compile_all_called = True
-
-
-@contextlib.contextmanager
-def _notices(function: Any, family: str) -> Iterator[None]:
-    """The lines of :func:`compiling` for a block that may compile ``function``."""
-    said: list[bool] = []
-
-    def announce() -> None:
-        said.append(True)
-        if family not in _announced:
-            _announced.add(family)
-            where = f"{function.__module__}.{function.__qualname__}"
-            _say(COMPILE_NOTICE.format(family=family, function=where))
-
-    timer = threading.Timer(COMPILE_NOTICE_AFTER, announce)
-    timer.daemon = True
-    started = time.perf_counter()
-    timer.start()
-    try:
-        yield
-    finally:
-        timer.cancel()
-        timer.join()
-        seconds = time.perf_counter() - started
-        if said and seconds >= COMPILED_NOTICE_AFTER:
-            _say(COMPILED_NOTICE.format(family=family, seconds=seconds))
 
 
 def _disabled() -> bool:
@@ -427,8 +479,20 @@ def cfunc(fn: Callable[..., Any], signature: Any) -> Any:
     numba types by its signature alone."""
     if numba is None:
         raise RuntimeError("numba is not enabled")
-    with compiling(fn):
-        return numba.cfunc(signature, cache=True, error_model="python")(fn)
+    family = compile_family(fn)
+    if family is not None:
+        _ready()
+        _first_compile()
+    started = time.perf_counter()
+    made = numba.cfunc(signature, cache=True, error_model="python")(fn)
+    # numba compiles a cfunc as it is made: asked afterwards (it loaded it from its
+    # cache, or compiled it), the notices come once it is done
+    if family is not None and made.cache_hits == 0 and not _running:
+        _announce(fn, family)
+        seconds = time.perf_counter() - started
+        if seconds >= COMPILED_NOTICE_AFTER:
+            _say(COMPILED_NOTICE.format(family=family, seconds=seconds))
+    return made
 
 
 def _ready_function() -> int:
@@ -439,9 +503,10 @@ _ready_kernel: Any = None
 
 
 def _ready() -> None:
-    """numba set up for loading from its cache, outside any timed block: its first load
-    in a process imports its implementations (a third of a second), which would pass
-    for a compile. A tiny cached function is loaded (or compiled) for that.
+    """numba set up for loading from its cache, before any block of :func:`compiling`:
+    its first load in a process imports its implementations (a third of a second),
+    which is no part of a kernel's compile. A tiny cached function is loaded (or
+    compiled) for that.
 
     Those implementations are some 60,000 objects that live as long as the process:
     as at ``import billiard``, the cyclic garbage collector is paused while they are

@@ -26,26 +26,39 @@ before. A worker whose run fails leaves what it did not reach to compile on firs
 and the cache is marked all the same (the workers are not started again in every
 process).
 
+The workers import this process's copy of the package, whatever folder they start in
+(a source checkout's ``billiard/`` in the current folder would otherwise pass before an
+installed copy, and be compiled into its own cache instead), and end with this process:
+at the end of a pipe it holds (it ended, even by SIGKILL), on its way out of the wait
+(KeyboardInterrupt and any other exception), and when SIGINT or SIGTERM comes under a
+handler of the program's own (a run's), which also breaks off the compile.
+
 :func:`run_jobs` runs jobs in this process: what a worker does.
 """
 
 from __future__ import annotations
 
+import contextlib
 import os
+import signal
 import subprocess
 import sys
 import tempfile
+import threading
 import time
+from collections.abc import Iterator
+from pathlib import Path
 from typing import Any
 
 from billiard import jit as _jit
+from billiard.engine.interrupt import RunInterrupted
 
 __all__ = ["ALL_NOTICE", "ALL_NOTICE_DONE", "JOBS", "WORKERS", "compile_all", "run_jobs"]
 
 #: printed before the kernels compile together
 ALL_NOTICE = (
     "billiard: compiling the engine's kernels with numba, once per install or update "
-    "(under a minute); cached for later runs"
+    "(about a minute on two free cores, minutes on a busy machine); cached for later runs"
 )
 #: printed when they are compiled
 ALL_NOTICE_DONE = "billiard: compiled the engine's kernels in {seconds:.1f} s"
@@ -94,8 +107,29 @@ WAIT_S = 300.0
 #: phase and the hold, after the other has put the impact loop in the cache (numba
 #: would otherwise compile the loop a second time, some 18 s).
 WORKERS: tuple[tuple[int | str, ...], ...] = ((0, LOOP_CACHED), (1, 2, WAIT_LOOP, 3))
-#: what a worker runs
-_WORKER = "from billiard.engine.compile_all import run_jobs; run_jobs({jobs})"
+#: what a worker runs (``python -P -c``: the current folder not on ``sys.path``): it
+#: ends when its standard input, a pipe the starting process holds, reaches its end (that
+#: process ended, even by SIGKILL), imports the package from the starting process's
+#: folder (``package``; never another copy, such as a source checkout in the current
+#: folder beside an installed copy), and runs its jobs
+_WORKER = """\
+import importlib.util, os, sys, threading
+def orphaned():
+    sys.stdin.buffer.read()
+    os._exit(1)
+threading.Thread(target=orphaned, daemon=True).start()
+spec = importlib.util.spec_from_file_location(
+    "billiard", {init!r}, submodule_search_locations=[{package!r}]
+)
+sys.modules["billiard"] = module = importlib.util.module_from_spec(spec)
+spec.loader.exec_module(module)
+from billiard.engine.compile_all import run_jobs
+run_jobs({jobs!r}, {package!r})
+"""
+#: a worker's exit status when it imported another copy of the package
+WRONG_COPY = 3
+#: the folder of this copy of the package (what the workers import)
+_PACKAGE = Path(__file__).resolve().parents[1]
 #: set in a worker's environment: its own first compile calls no hook
 _WORKER_ENV = "BILLIARD_COMPILE_WORKER"
 #: set in the workers' environment: the file whose existence says the loop is cached
@@ -114,9 +148,14 @@ def _rolling_start(scene: Any) -> dict[str, float]:
     return {"initial.q1": q1, "initial.q2": q2, "initial.v1": 0.0, "initial.v2": 0.0}
 
 
-def run_jobs(jobs: list[int | str]) -> None:
+def run_jobs(jobs: list[int | str], package: str | None = None) -> None:
     """Run :data:`JOBS` ``jobs`` in this process (each compiles what it needs), and the
-    hand-over steps :data:`LOOP_CACHED` and :data:`WAIT_LOOP`."""
+    hand-over steps :data:`LOOP_CACHED` and :data:`WAIT_LOOP`. ``package``: the folder
+    of the package the starting process imported; a worker that imported another copy
+    exits with status :data:`WRONG_COPY` (it would compile into that copy's cache)."""
+    if package is not None and _PACKAGE != Path(package).resolve():
+        print(f"billiard: compile worker imported {_PACKAGE}, not {package}", file=sys.stderr)
+        sys.exit(WRONG_COPY)
     import numpy as np
 
     from billiard.engine.simulation import Simulation
@@ -125,18 +164,18 @@ def run_jobs(jobs: list[int | str]) -> None:
     from billiard.runfile.rows import format_rows_bytes
     from billiard.scene.scene import load_scene, with_values
 
-    signal = os.environ.get(_SIGNAL_ENV)
+    handover = os.environ.get(_SIGNAL_ENV)
     ensemble_scene = None
     for index in jobs:
         if index == LOOP_CACHED:
-            if signal:
-                open(signal, "w").close()
+            if handover:
+                open(handover, "w").close()
             if ensemble_scene is not None:
                 _ensemble(ensemble_scene)
             continue
         if index == WAIT_LOOP:
             waited = time.monotonic() + WAIT_S
-            while signal and not os.path.exists(signal) and time.monotonic() < waited:
+            while handover and not os.path.exists(handover) and time.monotonic() < waited:
                 time.sleep(0.05)
             continue
         name, changes, impacts, csv, rolling, sampled = JOBS[int(index)]
@@ -179,7 +218,13 @@ def _ensemble(scene: Any) -> None:
 
 def compile_all() -> bool:
     """Compile every kernel a run can need, together, unless the cache has them all
-    (or this is a worker); returns True when the workers ran and the cache is marked."""
+    (or this is a worker); returns True when the workers ran and the cache is marked.
+
+    Raises:
+        RunInterrupted: SIGINT or SIGTERM under a handler of the program's own (a run's,
+            which defers a stop to its next impact: there is none before the kernels);
+            the workers are ended first, as on any other way out of here.
+    """
     if not _jit.ENABLED or os.environ.get(_WORKER_ENV) or _jit.all_compiled():
         return False
     if not _jit.cache_stamped():
@@ -192,27 +237,77 @@ def compile_all() -> bool:
             _WORKER_ENV: "1",
             _SIGNAL_ENV: os.path.join(folder, "loop-cached"),
         }
+        workers: list[subprocess.Popen] = []
         try:
-            workers = [
-                subprocess.Popen(
-                    [sys.executable, "-c", _WORKER.format(jobs=list(jobs))],
-                    env=env,
-                    stdout=subprocess.DEVNULL,
-                    stderr=subprocess.DEVNULL,
-                )
-                for jobs in WORKERS
-            ]
-        except OSError:
-            return False  # no process to start: each kernel compiles on its first use
-        for worker in workers:
-            worker.wait()
-            # a worker that ended without its hand-over (it failed) releases the other
-            if not os.path.exists(env[_SIGNAL_ENV]):
-                open(env[_SIGNAL_ENV], "w").close()
+            with _signals_stop_compile():
+                try:
+                    for jobs in WORKERS:
+                        workers.append(_start_worker(list(jobs), env))
+                except OSError:
+                    return False  # no process to start: each kernel compiles on first use
+                for worker in workers:
+                    worker.wait()  # a signal's handler runs (and may raise) meanwhile
+                    # a worker that ended without its hand-over (it failed) releases the other
+                    if not os.path.exists(env[_SIGNAL_ENV]):
+                        open(env[_SIGNAL_ENV], "w").close()
+        finally:
+            _end_workers(workers)
     _jit.mark_all_compiled()
     seconds = time.perf_counter() - started
     print(ALL_NOTICE_DONE.format(seconds=seconds), file=sys.stderr, flush=True)
     return True
+
+
+def _start_worker(jobs: list[int | str], env: dict[str, str]) -> subprocess.Popen:
+    """A worker process running ``jobs`` on this process's copy of the package; its
+    standard input is a pipe this process holds open until the worker is ended."""
+    code = _WORKER.format(init=str(_PACKAGE / "__init__.py"), package=str(_PACKAGE), jobs=jobs)
+    return subprocess.Popen(
+        [sys.executable, "-P", "-c", code],
+        env=env,
+        stdin=subprocess.PIPE,
+        stdout=subprocess.DEVNULL,
+        stderr=subprocess.DEVNULL,
+    )
+
+
+def _end_workers(workers: list[subprocess.Popen]) -> None:
+    """The workers still running killed, and every worker's pipe closed."""
+    for worker in workers:
+        if worker.poll() is None:
+            worker.kill()
+        worker.wait()
+        if worker.stdin is not None:
+            worker.stdin.close()
+
+
+@contextlib.contextmanager
+def _signals_stop_compile() -> Iterator[None]:
+    """SIGINT and SIGTERM also break off the compile where the program has a handler
+    of its own for them (a run's turns them into a stop request at its next impact,
+    which would come only after the whole compile): that handler runs, then
+    :class:`RunInterrupted` is raised. Under the default handlers SIGINT raises
+    KeyboardInterrupt and SIGTERM ends the process (the workers see their pipe's end),
+    so these are left alone, as in any thread but the main one."""
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    installed: dict[int, Any] = {}
+
+    def handler(signum: int, frame: Any) -> None:
+        installed[signum](signum, frame)
+        raise RunInterrupted(signum)
+
+    for sig in (signal.SIGINT, signal.SIGTERM):
+        previous = signal.getsignal(sig)
+        if callable(previous) and previous is not signal.default_int_handler:
+            installed[sig] = previous
+            signal.signal(sig, handler)
+    try:
+        yield
+    finally:
+        for sig, previous in installed.items():
+            signal.signal(sig, previous)
 
 
 _jit.on_first_compile(compile_all)

@@ -6,9 +6,11 @@ scene compiles nothing."""
 from __future__ import annotations
 
 import os
+import shutil
 import subprocess
 import sys
 import time
+from pathlib import Path
 
 import pytest
 
@@ -122,6 +124,52 @@ def test_curves_of_one_and_two_walls_give_the_kernels_one_type():
     assert one.numba_type == two.numba_type
     three = WallTable([(one[0][0],) * 3])
     assert len(three[0]) == 3 and three.numba_type != one.numba_type
+
+
+PARENT = """
+from billiard.engine import compile_all
+compile_all.WORKERS = ((), ())  # two workers that import the package and run nothing
+assert compile_all.compile_all()
+"""
+MARK = """
+import os as _os
+open(_os.path.join(_os.environ["MARKS"], "{name}-%d" % _os.getpid()), "w").close()
+"""
+
+
+@compiled
+def test_the_workers_import_the_package_of_the_process_that_starts_them(tmp_path):
+    """The starting process imports a copy of the project (``copy``, as an installed
+    copy) from a folder holding another ``billiard/`` (``checkout``, as a source
+    checkout beside an installed copy): both workers import the first, as it did."""
+    root = Path(__file__).resolve().parents[2]
+    copy, checkout, marks = tmp_path / "copy", tmp_path / "checkout", tmp_path / "marks"
+    ignore = shutil.ignore_patterns("__pycache__", "*.nbi", "*.nbc")
+    for name in ("billiard", "generated", "derivation"):
+        shutil.copytree(root / name, copy / name, ignore=ignore)
+    shutil.copy(root / "pyproject.toml", copy)
+    with open(copy / "billiard" / "__init__.py", "a", encoding="utf-8") as init:
+        init.write(MARK.format(name="copy"))
+    (checkout / "billiard").mkdir(parents=True)
+    (checkout / "billiard" / "__init__.py").write_text(MARK.format(name="checkout"))
+    marks.mkdir()
+    env = {**os.environ, "PYTHONPATH": str(copy), "MARKS": str(marks)}
+    env["NUMBA_CACHE_DIR"] = str(tmp_path / "cache")
+    env.pop("NUMBA_DISABLE_JIT", None)
+    done = subprocess.run(
+        [sys.executable, "-P", "-c", PARENT], cwd=checkout, env=env, capture_output=True, text=True
+    )
+    assert done.returncode == 0, done.stderr
+    names = sorted(path.name.split("-")[0] for path in marks.iterdir())
+    assert names == ["copy", "copy", "copy"]  # the starting process and its two workers
+
+
+@compiled
+def test_a_worker_that_imported_another_copy_exits(tmp_path, capsys):
+    with pytest.raises(SystemExit) as exited:
+        compile_all.run_jobs([], str(tmp_path))
+    assert exited.value.code == compile_all.WRONG_COPY
+    assert capsys.readouterr().err.startswith("billiard: compile worker imported ")
 
 
 SCRIPT = (
