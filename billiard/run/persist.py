@@ -580,6 +580,12 @@ def _run_streamed(
         mark = stream.flush()
         if state.impacts != mark.rows:  # pragma: no cover - an engine bug
             raise AssertionError(f"engine state after {state.impacts}, CSV {mark.rows}")
+        # the samples the state has made (those of a contact phase a stop cut, which
+        # the resumed run makes again, are after them: see ContactPhases._cut)
+        marks = {
+            name: opened.mark(state.samples - start.samples if name == "trajectory" else None)
+            for name, opened in sides.items()
+        }
         engine: dict[str, Any] | None = state.to_dict()
         if not _all_finite(engine):
             # only a stopped run can get here (a fault left a memory non-finite); its
@@ -598,8 +604,8 @@ def _run_streamed(
                 **({"csv": mark.as_dict()} if store == "csv" else {}),
                 "engine": engine,
                 "sample": sim.sample_dt,
-                "side": {name: opened.flush() for name, opened in sides.items()},
-                "side_crc32": {name: opened.crc32 for name, opened in sides.items()},
+                "side": {name: size for name, (size, _) in marks.items()},
+                "side_crc32": {name: crc for name, (_, crc) in marks.items()},
                 "scene_toml_sha256": scene_file_sha256,
                 **({"outcome": _outcome(sim)} if end else {}),
             },
