@@ -552,15 +552,30 @@ def local_executor(workers: int) -> Iterator[Workers]:
         if clean:
             pool.shutdown(wait=True)
         else:  # interrupted: drop queued points and stop the running ones now
-            pool.shutdown(wait=False, cancel_futures=True)
-            terminate = getattr(pool, "terminate_workers", None)  # Python >= 3.14
-            if terminate is not None:
-                terminate()
-            else:
-                for process in list((getattr(pool, "_processes", None) or {}).values()):
-                    process.terminate()
-                for process in list((getattr(pool, "_processes", None) or {}).values()):
-                    process.join(5)
+            _stop_pool(pool)
+
+
+#: Seconds an interrupted sweep gives its workers to end on SIGTERM before SIGKILL.
+STOP_GRACE = 0.5
+
+
+def _stop_pool(pool: ProcessPoolExecutor) -> None:
+    """Drop the pool's queued chunks and end its workers now: the chunks they run are
+    lost (a resume computes them). The processes are taken before ``shutdown``, which
+    forgets them: a worker left running goes on with its chunk, and the interpreter's
+    exit waits for it (4 to 10 s after Ctrl-C)."""
+    processes = list((getattr(pool, "_processes", None) or {}).values())
+    for process in processes:
+        with contextlib.suppress(OSError, ValueError):  # already ended, or closed
+            process.terminate()
+    pool.shutdown(wait=False, cancel_futures=True)
+    deadline = time.monotonic() + STOP_GRACE
+    for process in processes:
+        with contextlib.suppress(OSError, ValueError):
+            process.join(max(0.0, deadline - time.monotonic()))
+            if process.is_alive():
+                process.kill()
+                process.join(1.0)
 
 
 @contextlib.contextmanager
