@@ -38,6 +38,7 @@ from typing import Any
 import numpy as np
 
 from billiard.engine import ensemble
+from billiard.lifeline import die_with_parent
 from billiard.sweep.attractor import CLASSES
 from billiard.sweep.columns import STATUSES, ChunkResult, empty_columns, record_of_row
 from billiard.sweep.definition import Sweep, SweepError, read_sweep_file, sweep_to_toml
@@ -510,8 +511,10 @@ def _start_values(
 # executors
 
 
-def _worker_init() -> None:
-    """Workers leave Ctrl-C to the parent, which stops them."""
+def _worker_init(parent: int) -> None:
+    """Workers leave Ctrl-C to the parent, which stops them, and end with the parent
+    (a parent killed by SIGKILL stops none)."""
+    die_with_parent(parent)
     signal.signal(signal.SIGINT, signal.SIG_IGN)
 
 
@@ -542,6 +545,7 @@ def local_executor(workers: int) -> Iterator[Workers]:
         max_workers=workers,
         mp_context=multiprocessing.get_context("spawn"),
         initializer=_worker_init,
+        initargs=(os.getpid(),),
     )
     clean = False
     try:

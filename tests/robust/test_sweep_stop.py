@@ -1,6 +1,7 @@
 """Stopping a sweep (``billiard sweep``, ``billiard/sweep/execute.py``): Ctrl-C or SIGTERM
 ends it within a second, the chunks finished before kept and ``--resume`` finishing it to
-the bytes of an uninterrupted sweep.
+the bytes of an uninterrupted sweep; a SIGKILL of its main process leaves no worker
+running.
 
 The sweeps run in a fresh interpreter, signalled from here. Point 0 ends at once (a run
 of 0.05 s); points 1 and 2 run 100,000 s of simulated time, about 1.1 million impacts:
@@ -106,3 +107,17 @@ def test_ctrl_c_stops_a_sweep_within_a_second_and_resume_finishes_it(tmp_path):
     assert (out / "sweep.nc").read_bytes() == (ref / "sweep.nc").read_bytes()
     data = read_result(out / "sweep.nc")
     assert data["total_impacts"][1] > 1_000_000  # the slow points were measured whole
+
+
+def test_a_killed_sweep_leaves_no_worker_running(tmp_path):
+    out = tmp_path / "sweep"
+    with reaped() as leftovers:
+        proc = start(out)
+        # both workers started and computing (point 0 is stored: the pool runs)
+        wait_for(lambda: "chunk 0-0:" in log(out), proc)
+        leftovers += children(proc.pid)
+        assert len(leftovers) >= 2
+        sent = time.monotonic()
+        proc.kill()
+        proc.wait(timeout=60)
+        assert not ended_within(leftovers, sent, STOP_WITHIN), "workers outlived a killed sweep"
