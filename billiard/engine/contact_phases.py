@@ -147,6 +147,7 @@ class ContactPhases:
         mode = self._mode
         ball = self._ball
         omega = self.drive.omega
+        samples = self._samples
         if self.on_sample is not None:
             sc = self.scene
 
@@ -159,6 +160,8 @@ class ContactPhases:
 
             self._emit_samples(ball.t, min(t_start, until), at)
         if t_start > until:
+            # as the state, its sample count stays at the impact (see _cut)
+            self._samples = samples
             return False
         tau = t_start - ball.t
         theta = (ball.theta + omega * tau) % (2.0 * math.pi)
@@ -313,6 +316,7 @@ class ContactPhases:
         mode = self._mode
         t0, theta0 = ball.t, ball.theta
         omega = self.drive.omega
+        samples = self._samples
 
         def on_sample(tau: float, y: tuple) -> None:
             theta = theta0 + omega * tau
@@ -347,6 +351,7 @@ class ContactPhases:
                     *model.lab_state(wall, theta, end.y, mode)[:5],
                 ),  # fmt: skip
                 deadline,
+                samples,
             )
             return None
         tau = end.tau
@@ -557,11 +562,17 @@ class ContactPhases:
             Status.IN_CONTACT,
         )
 
-    def _cut(self, record: ContactRecord, deadline: float) -> None:
+    def _cut(self, record: ContactRecord, deadline: float, samples: int) -> None:
         """A phase cut by the run's end (``end`` = ``cut``) at ``record.t_end``: reported
         (it is no event of the engine, whose state stays at the phase's start: a resumed
         run redoes the phase), then the contact span's end, a stop request
-        (RunInterrupted), or the time limit (the caller returns None)."""
+        (RunInterrupted), or the time limit (the caller returns None).
+
+        ``samples``: the sample count at the phase's start. The samples the phase
+        reported before the cut are not part of the engine's state either: its count
+        goes back to that start (a checkpoint of this state, whose count disagreed with
+        its time, was refused on resume; the resumed run reports them again)."""
+        self._samples = samples
         if self.on_contact_cut is not None:
             self.on_contact_cut(record)
         t_cut = record.t_end
@@ -608,6 +619,7 @@ class ContactPhases:
             self._report_sample(t0 + tau, *lab(theta0 + drive.omega * tau, u3), HELD)
 
         sampling = self.on_sample is not None
+        samples = self._samples
         deadline = self._contact_deadline(until)
         if t0 >= deadline:
             raise self._in_contact(t0)
@@ -617,6 +629,7 @@ class ContactPhases:
                 za, zb, theta0, ball.u3, until - t0,
                 self._sample_times(t0, until) if sampling else (),
                 on_sample if sampling else None,
+                self._pause if sampling else None,
             ),
         )  # fmt: skip
         if end.reason is None:
@@ -633,6 +646,7 @@ class ContactPhases:
                     *lab(theta0 + drive.omega * end.tau, end.u3),
                 ),  # fmt: skip
                 deadline,
+                samples,
             )
             return None
         tau = end.tau

@@ -117,11 +117,13 @@ class VertexHold:
         limit: float,
         samples: Iterable[float] = (),
         on_sample: Callable[[float, float], None] | None = None,
+        pause: Callable[[float], bool] | None = None,
     ) -> HoldEnd:
         """Hold the ball from drive angle theta0 with spin u3 for at most ``limit``
         seconds (:func:`billiard.kernels.vertex.advance`); report ``on_sample(tau, u3)``
         at the sample times (s from the start; an iterable, read as far as the hold
-        goes).
+        goes). ``pause(tau)`` is called after each sample: True stops the hold there
+        (reason None, as at the time limit; a stop request of a sampled run).
 
         Raises:
             BallAtRest: no time limit, the spin is zero and no release comes within a
@@ -136,24 +138,31 @@ class VertexHold:
         ctx[_L.VX_NEXT] = next(samples, math.inf) if on_sample is not None else math.inf
         try:
             if _phase.COMPILED:  # compiled as the phases are
-                status = self._run_compiled(samples, on_sample)
+                status = self._run_compiled(samples, on_sample, pause)
             else:
                 _k.begin(ctx)
                 status = _k.advance(ctx)
                 while status == _L.PHASE_SAMPLE:
                     on_sample(ctx[_L.VX_SAMPLE_T], ctx[_L.VX_SAMPLE_W])  # type: ignore[misc]
+                    if pause is not None and pause(ctx[_L.VX_SAMPLE_T]):
+                        break
                     ctx[_L.VX_NEXT] = next(samples, math.inf)
                     status = _k.advance(ctx)
         except _KERNEL_ERRORS as exc:
             if exc.args[0] == _L.E_AT_REST:
                 raise BallAtRest(ctx[_L.VX_RSINCE]) from None
             raise
+        if status == _L.PHASE_SAMPLE:  # paused at the sample
+            return HoldEnd(ctx[_L.VX_SAMPLE_T], None, ctx[_L.VX_SAMPLE_W])
         if status == _L.PHASE_LIMIT:
             return HoldEnd(limit, None, ctx[_L.VX_W_END])
         return HoldEnd(ctx[_L.VX_END_T], "release", ctx[_L.VX_W_END], int(ctx[_L.VX_KEEPS]))
 
     def _run_compiled(
-        self, samples: Iterator[float], on_sample: Callable[[float, float], None] | None
+        self,
+        samples: Iterator[float],
+        on_sample: Callable[[float, float], None] | None,
+        pause: Callable[[float], bool] | None,
     ) -> int:
         """The hold set up in ``self.ctx``, run by the compiled kernels
         (:func:`billiard.kernels.vertex.run_hold`) on a float64 copy of it, copied back
@@ -172,6 +181,8 @@ class VertexHold:
                     status = run_hold(state, True)
             while status == _L.PHASE_SAMPLE:
                 on_sample(float(state[_L.VX_SAMPLE_T]), float(state[_L.VX_SAMPLE_W]))  # type: ignore[misc]
+                if pause is not None and pause(float(state[_L.VX_SAMPLE_T])):
+                    break
                 state[_L.VX_NEXT] = next(samples, math.inf)
                 status = run_hold(state, False)
         finally:

@@ -567,13 +567,17 @@ def _run_streamed(
         mark = stream.flush()
         if state.impacts != mark.rows:  # pragma: no cover - an engine bug
             raise AssertionError(f"engine state after {state.impacts}, CSV {mark.rows}")
+        # the samples the state has made (those of a contact phase a stop cut, which
+        # the resumed run makes again, are after them: see ContactPhases._cut)
+        marks = {
+            name: opened.mark(state.samples - start.samples if name == "trajectory" else None)
+            for name, opened in sides.items()
+        }
         engine: dict[str, Any] | None = state.to_dict()
         if not _all_finite(engine):
             # only a stopped run can get here (a fault left a memory non-finite); its
             # checkpoint then records the stop without a state to continue from
             engine = None
-        side_bytes = {name: opened.flush() for name, opened in sides.items()}
-        side_crc32 = {name: opened.crc32 for name, opened in sides.items()}
         ends: dict[str, Any] = {}
         if status != "running":
             # the last checkpoint: the phase the end cut goes after the sizes a resume
@@ -594,8 +598,8 @@ def _run_streamed(
                 **({"csv": mark.as_dict()} if store == "csv" else {}),
                 "engine": engine,
                 "sample": sim.sample_dt,
-                "side": side_bytes,
-                "side_crc32": side_crc32,
+                "side": {name: size for name, (size, _) in marks.items()},
+                "side_crc32": {name: crc for name, (_, crc) in marks.items()},
                 **ends,
                 "scene_toml_sha256": scene_file_sha256,
                 **({"outcome": _outcome(sim)} if end else {}),

@@ -477,8 +477,10 @@ class SideNpy:
         self.table = table
         self._head = header_size(table.dtype)
         self._pending: list[Sequence[Any]] = []
+        self.appended = 0
         if size is None:
-            self._file = open(self.path, "wb")  # noqa: SIM115 - closed by close()
+            # read as well: a mark before the last rows reads them back (see mark)
+            self._file = open(self.path, "w+b")  # noqa: SIM115 - closed by close()
             self._file.write(header_bytes(table.dtype, 0))
             self.crc32 = 0
             self.rows = 0
@@ -497,9 +499,12 @@ class SideNpy:
             os.pwrite(fd, header_bytes(table.dtype, self.rows), 0)
             self._file.seek(size)
         self._counted = self.rows
+        #: (rows appended, size, CRC-32) at the last flush: where mark reads from
+        self._flushed = (0, self._head + self.rows * table.dtype.itemsize, self.crc32)
 
     def append(self, row: Sequence[Any]) -> None:
         self._pending.append(row)
+        self.appended += 1
         if len(self._pending) >= SIDE_SPILL_ROWS:
             # written, not synced: a resume cuts the file back to its checkpoint's size
             self._write()
@@ -523,7 +528,23 @@ class SideNpy:
             os.pwrite(fd, header_bytes(self.table.dtype, self.rows), 0)
             os.fsync(fd)
             self._counted = self.rows
-        return self._file.tell()
+        size = self._file.tell()
+        self._flushed = (self.appended, size, self.crc32)
+        return size
+
+    def mark(self, rows: int | None = None) -> tuple[int, int]:
+        """:meth:`billiard.runfile.sidecsv.SideCsv.mark`: (size in bytes, CRC-32 of the
+        rows) of the file up to the first ``rows`` rows appended since it was opened
+        (default all), all rows written and synced. The header counts every row
+        written; a resume cuts the file back to the size and counts again."""
+        done, size, crc = self._flushed
+        end = self.flush()
+        if rows is None or rows == self.appended:
+            return end, self.crc32
+        if not done <= rows < self.appended:
+            raise ValueError(f"no mark after {rows} rows: {done} to {self.appended} can be marked")
+        stop = size + (rows - done) * self.table.dtype.itemsize
+        return stop, crc32_range(self._file.fileno(), size, stop, crc)
 
     def close(self) -> None:
         if not self._file.closed:

@@ -16,7 +16,7 @@ from typing import Any
 import numpy as np
 
 from billiard.runfile.checkpoint import CheckpointError, open_checked
-from billiard.runfile.csvfile import crc32_range, prefix_crc32
+from billiard.runfile.csvfile import _read_at, crc32_range, prefix_crc32
 from billiard.runfile.record import format_field
 from billiard.scene.userfile import read_limited
 
@@ -29,11 +29,14 @@ _TEXT = frozenset({"wall", "mode", "end"})
 #: to the next flush: a long flight sampled finely makes millions of rows between two
 #: impacts, which would otherwise all wait in memory.
 SPILL_CHARS = 1 << 22
+#: Bytes read at a time when a mark before the last rows is looked for (:meth:`SideCsv.mark`).
+_SCAN_CHUNK = 1 << 20
 
 
 class SideCsv:
     """A CSV file written by whole rows, buffered until :meth:`flush`, with the CRC-32 of
-    what it holds (:attr:`crc32`, for a checkpoint).
+    what it holds (:attr:`crc32`, for a checkpoint) and the rows appended since it was
+    opened (:attr:`appended`).
 
     Args:
         path: the file.
@@ -54,11 +57,14 @@ class SideCsv:
         self.path = Path(path)
         self._pending: list[str] = []
         self._pending_chars = 0
+        self.appended = 0
         if size is None:
-            self._file = open(self.path, "wb")  # noqa: SIM115 - closed by close()
+            # read as well: a mark before the last rows reads them back (see mark)
+            self._file = open(self.path, "w+b")  # noqa: SIM115 - closed by close()
             header = (",".join(columns) + "\n").encode()
             self._file.write(header)
             self.crc32 = zlib.crc32(header)
+            size = len(header)
         else:
             try:
                 self._file = open(self.path, "r+b")  # noqa: SIM115
@@ -72,11 +78,14 @@ class SideCsv:
             self.crc32 = crc32
             self._file.truncate(size)
             self._file.seek(size)
+        #: (rows appended, size, CRC-32) at the last flush: where mark reads from
+        self._flushed = (0, size, self.crc32)
 
     def append(self, row: Sequence[Any]) -> None:
         line = ",".join(format_field(v) for v in row) + "\n"
         self._pending.append(line)
         self._pending_chars += len(line)
+        self.appended += 1
         if self._pending_chars >= SPILL_CHARS:
             # written, not synced: a resume cuts the file back to its checkpoint's size
             self._write()
@@ -94,12 +103,51 @@ class SideCsv:
         self._write()
         self._file.flush()
         os.fsync(self._file.fileno())
-        return self._file.tell()
+        size = self._file.tell()
+        self._flushed = (self.appended, size, self.crc32)
+        return size
+
+    def mark(self, rows: int | None = None) -> tuple[int, int]:
+        """Write and sync the buffered rows; return the (size in bytes, CRC-32) of the
+        file up to the first ``rows`` rows appended since it was opened (default all of
+        them), for a checkpoint. The rows after them stay in the file, after the size the
+        checkpoint records (samples of a contact phase cut by a stop, which the engine
+        reports again when the run resumes: a resume cuts the file back to that size).
+
+        Raises:
+            ValueError: ``rows`` is before the last flush or after the last row.
+        """
+        done, size, crc = self._flushed
+        end = self.flush()
+        if rows is None or rows == self.appended:
+            return end, self.crc32
+        if not done <= rows < self.appended:
+            raise ValueError(f"no mark after {rows} rows: {done} to {self.appended} can be marked")
+        return _line_mark(self._file.fileno(), size, crc, rows - done)
 
     def close(self) -> None:
         if not self._file.closed:
             self.flush()
             self._file.close()
+
+
+def _line_mark(fd: int, offset: int, crc: int, lines: int) -> tuple[int, int]:
+    """(offset, CRC-32) just after the ``lines``-th line end at or after ``offset`` in the
+    open file ``fd``, the CRC-32 continued from ``crc`` (that of the bytes before
+    ``offset``)."""
+    while True:
+        chunk = _read_at(fd, _SCAN_CHUNK, offset)
+        if not chunk:
+            raise ValueError(f"the file ends {lines} lines before the mark")
+        found = chunk.count(b"\n")
+        if found >= lines:
+            end = -1
+            for _ in range(lines):
+                end = chunk.index(b"\n", end + 1)
+            return offset + end + 1, zlib.crc32(chunk[: end + 1], crc)
+        crc = zlib.crc32(chunk, crc)
+        offset += len(chunk)
+        lines -= found
 
 
 def check_side(path: Path, size: int, crc32: int | None, end: tuple[int, int] | None = None) -> int:

@@ -39,6 +39,7 @@ from typing import Any
 import numpy as np
 
 from billiard.engine import ensemble
+from billiard.lifeline import die_with_parent
 from billiard.sweep.attractor import CLASSES
 from billiard.sweep.columns import STATUSES, ChunkResult, empty_columns, record_of_row
 from billiard.sweep.definition import Sweep, SweepError, read_sweep_file, sweep_to_toml
@@ -513,8 +514,10 @@ def _start_values(
 # executors
 
 
-def _worker_init() -> None:
-    """Workers leave Ctrl-C to the parent, which stops them."""
+def _worker_init(parent: int) -> None:
+    """Workers leave Ctrl-C to the parent, which stops them, and end with the parent
+    (a parent killed by SIGKILL stops none)."""
+    die_with_parent(parent)
     signal.signal(signal.SIGINT, signal.SIG_IGN)
 
 
@@ -545,6 +548,7 @@ def local_executor(workers: int) -> Iterator[Workers]:
         max_workers=workers,
         mp_context=multiprocessing.get_context("spawn"),
         initializer=_worker_init,
+        initargs=(os.getpid(),),
     )
     clean = False
     try:
@@ -555,15 +559,30 @@ def local_executor(workers: int) -> Iterator[Workers]:
         if clean:
             pool.shutdown(wait=True)
         else:  # interrupted: drop queued points and stop the running ones now
-            pool.shutdown(wait=False, cancel_futures=True)
-            terminate = getattr(pool, "terminate_workers", None)  # Python >= 3.14
-            if terminate is not None:
-                terminate()
-            else:
-                for process in list((getattr(pool, "_processes", None) or {}).values()):
-                    process.terminate()
-                for process in list((getattr(pool, "_processes", None) or {}).values()):
-                    process.join(5)
+            _stop_pool(pool)
+
+
+#: Seconds an interrupted sweep gives its workers to end on SIGTERM before SIGKILL.
+STOP_GRACE = 0.5
+
+
+def _stop_pool(pool: ProcessPoolExecutor) -> None:
+    """Drop the pool's queued chunks and end its workers now: the chunks they run are
+    lost (a resume computes them). The processes are taken before ``shutdown``, which
+    forgets them: a worker left running goes on with its chunk, and the interpreter's
+    exit waits for it (4 to 10 s after Ctrl-C)."""
+    processes = list((getattr(pool, "_processes", None) or {}).values())
+    for process in processes:
+        with contextlib.suppress(OSError, ValueError):  # already ended, or closed
+            process.terminate()
+    pool.shutdown(wait=False, cancel_futures=True)
+    deadline = time.monotonic() + STOP_GRACE
+    for process in processes:
+        with contextlib.suppress(OSError, ValueError):
+            process.join(max(0.0, deadline - time.monotonic()))
+            if process.is_alive():
+                process.kill()
+                process.join(1.0)
 
 
 @contextlib.contextmanager
