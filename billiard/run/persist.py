@@ -494,11 +494,11 @@ def _check_sides(
     in trajectory.csv as the engine state made) before anything is written."""
     for name, size in sizes.items():
         path = out / _side_name(name, store)
+        table = CONTACTS if name == "contacts" else TRAJECTORY
         if store == "npy":
-            table = CONTACTS if name == "contacts" else TRAJECTORY
             rows = check_side_npy(path, table, size, crcs.get(name))
         else:
-            rows = check_side(path, size, crcs.get(name))
+            rows = check_side(path, size, crcs.get(name), table.columns)
         if name == "trajectory" and rows != samples:
             raise CheckpointError(
                 f"{path} holds {rows} samples before the checkpoint, its engine state "

@@ -46,6 +46,7 @@ from billiard.runfile.npyfile import (
     export_csv,
     header_bytes,
     header_size,
+    is_legacy_contacts,
     read_header,
     read_table,
     rows_of_block,
@@ -110,6 +111,12 @@ def _check_header(path: Path, head: bytes, table: Table) -> None:
         dtype, _, offset = read_header(head)
     except ValueError:
         dtype, offset = None, -1
+    if dtype is not None and is_legacy_contacts(dtype, table):
+        raise CheckpointError(
+            f"{path} has other columns than this version writes (written by an earlier "
+            f"version: wall as text, no wall_other): it cannot be continued; run the scene "
+            f"again without --resume"
+        )
     if dtype != table.dtype or offset != header_size(table.dtype):
         raise CheckpointError(
             f"{path} does not start with the header of a binary {table.name} file"
