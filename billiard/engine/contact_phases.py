@@ -343,7 +343,7 @@ class ContactPhases:
                 ContactRecord(
                     t_start,
                     t_cut,
-                    surface.label,
+                    surface.code,
                     mode,
                     CUT,
                     settle,
@@ -364,7 +364,7 @@ class ContactPhases:
             )
         q3 = ball.q3 + 0.5 * (ball.u3 + u3) * tau
         record = ContactRecord(
-            t_start, t, surface.label, mode, end.reason, settle,
+            t_start, t, surface.code, mode, end.reason, settle,
             *model.lab_state(wall, theta0, (s, sd, ball.u3), mode), q1, q2, u1, u2, u3,
         )  # fmt: skip
         self._ball = BallState(t, theta, q1, q2, u1, u2, u3, q3)
@@ -638,12 +638,13 @@ class ContactPhases:
                 ContactRecord(
                     t_start,
                     t_cut,
-                    f"{offsets[a].label}+{offsets[b].label}",
+                    offsets[a].code,
                     HELD,
                     CUT,
                     settle,
                     *lab(theta0, ball.u3),
                     *lab(theta0 + drive.omega * end.tau, end.u3),
+                    offsets[b].code,
                 ),  # fmt: skip
                 deadline,
                 samples,
@@ -655,8 +656,8 @@ class ContactPhases:
         # the spin decays linearly in time on a static boundary: the trapezoid is exact
         q3 = ball.q3 + 0.5 * (ball.u3 + u3) * tau
         record = ContactRecord(
-            t_start, t, f"{offsets[a].label}+{offsets[b].label}", HELD, end.reason, settle,
-            *lab(theta0, ball.u3), q1, q2, u1, u2, u3,
+            t_start, t, offsets[a].code, HELD, end.reason, settle,
+            *lab(theta0, ball.u3), q1, q2, u1, u2, u3, offsets[b].code,
         )  # fmt: skip
         self._ball = BallState(t, theta, q1, q2, u1, u2, u3, q3)
         self._end_phase(HELD, t_start, tau, total, error)

@@ -47,7 +47,7 @@ from billiard.kernels import layout as L
 from billiard.kernels.interpreted import stop_text
 from billiard.models.rk4_locator import answer_foot
 from billiard.runfile.npystream import NpyRecorder
-from billiard.runfile.record import ContactRecord, MemoryRecorder, record_of
+from billiard.runfile.record import NO_WALL, ContactRecord, MemoryRecorder, record_of
 from billiard.runfile.rows import as_block
 from billiard.runfile.stream import CsvRecorder
 from billiard.status import Status
@@ -639,11 +639,12 @@ class KernelEngine:
         surfaces = sim.boundary.surfaces
         rows = self._contacts[first * L.CCOL : stop * L.CCOL].reshape(-1, L.CCOL).tolist()
         for row in rows:
+            # the surfaces' indices in the row (b < 0: one wall); their wall codes here
             a, b = int(row[4]), int(row[5])
-            label = surfaces[a].label if b < 0 else f"{surfaces[a].label}+{surfaces[b].label}"
+            other = surfaces[b].code if b >= 0 else NO_WALL
             record = ContactRecord(
-                row[2], row[3], label, L.MOTION_NAMES[int(row[6])], L.END_NAMES[int(row[7])],
-                row[8], *row[9:19],
+                row[2], row[3], surfaces[a].code, L.MOTION_NAMES[int(row[6])],
+                L.END_NAMES[int(row[7])], row[8], *row[9:19], other,
             )  # fmt: skip
             hook = sim.on_contact if row[0] == 0.0 else sim.on_contact_cut
             if hook is not None:

@@ -43,6 +43,7 @@ import numpy as np
 
 from billiard.plot.common import Columns, RunDataError, column
 from billiard.plot.flights import arc_count, flight_from_state
+from billiard.runfile.rows import NO_WALL
 from billiard.scene.scene import Scene
 
 __all__ = [
@@ -149,6 +150,17 @@ def _text(values: np.ndarray) -> list[str]:
     return [str(v).strip() for v in np.asarray(values).tolist()]
 
 
+def wall_labels(contacts: Side) -> list[str]:
+    """Each phase's walls as a label: the wall's index, ``a+b`` for the two walls holding
+    the ball (``wall`` and ``wall_other``)."""
+    pairs = zip(
+        np.asarray(contacts["wall"]).tolist(),
+        np.asarray(contacts["wall_other"]).tolist(),
+        strict=True,
+    )
+    return [str(int(a)) if int(b) == NO_WALL else f"{int(a)}+{int(b)}" for a, b in pairs]
+
+
 def phase_path(
     columns: Columns,
     rows: np.ndarray,
@@ -173,10 +185,11 @@ def phase_path(
     n = column(columns, "n")
     c_start = column(contacts, "t_start")
     c_end = column(contacts, "t_end")
-    for name in ("mode", "end", "wall"):
+    for name in ("mode", "end", "wall", "wall_other"):
         if name not in contacts:
             raise RunDataError(f"contacts data have no column {name!r}")
-    modes, ends, walls = (_text(contacts[k]) for k in ("mode", "end", "wall"))
+    modes, ends = (_text(contacts[k]) for k in ("mode", "end"))
+    walls = wall_labels(contacts)
     t_lo, t_hi = float(t[rows[0]]), float(t[rows[-1]])
     if c_start.size and rows[-1] == t.size - 1:
         t_hi = max(t_hi, float(c_end.max()))

@@ -483,7 +483,7 @@ def _samples(
 def _check_sides(out: Path, files: Recorded, samples: int) -> None:
     """Check the side files' rows before the checkpoint (unchanged, and as many samples
     in trajectory.csv as the engine state made) before anything is written."""
-    rows = verify_sides(out, files, whole=False)
+    rows = verify_sides(out, files, whole=False, current=True)
     if "trajectory" in rows and rows["trajectory"] != samples:
         path = out / _side_name("trajectory", files.store)
         raise CheckpointError(

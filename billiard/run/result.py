@@ -144,7 +144,8 @@ class Result:
     def contacts(self) -> Table | None:
         """The contact phases (``contact.model = "phases"``): the ``contacts`` table,
         column name -> array, the columns of contacts.csv (read from the file on first
-        use); None for the impacts model."""
+        use; ``wall`` and ``wall_other`` int64, see
+        :func:`~billiard.runfile.tables.read_contacts`); None for the impacts model."""
         return self._side("contacts", self._contacts)
 
     @property

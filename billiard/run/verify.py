@@ -178,13 +178,15 @@ def verify_files(out: Path, files: Recorded) -> None:
 
 
 def verify_sides(
-    out: Path, files: Recorded, *, whole: bool, missing_ok: bool = False
+    out: Path, files: Recorded, *, whole: bool, missing_ok: bool = False, current: bool = False
 ) -> dict[str, int]:
     """Check the side files (``contacts``, ``trajectory``) of the run in ``out`` against
     what its checkpoint recorded: the bytes a resume keeps, and with ``whole`` (a run
     that ended) the whole files where the checkpoint has their ends. Nothing is changed.
     ``missing_ok``: a side file that is not there is not checked (a reader reads the run
     without it, e.g. trajectory.csv deleted to save space; a resume needs it).
+    ``current``: the files must have this version's columns (a resume appends rows to
+    them); else contacts written before ``wall`` was an integer are read as they are.
 
     Returns:
         The rows before the checkpoint's place in each side file checked, by name.
@@ -200,11 +202,12 @@ def verify_sides(
                 continue
             crc = files.side_crcs.get(name)
             end = files.side_ends.get(name) if whole else None
+            table = CONTACTS if name == "contacts" else TRAJECTORY
             if files.store == "npy":
-                table = CONTACTS if name == "contacts" else TRAJECTORY
-                rows[name] = check_side_npy(path, table, size, crc, end)
+                rows[name] = check_side_npy(path, table, size, crc, end, current=current)
             else:
-                rows[name] = check_side(path, size, crc, end)
+                columns = table.columns if current else None
+                rows[name] = check_side(path, size, crc, end, columns)
     return rows
 
 

@@ -50,7 +50,7 @@ COLUMN_INFO: dict[str, dict[str, tuple[str, str]]] = {
     "contacts": {
         "t_start": ("s", "start of the contact phase"),
         "t_end": ("s", "end of the contact phase"),
-        "wall": ("", "wall the ball rolls or slides on (a+b: held by two walls)"),
+        "wall": ("", "index of the wall the ball rolls or slides on (held: the first of two)"),
         "mode": ("", "roll, slide or held"),
         "end": ("", "how the phase ended"),
         "t_settle": ("s", "accumulation point of the chattering the phase stands for"),
@@ -64,6 +64,7 @@ COLUMN_INFO: dict[str, dict[str, tuple[str, str]]] = {
         "v1_end": ("m/s", "centre velocity at the end, horizontal"),
         "v2_end": ("m/s", "centre velocity at the end, vertical"),
         "omega_end": ("rad/s", "spin at the end"),
+        "wall_other": ("", "index of the second wall holding the ball (held), else -2"),
     },
     "samples": {
         "t": ("s", "sample time"),

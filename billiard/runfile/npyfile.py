@@ -17,8 +17,10 @@ Typed columns (units as in the CSV files):
   :data:`~billiard.kernels.layout.REGIMES` (0 ``stick``, 1 ``slip``, 2 ``elastic``);
   ``wall`` int64, the wall's index, ``-1`` for the lid; every other column float64.
   137 bytes per impact.
-* ``contacts.npy``: ``wall``, ``mode`` and ``end`` fixed-width ASCII text (``S15``,
-  ``S5``, ``S8``: a phase held by two walls is ``a+b``), the rest float64.
+* ``contacts.npy``: ``wall`` and ``wall_other`` int64 (the wall, -1 the lid; the second
+  wall of a phase held by two, else -2), ``mode`` and ``end`` fixed-width ASCII text
+  (``S5``, ``S8``), the rest float64. Files written before (``wall`` text ``S15``, ``a+b``
+  for two walls, no ``wall_other``) read as these.
 * ``trajectory.npy``: ``mode`` ASCII text (``S6``), the rest float64.
 
 :func:`read_table` gives the columns with the dtypes of the CSV readers (text as ``str``
@@ -49,7 +51,7 @@ from billiard.runfile.record import (
     format_field,
     header_line,
 )
-from billiard.runfile.rows import format_rows_bytes, regime_labels
+from billiard.runfile.rows import contact_walls, format_rows_bytes, regime_labels
 from billiard.scene.userfile import FileRefused, check_regular
 
 __all__ = [
@@ -60,6 +62,7 @@ __all__ = [
     "block_of",
     "export_csv",
     "header_bytes",
+    "is_legacy_contacts",
     "read_header",
     "read_table",
     "rows_of_block",
@@ -102,7 +105,7 @@ CONTACTS = Table(
     "contacts.csv",
     "contacts.npy",
     CONTACT_COLUMNS,
-    _dtype(CONTACT_COLUMNS, {"wall": "S15", "mode": "S5", "end": "S8"}),
+    _dtype(CONTACT_COLUMNS, {"wall": "<i8", "wall_other": "<i8", "mode": "S5", "end": "S8"}),
 )
 TRAJECTORY = Table(
     "trajectory",
@@ -253,6 +256,25 @@ def _fail(path: str | os.PathLike[str], problem: str) -> RunDataError:
     return RunDataError(f"{path}: {problem}")
 
 
+def is_legacy_contacts(dtype: np.dtype, table: Table) -> bool:
+    """Rows of ``contacts.npy`` as written before ``wall`` was an integer: ``wall`` text
+    (``a+b`` for two walls), no ``wall_other``."""
+    names = dtype.names or ()
+    return (
+        table is CONTACTS
+        and "wall" in names
+        and dtype["wall"].kind == "S"
+        and "wall_other" not in names
+    )
+
+
+def _legacy_walls(column: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(``wall``, ``wall_other``) int64 of a legacy ``wall`` text column."""
+    pairs = [contact_walls(v.decode("ascii")) for v in column.tolist()]
+    wall = np.array([a for a, _ in pairs], dtype=np.int64)
+    return wall, np.array([b for _, b in pairs], dtype=np.int64)
+
+
 def open_rows(path: str | os.PathLike[str], table: Table) -> np.ndarray:
     """The rows of the binary file ``path`` of ``table``, mapped read-only (a plain empty
     array when it has none): the rows its header counts.
@@ -276,7 +298,12 @@ def open_rows(path: str | os.PathLike[str], table: Table) -> np.ndarray:
         dtype, rows, offset = read_header(head)
     except ValueError as exc:
         raise _fail(path, f"not a binary run file ({exc})") from None
-    missing = [name for name in table.columns if name not in dtype.names]
+    legacy = is_legacy_contacts(dtype, table)
+    missing = [
+        name
+        for name in table.columns
+        if name not in dtype.names and not (legacy and name == "wall_other")
+    ]
     if missing:
         raise _fail(path, f"missing column(s) {', '.join(missing)}")
     if offset + rows * dtype.itemsize > size:
@@ -299,11 +326,16 @@ def read_table(path: str | os.PathLike[str], table: Table) -> dict[str, np.ndarr
     readers: numeric columns as read-only views of the mapped file, ``regime`` decoded to
     its labels, text columns as ``str`` arrays (as narrow as the longest value).
 
+    A legacy ``contacts.npy`` (:func:`is_legacy_contacts`) reads as one written now:
+    ``wall`` and ``wall_other`` int64 (``a+b`` as a and b, one wall with -2).
+
     Raises:
-        RunDataError: as :func:`open_rows`, or a regime code that is none of the regimes'.
+        RunDataError: as :func:`open_rows`, a regime code that is none of the regimes',
+            or a legacy ``wall`` that names no wall.
     """
     rows = open_rows(path, table)
     out: dict[str, np.ndarray] = {}
+    legacy = is_legacy_contacts(rows.dtype, table)
     for name in rows.dtype.names or ():
         column = rows[name]
         if name == "regime" and table is COLLISIONS:
@@ -311,10 +343,17 @@ def read_table(path: str | os.PathLike[str], table: Table) -> dict[str, np.ndarr
                 out[name] = regime_labels(column)
             except ValueError as exc:
                 raise _fail(path, str(exc)) from None
+        elif name == "wall" and legacy:
+            try:
+                out[name], other = _legacy_walls(column)
+            except (ValueError, UnicodeDecodeError) as exc:
+                raise _fail(path, f"column wall: {exc}") from None
         elif column.dtype.kind == "S":
             out[name] = _text(column)
         else:
             out[name] = column
+    if legacy:
+        out["wall_other"] = other  # the last column, as in a file of now
     return out
 
 
@@ -340,6 +379,7 @@ def export_csv(source: str | os.PathLike[str], target: str | os.PathLike[str], t
         OSError: ``target`` cannot be written.
     """
     rows = open_rows(source, table)
+    legacy = is_legacy_contacts(rows.dtype, table)
     target = Path(target)
     temp = target.with_name(f".{target.name}.{os.getpid()}.tmp")
     try:
@@ -351,8 +391,15 @@ def export_csv(source: str | os.PathLike[str], target: str | os.PathLike[str], t
                     handle.write(format_rows_bytes(block_of(part), LINE_END))
                     continue
                 lines = []
+                wall = table.columns.index("wall") if legacy else -1
                 for row in part.tolist():
                     cells = [v.decode("ascii") if isinstance(v, bytes) else v for v in row]
+                    if legacy:  # the columns of a file of now
+                        try:
+                            cells[wall], other = contact_walls(cells[wall])
+                        except ValueError as exc:
+                            raise _fail(source, f"column wall: {exc}") from None
+                        cells.append(other)
                     lines.append(",".join(format_field(v) for v in cells) + "\n")
                 handle.write("".join(lines).encode("utf-8"))
             handle.flush()

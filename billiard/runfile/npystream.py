@@ -47,6 +47,7 @@ from billiard.runfile.npyfile import (
     export_csv,
     header_bytes,
     header_size,
+    is_legacy_contacts,
     read_header,
     read_table,
     rows_of_block,
@@ -92,13 +93,21 @@ def _is_count(value: Any) -> bool:
     return isinstance(value, int) and not isinstance(value, bool) and value >= 0
 
 
-def _check_header(path: Path, head: bytes, table: Table) -> None:
-    """Refuse a file whose header is not that of ``table``'s binary file."""
+def _check_header(path: Path, head: bytes, table: Table, expected: Any = None) -> None:
+    """Refuse a file whose header is not that of ``table``'s binary file (rows of
+    ``expected``, default the table's own dtype)."""
+    expected = table.dtype if expected is None else expected
     try:
         dtype, _, offset = read_header(head)
     except ValueError:
         dtype, offset = None, -1
-    if dtype != table.dtype or offset != header_size(table.dtype):
+    if expected is table.dtype and dtype is not None and is_legacy_contacts(dtype, table):
+        raise CheckpointError(
+            f"{path} has other columns than this version writes (written by an earlier "
+            f"version: wall as text, no wall_other): it cannot be continued; run the scene "
+            f"again without --resume"
+        )
+    if dtype != expected or offset != header_size(expected):
         raise CheckpointError(
             f"{path} does not start with the header of a binary {table.name} file"
         )
@@ -558,13 +567,17 @@ def check_side_npy(
     size: int,
     crc32: int | None,
     end: tuple[int, int] | None = None,
+    *,
+    current: bool = True,
 ) -> int:
     """Check that the binary side file ``path`` still holds the ``size`` bytes its
     checkpoint recorded, unchanged (the CRC-32 of its rows is ``crc32``), without
     changing it: before a run resumes, and when a run is opened. ``end`` (the last
     checkpoint of a run that ended): the file's whole length and the CRC-32 of all its
     rows, the phase its end cut included; the file must end there, its header counting
-    them.
+    them. ``current``: the rows must be this version's (a resume appends to them); else
+    contacts written before ``wall`` was an integer are checked as they are (a reader
+    converts them).
 
     Returns:
         The number of rows in the first ``size`` bytes.
@@ -575,14 +588,20 @@ def check_side_npy(
             ``end``, it differs after ``size`` or goes on after ``end``.
     """
     fd = open_checked(path)
-    head_size = header_size(table.dtype)
+    dtype = table.dtype
     try:
+        if not current:
+            with contextlib.suppress(ValueError):
+                found = read_header(_read_at(fd, 1 << 12, 0))[0]
+                if is_legacy_contacts(found, table):
+                    dtype = found
+        head_size = header_size(dtype)
         head = _read_at(fd, head_size, 0)
-        _check_header(path, head, table)
+        _check_header(path, head, table, dtype)
         length = os.fstat(fd).st_size
         if length < size or size < head_size:
             raise CheckpointError(f"{path} is shorter than its checkpoint says")
-        rows, rest = divmod(size - head_size, table.dtype.itemsize)
+        rows, rest = divmod(size - head_size, dtype.itemsize)
         if rest:
             raise CheckpointError(f"{path}: the checkpoint's size is not the end of a row")
         crc = crc32_range(fd, head_size, size)
@@ -593,7 +612,7 @@ def check_side_npy(
             )
         if end is not None:
             stop, final = end
-            total, rest = divmod(stop - head_size, table.dtype.itemsize)
+            total, rest = divmod(stop - head_size, dtype.itemsize)
             if rest or stop < size or length < stop:
                 raise CheckpointError(f"{path} is shorter than its checkpoint says")
             if crc32_range(fd, size, stop, crc) != final:

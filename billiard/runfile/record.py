@@ -43,7 +43,14 @@ from typing import Any, NamedTuple
 import numpy as np
 
 from billiard.kernels.layout import REGIMES
-from billiard.runfile.rows import LID_WALL, column_arrays, format_rows, row_of, wall_code
+from billiard.runfile.rows import (
+    LID_WALL,
+    NO_WALL,
+    column_arrays,
+    format_rows,
+    row_of,
+    wall_code,
+)
 from billiard.scene.userfile import FileRefused, check_regular
 
 __all__ = [
@@ -56,6 +63,7 @@ __all__ = [
     "TEXT_COLUMNS",
     "ImpactRecord",
     "LID_WALL",
+    "NO_WALL",
     "RunDataError",
     "MemoryRecorder",
     "read_collisions_csv",
@@ -92,11 +100,14 @@ class ImpactRecord(NamedTuple):
 class ContactRecord(NamedTuple):
     """One rolling or sliding phase (``contact.model = "phases"``), as
     :meth:`billiard.engine.simulation.Simulation.step` returns it and as it is written to
-    ``contacts.csv`` (columns in the README's table)."""
+    ``contacts.csv`` (columns in the README's table). ``wall`` is the wall's index (-1
+    the lid); a phase held by two walls (``mode`` ``held``) has the second in
+    ``wall_other``, every other phase :data:`NO_WALL` there (the last column, so that a
+    phase on one wall is built without it)."""
 
     t_start: float
     t_end: float
-    wall: str
+    wall: int
     mode: str
     end: str
     t_settle: float
@@ -110,6 +121,7 @@ class ContactRecord(NamedTuple):
     v1_end: float
     v2_end: float
     omega_end: float
+    wall_other: int = NO_WALL
 
 
 #: The columns of ``contacts.csv``, in order.
@@ -125,6 +137,7 @@ REQUIRED_COLUMNS: tuple[str, ...] = COLUMNS[:13]
 TEXT_COLUMNS: frozenset[str] = frozenset({"regime"})
 _TEXT = TEXT_COLUMNS | {"mode", "end"}  # the latter two: contacts.csv, trajectory.csv
 _INTEGER = frozenset({"n", "wall"})
+_SIDE_INTEGER = frozenset({"wall", "wall_other"})  # contacts.csv
 #: Line terminator of the rows written: a plain newline, so that line tools (awk, cut,
 #: sort) see ``0.5`` and not ``0.5\r``. Files written with ``\r\n`` (by older versions)
 #: still read, and a resumed one is continued with its own terminator.
@@ -136,16 +149,16 @@ class RunDataError(ValueError):
     """A run's files cannot be read; the message is one line naming the file."""
 
 
-def _as_arrays(columns: dict[str, list[Any]], impacts: bool = True) -> dict[str, np.ndarray]:
-    """Arrays of the values of each column: those of ``collisions.csv`` (``impacts``), or
-    of a side table (contacts, samples), whose ``wall`` is text (``a+b``: two walls)."""
+def _as_arrays(columns: dict[str, list[Any]]) -> dict[str, np.ndarray]:
+    """Arrays of the values of each column: those of ``collisions.csv`` or of a side
+    table (contacts, samples)."""
     out: dict[str, np.ndarray] = {}
     for name, values in columns.items():
-        if name in _TEXT or (name == "wall" and not impacts):
+        if name in _TEXT:
             out[name] = np.array(values, dtype=str)
         elif name == "wall":
             out[name] = np.array([wall_code(v) for v in values], dtype=np.int64)
-        elif name in _INTEGER:
+        elif name in _INTEGER or name in _SIDE_INTEGER:
             out[name] = np.array(values, dtype=np.int64)
         else:
             out[name] = np.array(values, dtype=np.float64)
@@ -204,7 +217,7 @@ class MemoryRecorder:
         if self._blocks:
             return column_arrays(self.names, self._blocks)
         columns = dict(zip(self.names, self._data, strict=True))
-        return _as_arrays(columns, impacts=self.names == COLUMNS)
+        return _as_arrays(columns)
 
     def write_csv(self, path: str | os.PathLike[str]) -> None:
         if not self._blocks:

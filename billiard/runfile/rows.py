@@ -29,6 +29,8 @@ __all__ = [
     "format_rows",
     "format_rows_bytes",
     "LID_WALL",
+    "NO_WALL",
+    "contact_walls",
     "regime_labels",
     "row_of",
     "wall_code",
@@ -39,6 +41,9 @@ _N, _REGIME, _WALL = 0, 10, 13
 
 #: The ``wall`` column's code of an impact on the lid (the walls are numbered from 0).
 LID_WALL = int(LID_LABEL)
+#: The ``wall_other`` column of a contact phase on one wall: no second wall (-1 is the
+#: lid, walls count from 0, so -2 is none of them).
+NO_WALL = -2
 
 
 def wall_code(wall: Any) -> int:
@@ -54,6 +59,18 @@ def wall_code(wall: Any) -> int:
     if isinstance(wall, float) and not wall.is_integer():
         raise ValueError(f"wall {wall!r} is not an integer")
     return int(wall)
+
+
+def contact_walls(text: str) -> tuple[int, int]:
+    """``(wall, wall_other)`` of a ``contacts.csv`` ``wall`` cell as files written before
+    the column was an integer hold it: ``a+b`` for a phase held by two walls, else one
+    wall (``0``, ``1``, ... or ``lid``) and :data:`NO_WALL`.
+
+    Raises:
+        ValueError: a part is neither an integer nor ``lid``.
+    """
+    first, plus, second = text.strip().partition("+")
+    return wall_code(first), wall_code(second) if plus else NO_WALL
 
 
 def wall_label(code: float) -> str:

@@ -18,13 +18,14 @@ import numpy as np
 from billiard.runfile.checkpoint import CheckpointError, open_checked
 from billiard.runfile.csvfile import _read_at, crc32_range, prefix_crc32
 from billiard.runfile.record import format_field
+from billiard.runfile.rows import contact_walls, wall_code
 from billiard.scene.userfile import read_limited
 
 __all__ = ["CONTACTS_NAME", "TRAJECTORY_NAME", "SideCsv", "check_side", "read_side_csv"]
 
 CONTACTS_NAME = "contacts.csv"
 TRAJECTORY_NAME = "trajectory.csv"
-_TEXT = frozenset({"wall", "mode", "end"})
+_TEXT = frozenset({"mode", "end"})
 #: Characters of rows collected before they are written (not synced) whatever the time
 #: to the next flush: a long flight sampled finely makes millions of rows between two
 #: impacts, which would otherwise all wait in memory.
@@ -150,20 +151,28 @@ def _line_mark(fd: int, offset: int, crc: int, lines: int) -> tuple[int, int]:
         lines -= found
 
 
-def check_side(path: Path, size: int, crc32: int | None, end: tuple[int, int] | None = None) -> int:
+def check_side(
+    path: Path,
+    size: int,
+    crc32: int | None,
+    end: tuple[int, int] | None = None,
+    columns: Sequence[str] | None = None,
+) -> int:
     """Check that the side file ``path`` still holds the ``size`` bytes its checkpoint
     recorded, unchanged (their CRC-32 is ``crc32``; None: not recorded, by an earlier
     version), without changing it: before a run resumes, and when a run is opened.
     ``end`` (the last checkpoint of a run that ended): the file's whole length and the
     CRC-32 of all of it, the phase its end cut included; the file must end there.
+    ``columns`` (a resume, which appends rows): the header the file must have.
 
     Returns:
         The number of rows (line ends after the header's) in the first ``size`` bytes.
 
     Raises:
         CheckpointError: the file is missing, not a regular file, shorter than ``size``,
-            or its first ``size`` bytes were changed; with ``end``, it differs after
-            ``size`` or goes on after ``end``.
+            its first ``size`` bytes were changed, or its columns are not ``columns``
+            (written by an earlier version: rows of this one would not fit them); with
+            ``end``, it differs after ``size`` or goes on after ``end``.
     """
     fd = open_checked(path)
     try:
@@ -171,6 +180,12 @@ def check_side(path: Path, size: int, crc32: int | None, end: tuple[int, int] | 
         if length < size:
             raise CheckpointError(f"{path} is shorter than its checkpoint says")
         crc, lines = prefix_crc32(fd, size)
+        header = (",".join(columns) + "\n").encode() if columns is not None else b""
+        if header and os.pread(fd, len(header), 0) != header:
+            raise CheckpointError(
+                f"{path} has other columns than this version writes (written by an earlier "
+                f"version?): it cannot be continued; run the scene again without --resume"
+            )
         if crc32 is not None and crc != crc32:
             raise CheckpointError(
                 f"{path} does not match the checkpoint (its rows before it were changed "
@@ -196,12 +211,17 @@ def check_side(path: Path, size: int, crc32: int | None, end: tuple[int, int] | 
 
 
 def read_side_csv(path: str | os.PathLike[str]) -> dict[str, np.ndarray]:
-    """Column name -> numpy array of a side file (text columns as str).
+    """Column name -> numpy array of a side file: text columns as str, ``wall`` and
+    ``wall_other`` int64, the rest float64. A ``contacts.csv`` written before ``wall``
+    was an integer (``a+b`` for a phase held by two walls, ``lid`` for the lid) reads as
+    one written now: ``a+b`` as ``wall`` a and ``wall_other`` b, one wall with
+    ``wall_other`` :data:`~billiard.runfile.rows.NO_WALL`.
 
     Raises:
         OSError: the file cannot be read, or is not a regular file
             (:class:`~billiard.scene.userfile.FileRefused`: a device or a pipe never ends).
         UnicodeDecodeError: the file is not UTF-8 text.
+        ValueError: a value that is not of its column's type.
     """
     lines = read_limited(path, None).decode("utf-8").splitlines()
     names = lines[0].split(",")
@@ -209,5 +229,16 @@ def read_side_csv(path: str | os.PathLike[str]) -> dict[str, np.ndarray]:
     out: dict[str, np.ndarray] = {}
     for i, name in enumerate(names):
         values = [row[i] for row in rows]
-        out[name] = np.array(values, dtype=str if name in _TEXT else np.float64)
+        if name == "wall" and "wall_other" not in names:
+            pairs = [contact_walls(v) for v in values]
+            out[name] = np.array([a for a, _ in pairs], dtype=np.int64)
+            out["wall_other"] = np.array([b for _, b in pairs], dtype=np.int64)
+        elif name == "wall":
+            out[name] = np.array([wall_code(v) for v in values], dtype=np.int64)
+        elif name == "wall_other":
+            out[name] = np.array([int(v) for v in values], dtype=np.int64)
+        else:
+            out[name] = np.array(values, dtype=str if name in _TEXT else np.float64)
+    if "wall_other" in out and "wall_other" not in names:
+        out["wall_other"] = out.pop("wall_other")  # the last column, as in a file of now
     return out

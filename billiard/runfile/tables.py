@@ -73,10 +73,12 @@ def read_contacts(path: str | os.PathLike[str]) -> dict[str, np.ndarray]:
 
     Returns:
         Column name -> 1-D array, one entry per phase, in the columns' order
-        (:data:`~billiard.runfile.record.CONTACT_COLUMNS`): ``wall``, ``mode`` and ``end``
-        strings (``wall`` is ``a+b`` for a phase held by two walls), every other column
-        float64 (s, m, m/s, rad/s). The numeric columns of a binary file are read-only
-        views of the mapped file.
+        (:data:`~billiard.runfile.record.CONTACT_COLUMNS`): ``wall`` and ``wall_other``
+        int64 (the wall's index, -1 the lid; ``wall_other`` the second wall of a phase
+        held by two, else -2), ``mode`` and ``end`` strings, every other column float64
+        (s, m, m/s, rad/s), whatever the format and whichever version wrote the file
+        (``a+b`` text of earlier files reads as a and b). The numeric columns of a
+        binary file are read-only views of the mapped file.
 
     Raises:
         RunDataError: the file is missing, unreadable or not a contacts table.

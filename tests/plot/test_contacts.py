@@ -86,6 +86,13 @@ def drawn_trajectory(run: Path, window=WINDOW) -> tuple[dict, dict, dict, object
     return drawn, columns, contacts, scene
 
 
+def walls_of(contacts, k: int) -> str:
+    """Phase k's walls as the figures name them: ``a``, or ``a+b`` for two (held)."""
+    wall, other = int(contacts["wall"][k]), int(contacts["wall_other"][k])
+    assert (other != -2) == (contacts["mode"][k] == "held")
+    return f"{wall}+{other}" if other != -2 else str(wall)
+
+
 def offset_distance(scene, wall_label: str, t: np.ndarray, x: np.ndarray, y: np.ndarray):
     """Distance (m) of centres at times t from the offset curve of a wall (or, for two
     walls a+b, the larger of the two), relative to the boundary: |nearest distance - r|."""
@@ -122,7 +129,7 @@ def test_contact_stretches_are_drawn_along_the_wall_by_mode(phases_run):
     in_window = contacts["t_end"] <= path.t_hi + 1e-12
     assert len(path.stretches) == int(in_window.sum()) >= 10
     for k, piece in enumerate(path.stretches):
-        assert piece.kind == contacts["mode"][k] and piece.wall == contacts["wall"][k]
+        assert piece.kind == contacts["mode"][k] and piece.wall == walls_of(contacts, k)
         assert piece.t[0] == contacts["t_start"][k] and piece.t[-1] == contacts["t_end"][k]
         assert piece.x[0] == contacts["q1_start"][k] and piece.y[-1] == contacts["q2_end"][k]
         assert piece.source in ("samples", "ends")
@@ -253,7 +260,7 @@ def test_phases_run_figures_and_gif(phases_run, unsampled_run, tmp_path, monkeyp
         inside = (times > t0) & (times < t1)
         if inside.any():
             assert {modes[i] for i in np.flatnonzero(inside)} == {contacts["mode"][k]}
-            wall = str(contacts["wall"][k])
+            wall = walls_of(contacts, k)
             gaps = offset_distance(scene, wall, times[inside], x[inside], y[inside])
             assert gaps.max() < 1e-9
     assert any(text.startswith("rolling, wall") for text in texts)
@@ -294,8 +301,7 @@ def test_stretches_that_cannot_be_integrated_follow_the_curve_or_a_segment(unsam
     assert offset_distance(scene, piece.wall, piece.t, piece.x, piece.y).max() < 1e-9
     # a wall the curve does not have: the straight segment between the recorded ends
     changed = {name: values.copy() for name, values in contacts.items()}
-    changed["wall"] = changed["wall"].astype("<U8")
-    changed["wall"][k] = "7"
+    changed["wall"][k] = 7
     piece = plot.contacts.phase_path(columns, rows, scene, changed).stretches[k]
     assert piece.source == "segment"
     ends = np.array([[piece.x[0], piece.y[0]], [piece.x[-1], piece.y[-1]]])

@@ -13,13 +13,17 @@ import zlib
 from collections.abc import Callable
 from pathlib import Path
 
+import numpy as np
 import pytest
 
+import billiard
 from billiard.cli import main
 from billiard.engine.interrupt import signal_after
 from billiard.run.persist import CHECKPOINT_NAME, CSV_NAME, SCENE_NAME
 from billiard.run.simulate import RunInterrupted, Simulation, resume, simulate
 from billiard.runfile.checkpoint import read_checkpoint, write_checkpoint
+from billiard.runfile.npyfile import CONTACTS, header_bytes, header_size
+from billiard.runfile.record import NO_WALL
 from billiard.scene.scene import load_scene, scene_from_toml, scene_to_toml, with_values
 
 IMPACTS, AT = 400, 150
@@ -269,3 +273,78 @@ def test_the_trajectory_must_hold_the_states_samples(phases_runs, tmp_path, caps
     forge(out, change)
     n = body["engine"]["samples"]
     refused(out, capsys, f"holds {n - 1} samples before the checkpoint, its engine state says {n}")
+
+
+# ---------------------------------------------------------------------------------
+# (d) side files written by an earlier version
+
+
+def _old_contacts_text(text: str) -> str:
+    """contacts.csv lines as written before ``wall`` was an integer: no ``wall_other``,
+    ``a+b`` in ``wall`` for a phase held by two walls."""
+    lines = []
+    for line in text.splitlines(keepends=True):
+        cells = line.rstrip("\n").split(",")
+        other = cells.pop()
+        if other not in ("wall_other", str(NO_WALL)):
+            cells[2] = f"{cells[2]}+{other}"
+        lines.append(",".join(cells) + "\n")
+    return "".join(lines)
+
+
+def _old_contacts_npy(rows: np.ndarray) -> tuple[bytes, bytes]:
+    """(header, rows) of contacts.npy as written before: ``wall`` ``S15`` text."""
+    names = [name for name in CONTACTS.columns if name != "wall_other"]
+    kinds = {"wall": "S15", "mode": "S5", "end": "S8"}
+    dtype = np.dtype([(name, kinds.get(name, "<f8")) for name in names])
+    old = np.empty(len(rows), dtype=dtype)
+    for name in names:
+        old[name] = rows[name]
+    old["wall"] = [
+        f"{a}+{b}".encode() if b != NO_WALL else str(a).encode()
+        for a, b in zip(rows["wall"].tolist(), rows["wall_other"].tolist(), strict=True)
+    ]
+    return header_bytes(dtype, len(old)), old.tobytes()
+
+
+@pytest.fixture(scope="module")
+def phases_npy_run(tmp_path_factory) -> Path:
+    """The phases run stored as binary files, interrupted after impact AT."""
+    stopped = tmp_path_factory.mktemp("phases-npy") / "stopped"
+    with pytest.raises(RunInterrupted):
+        simulate(wedge_phases(), collisions=IMPACTS, out_dir=stopped, store="npy",
+                 on_record=signal_after(AT))  # fmt: skip
+    return stopped
+
+
+@pytest.mark.parametrize("store", ["csv", "npy"])
+def test_a_run_with_contacts_of_an_earlier_version_is_refused(
+    store, phases_runs, phases_npy_run, tmp_path, capsys
+):
+    """An unfinished run whose contacts file an earlier version wrote (``wall`` text,
+    no ``wall_other``), its checkpoint consistent with it: continued, it would get rows
+    of the new columns after rows of the old ones. Refused in one line, files as they
+    were."""
+    out = copy_run(phases_runs[1] if store == "csv" else phases_npy_run, tmp_path)
+    checkpoint = read_checkpoint(out / CHECKPOINT_NAME)
+    size = checkpoint["side"]["contacts"]
+    path = out / f"contacts.{store}"
+    if store == "csv":
+        data = path.read_text()
+        before, after = _old_contacts_text(data[:size]), _old_contacts_text(data[size:])
+        path.write_text(before + after)
+        checkpoint["side"]["contacts"] = len(before.encode())
+        checkpoint["side_crc32"]["contacts"] = zlib.crc32(before.encode())
+    else:
+        rows = np.load(path)
+        head = header_size(CONTACTS.dtype)
+        kept = (size - head) // CONTACTS.dtype.itemsize
+        header, body = _old_contacts_npy(rows)
+        path.write_bytes(header + body)
+        item = len(body) // max(len(rows), 1)
+        checkpoint["side"]["contacts"] = len(header) + kept * item
+        checkpoint["side_crc32"]["contacts"] = zlib.crc32(body[: kept * item])
+    write_checkpoint(out / CHECKPOINT_NAME, checkpoint)
+    # still a run of contact phases to read: the old rows read as rows of now
+    assert billiard.read_contacts(path)["wall_other"].dtype == np.int64
+    refused(out, capsys, f"{path} has other columns than this version writes", "without --resume")

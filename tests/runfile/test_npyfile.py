@@ -15,7 +15,7 @@ import billiard
 from billiard.run.simulate import simulate
 from billiard.runfile import npyfile
 from billiard.runfile.npyfile import COLLISIONS, CONTACTS, TABLES, TRAJECTORY
-from billiard.runfile.record import COLUMNS, LID_WALL, RunDataError
+from billiard.runfile.record import COLUMNS, LID_WALL, ContactRecord, RunDataError
 from billiard.runfile.tables import read_collisions
 from billiard.scene.scene import load_scene, with_values
 
@@ -211,12 +211,11 @@ def test_a_file_of_the_other_format_is_refused_by_its_name(tmp_path, runs, name)
 
 
 def test_a_text_too_long_for_its_column_is_refused_not_cut():
-    row = ("0", "roll", "lift-off") + (0.0,) * 13
-    record = list(row[3:5]) + list(row[:3]) + list(row[5:])  # t_start, t_end, wall, ...
+    record = ContactRecord(0.0, 0.0, 0, "roll", "lift-off", *(0.0,) * 11)
     assert len(record) == len(CONTACTS.columns)
     assert npyfile.rows_of_records([record], CONTACTS)["end"][0] == b"lift-off"
-    record[2] = "1234567890+1234567890"
-    with pytest.raises(ValueError, match="contacts column wall: .* is over 15 characters"):
+    record = record._replace(end="lift-offs")
+    with pytest.raises(ValueError, match="contacts column end: .* is over 8 characters"):
         npyfile.rows_of_records([record], CONTACTS)
 
 
