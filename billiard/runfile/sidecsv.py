@@ -17,7 +17,7 @@ import numpy as np
 
 from billiard.runfile.checkpoint import CheckpointError, open_checked
 from billiard.runfile.csvfile import _read_at, crc32_range, prefix_crc32
-from billiard.runfile.record import format_field
+from billiard.runfile.record import RunDataError, format_field
 from billiard.runfile.rows import contact_walls, wall_code
 from billiard.scene.userfile import read_limited
 
@@ -221,11 +221,18 @@ def read_side_csv(path: str | os.PathLike[str]) -> dict[str, np.ndarray]:
         OSError: the file cannot be read, or is not a regular file
             (:class:`~billiard.scene.userfile.FileRefused`: a device or a pipe never ends).
         UnicodeDecodeError: the file is not UTF-8 text.
-        ValueError: a value that is not of its column's type.
+        ValueError: a value that is not of its column's type; RunDataError (a
+            ValueError): a row with more or fewer fields than the header has columns.
     """
     lines = read_limited(path, None).decode("utf-8").splitlines()
     names = lines[0].split(",")
     rows = [line.split(",") for line in lines[1:] if line]
+    for number, row in enumerate(rows, start=2):
+        if len(row) != len(names):
+            raise RunDataError(
+                f"{path}: line {number} has {len(row)} fields where the header names "
+                f"{len(names)} columns (a damaged file?)"
+            )
     out: dict[str, np.ndarray] = {}
     for i, name in enumerate(names):
         values = [row[i] for row in rows]

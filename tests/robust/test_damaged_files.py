@@ -199,3 +199,18 @@ def test_commands_that_read_a_run_refuse_a_damaged_one(runs, tmp_path, capsys, a
     err = capsys.readouterr().err
     assert err.startswith(f"billiard: error: {path} does not match the checkpoint")
     assert err.count("\n") == 1 and _files(folder) == before
+
+
+def test_a_side_file_row_with_an_extra_field_is_refused(runs, tmp_path):
+    """A contacts.csv row with one field too many (a damaged copy, the checksums not
+    consulted: the reader alone) is refused in one line naming the file and the line,
+    not read with its fields shifted or dropped."""
+    from billiard.runfile.sidecsv import read_side_csv
+
+    path = _copy(runs, "phases-csv", tmp_path) / "contacts.csv"
+    lines = path.read_text().splitlines(keepends=True)
+    lines[1] = lines[1].replace(",", ",0,", 1)
+    path.write_text("".join(lines))
+    with pytest.raises(RunDataError) as info:
+        read_side_csv(path)
+    assert f"{path}: line 2 has" in str(info.value) and "\n" not in str(info.value)
