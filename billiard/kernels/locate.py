@@ -55,11 +55,13 @@ CONTACT_TOLERANCE = 1e-13
 GAP_NOISE = 1e-16
 # Rounding noise of a gap's rate relative to the speeds it is a difference of (the
 # ball's and the boundary's, m/s): each component of the relative velocity carries
-# about 2.2e-16 of them, so an approach slower than this is zero to within rounding,
-# and the gap's acceleration tells whether a surface in contact is being left or
-# pressed. (A ball at rest in a shaken vertex, lifted off by the drive, approached a
-# wall at 4e-20 m/s beside speeds of 1.17 m/s: an impact at tau = 0 again and again.)
-# A separating rate, however small, is left as it is: the end of a chatter series.
+# about 2.2e-16 of them, so a rate below this is zero to within rounding, and the
+# gap's acceleration tells whether a surface in contact is being left or pressed. (A
+# ball at rest in a shaken vertex, lifted off by the drive, approached a wall at 4e-20
+# m/s beside speeds of 1.17 m/s: an impact at tau = 0 again and again; or, leaving at
+# 3e-18 m/s, met it again 3e-20 s later, before the gap opened beyond rounding.) A
+# separating rate, however small, of a ball pressed into the surface is left as it is:
+# the end of a chatter series.
 RATE_NOISE = 1e-15
 
 assert MAX_SPLITS < STACK_DEPTH  # every split keeps at most one pending substep
@@ -339,9 +341,17 @@ def locate(ctx, p, walls, theta0, q1, q2, u1, u2, u3):
         dg0 = ctx[base + S_DGA]
         if g0 > CONTACT_TOLERANCE or (g0 > 0.0 and dg0 < 0.0):
             continue
-        if dg0 <= 0.0 and -dg0 <= RATE_NOISE * (abs(u1) + abs(u2) + abs(u1 - vxa) + abs(u2 - vya)):
+        if abs(dg0) <= RATE_NOISE * (abs(u1) + abs(u2) + abs(u1 - vxa) + abs(u2 - vya)):
             ax, ay = relative_acceleration(ctx, 0.0, u1, u2)
-            dg0 = gap_accel(ctx, p, walls, j, pxa, pya, vxa, vya, ax, ay)
+            a0 = gap_accel(ctx, p, walls, j, pxa, pya, vxa, vya, ax, ay)
+            if a0 >= 0.0:
+                # at rest relative to it to within rounding, and accelerating away: the
+                # gap opens by the acceleration, which a rising rate cannot prove
+                # (scan would wait dG/dtau / m for it, a time in which nothing opens)
+                ctx[base + S_DGA] = 0.0
+                dg0 = 0.0
+            elif dg0 <= 0.0:
+                dg0 = a0
         if dg0 >= 0.0:
             ctx[base + S_LEAVING] = 1.0
         elif immediate < 0 or dg0 < immediate_rate:
