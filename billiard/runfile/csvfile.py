@@ -100,6 +100,34 @@ def crc32_range(
     return crc
 
 
+def check_recorded(
+    path: Path, fd: int, crc: int, crc32: int | None, size: int, end: tuple[int, int] | None
+) -> None:
+    """Compare the open file ``fd`` (``path``) with what a checkpoint recorded of it:
+    ``crc``, the CRC-32 of its bytes before the checkpoint's place ``size``, against the
+    recorded ``crc32`` (None: not recorded, by an earlier version); with ``end`` (the
+    last checkpoint of a run that ended: its whole length and CRC-32), the bytes from
+    ``size`` to there too.
+
+    Raises:
+        CheckpointError: the file is shorter than recorded, or bytes were changed.
+    """
+    if crc32 is not None and crc != crc32:
+        raise CheckpointError(
+            f"{path} does not match the checkpoint (its rows before it were changed "
+            f"since: their CRC-32 differs; was the file edited?)"
+        )
+    if end is not None:
+        stop, final = end
+        if stop < size or os.fstat(fd).st_size < stop:
+            raise CheckpointError(f"{path} is shorter than its checkpoint says")
+        if crc32_range(fd, size, stop, crc) != final:
+            raise CheckpointError(
+                f"{path} does not match the checkpoint (its last rows were changed "
+                f"since: their CRC-32 differs; was the file edited?)"
+            )
+
+
 @dataclass(frozen=True)
 class Truncation:
     """What reopening a CSV file at a mark found after it: complete rows written after

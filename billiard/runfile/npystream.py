@@ -38,6 +38,7 @@ from billiard.runfile.csvfile import (
     _read_at,
     _ShortWrite,
     _write_all,
+    check_recorded,
     crc32_range,
     is_crc32,
 )
@@ -605,22 +606,13 @@ def check_side_npy(
         if rest:
             raise CheckpointError(f"{path}: the checkpoint's size is not the end of a row")
         crc = crc32_range(fd, head_size, size)
-        if crc32 is not None and crc != crc32:
-            raise CheckpointError(
-                f"{path} does not match the checkpoint (its rows before it were changed "
-                f"since: their CRC-32 differs; was the file edited?)"
-            )
+        check_recorded(path, fd, crc, crc32, size, None)
         if end is not None:
-            stop, final = end
-            total, rest = divmod(stop - head_size, dtype.itemsize)
-            if rest or stop < size or length < stop:
+            total, rest = divmod(end[0] - head_size, dtype.itemsize)
+            if rest:
                 raise CheckpointError(f"{path} is shorter than its checkpoint says")
-            if crc32_range(fd, size, stop, crc) != final:
-                raise CheckpointError(
-                    f"{path} does not match the checkpoint (its last rows were changed "
-                    f"since: their CRC-32 differs; was the file edited?)"
-                )
-            _check_end(path, head, length, stop, total, "rows")
+            check_recorded(path, fd, crc, None, size, end)
+            _check_end(path, head, length, end[0], total, "rows")
     finally:
         os.close(fd)
     return rows

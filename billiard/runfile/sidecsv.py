@@ -16,7 +16,7 @@ from typing import Any
 import numpy as np
 
 from billiard.runfile.checkpoint import CheckpointError, open_checked
-from billiard.runfile.csvfile import _read_at, crc32_range, prefix_crc32
+from billiard.runfile.csvfile import _read_at, check_recorded, prefix_crc32
 from billiard.runfile.record import RunDataError, format_field
 from billiard.runfile.rows import contact_walls, wall_code
 from billiard.scene.userfile import read_limited
@@ -186,20 +186,9 @@ def check_side(
                 f"{path} has other columns than this version writes (written by an earlier "
                 f"version?): it cannot be continued; run the scene again without --resume"
             )
-        if crc32 is not None and crc != crc32:
-            raise CheckpointError(
-                f"{path} does not match the checkpoint (its rows before it were changed "
-                f"since: their CRC-32 differs; was the file edited?)"
-            )
+        check_recorded(path, fd, crc, crc32, size, end)
         if end is not None:
-            stop, final = end
-            if stop < size or length < stop:
-                raise CheckpointError(f"{path} is shorter than its checkpoint says")
-            if crc32_range(fd, size, stop, crc) != final:
-                raise CheckpointError(
-                    f"{path} does not match the checkpoint (its last rows were changed "
-                    f"since: their CRC-32 differs; was the file edited?)"
-                )
+            stop = end[0]
             if length > stop:
                 raise CheckpointError(
                     f"{path} holds {length - stop} bytes after the rows of the finished "
