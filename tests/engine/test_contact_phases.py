@@ -45,7 +45,9 @@ def test_samples_and_phases_in_the_result():
     assert len(contacts["t_start"]) > 0
     assert np.all(contacts["t_end"] >= contacts["t_start"])
     times = result.mode_times
-    assert sum(times.values()) == pytest.approx(3.0, rel=1e-12)
+    total = sum(times.values()) / 3.0 - 1
+    print(f"[validation] phases: the modes' times sum to 3 s {total:+.1e} rel.")
+    assert abs(total) <= 1e-14  # measured 0: the phases tile the 3 s to the bit
     assert times["roll"] > 0.0 and times["slide"] > 0.0
     # the samples inside a finished phase say its mode
     i = int(np.argmax(contacts["t_end"] - contacts["t_start"]))
@@ -62,7 +64,9 @@ def test_sampled_flight_is_the_exact_parabola():
     first = result.columns["t"][0]
     t = traj["t"][traj["t"] < first]
     q2 = 0.05 - 0.5 * 9.81 * t**2
-    assert np.allclose(traj["q2"][: len(t)], q2, rtol=0, atol=1e-15)
+    off = float(np.max(np.abs(traj["q2"][: len(t)] - q2)))
+    print(f"[validation] phases: sampled flight {off:.1e} m from the parabola")
+    assert off <= 1e-16  # measured 0 m: the exact flight, 14 ulp of 0.05 m
 
 
 def test_engine_state_round_trips_in_contact():

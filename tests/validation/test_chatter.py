@@ -121,8 +121,14 @@ def test_the_reference_is_the_geometric_sum_on_a_still_table():
     # the reference's own check: with A = 0 a ball leaving at v rests 2 v / (g (1 - e)) later
     v = 0.3
     tau, arrive = landing(0.0, v, amp=0.0)
-    assert tau == pytest.approx(2 * v / G, rel=1e-14) and arrive == pytest.approx(-v, rel=1e-14)
-    assert accumulation(0.0, v, amp=0.0) == pytest.approx(2 * v / (G * (1 - E)), rel=1e-13)
+    errors = (tau / (2 * v / G) - 1, arrive / -v - 1)
+    total = accumulation(0.0, v, amp=0.0) / (2 * v / (G * (1 - E))) - 1
+    print(
+        f"[validation] chatter reference, still table: landing {errors[0]:+.1e}, "
+        f"{errors[1]:+.1e}, sum {total:+.1e} rel."
+    )
+    assert max(abs(x) for x in errors) <= 1e-14  # measured 0: brentq finds 2 v / g to the bit
+    assert abs(total) <= 1e-13  # measured 0 (a sum of about 50 flights)
 
 
 def test_a_shaken_table_lands_the_ball_at_the_accumulation_time_and_keeps_the_orbit():

@@ -87,9 +87,15 @@ def test_energy_is_conserved_over_25000_impacts(case):
         + m * G * c["q2"]
     )
     drift = float(np.max(np.abs(energy - e0)) / e0)
-    print(f"[validation] {case}: max relative energy drift over {IMPACTS} impacts {drift:.2e}")
+    column = float(np.max(np.abs(c["energy"] - energy) / energy))
+    print(
+        f"[validation] {case}: max relative energy drift over {IMPACTS} impacts {drift:.2e}; "
+        f"energy column against E {column:.1e} rel."
+    )
+    # the rounding bound 4 N eps = 2.2e-11 (module docstring); measured 5.7e-13
+    # (parabola), 3.2e-12 (wedge), 6.0e-13 (hyperbola), 1.2e-12 (quartic)
     assert drift <= 4 * IMPACTS * EPS, drift
-    assert np.allclose(c["energy"], energy, rtol=1e-14, atol=0.0)
+    assert column <= 1e-14  # measured 0: the column is E to the bit
     # a frictionless impact cannot touch the spin
     assert np.all(c["omega"] == 50.0)
     # with mu_s = 0 the no-slip impulse is accepted only if it is exactly zero; otherwise
@@ -111,4 +117,6 @@ def test_energy_drift_bound_is_not_vacuous():
     )
     for changes in lossy:
         c = simulate(with_values(scene, changes), collisions=200).columns
-        assert np.max(np.abs(c["energy"] - e0)) / e0 > 1e-4, changes
+        change = float(np.max(np.abs(c["energy"] - e0)) / e0)
+        print(f"[validation] control {changes}: energy moves by {change:.1e} in 200 impacts")
+        assert change > 1e-2, changes  # measured 0.19 (e = 0.999), 0.21 (mu = 0.1)

@@ -90,11 +90,18 @@ def test_fowles_flight_matches_dop853(y0):
         error = np.abs(fly(model, y0, t) - dop853(y0, t))
         worst = max(worst, float(error.max()))
     print(f"[validation] Fowles flight from {y0}: largest error {worst:.1e} (m, m/s)")
+    # the engine's tolerance, rtol = 1e-10; measured 5.8e-11, 5.3e-11, 1.5e-11
     assert worst < 1e-10
 
 
-@pytest.mark.parametrize("c_lin", [C_LIN, 2.0 * M])
-def test_linear_drag_flight_matches_the_closed_form(c_lin):
+@pytest.mark.parametrize(
+    "c_lin, bound",
+    [
+        (C_LIN, 3e-11),  # measured 5.0e-13: the drag, and its error, are small
+        (2.0 * M, 1e-10),  # rtol; measured 8.8e-11
+    ],
+)
+def test_linear_drag_flight_matches_the_closed_form(c_lin, bound):
     """c_quad = 0: the real ball's c_lin (drag 0.4 % of gravity at 1 m/s) and one 540
     times stronger (k = 2 /s), where drag dominates the flight."""
     model = AdaptiveFlight(G, M, c_lin, 0.0, rtol=1e-10)
@@ -104,7 +111,7 @@ def test_linear_drag_flight_matches_the_closed_form(c_lin):
             error = np.abs(fly(model, y0, t) - linear_drag(y0, t, c_lin))
             worst = max(worst, float(error.max()))
     print(f"[validation] linear drag c_lin = {c_lin:.3g} N s/m: largest error {worst:.1e}")
-    assert worst < 1e-10
+    assert worst < bound
 
 
 # ------------------------------------------------------------------ impacts in a run
@@ -196,9 +203,16 @@ def test_first_impacts_of_a_run_with_drag():
             f"speed {errors[rtol][2]:.1e} m/s"
         )
     t_err, q_err, v_err = errors[1e-10]
+    gains = [a / b for a, b in zip(errors[1e-10], errors[1e-12], strict=True)]
+    print(
+        f"[validation] first 6 impacts with drag: rtol 1e-10 -> 1e-12 errors "
+        f"{', '.join(f'{g:.1f}' for g in gains)} times smaller (t, q, v)"
+    )
+    # measured t 1.5e-11 s, q 6.7e-12 m, v 1.7e-10 m/s
     assert t_err < 1e-10 and q_err < 1e-10 and v_err < 1e-9
-    # tightening the engine's tolerance brings it closer to the reference, in proportion
-    assert all(a > 20 * b for a, b in zip(errors[1e-10], errors[1e-12], strict=True))
+    # tightening the engine's tolerance brings it closer to the reference; measured
+    # 31, 20.3, 20.2 times (t, q, v) for 100 times in rtol
+    assert all(g > 10 for g in gains)
 
 
 def linear_drag_bounces(c_lin: float, e: float, mu_s: float, mu_k: float, impacts: int):
@@ -268,5 +282,11 @@ def test_bounces_with_linear_drag_match_the_closed_form(tmp_path, monkeypatch):
             f"speed {errors[rtol][2]:.1e} m/s"
         )
     t_err, q_err, v_err = errors[1e-10]
+    gains = [a / b for a, b in zip(errors[1e-10], errors[1e-12], strict=True)]
+    print(
+        f"[validation] 5 bounces with linear drag: slowest approach {approach:.3g} m/s; "
+        f"rtol 1e-10 -> 1e-12 errors {', '.join(f'{g:.1f}' for g in gains)} times smaller"
+    )
+    # measured t 1.1e-10 s (bound 5e-9 s at 0.2 m/s), q 2.8e-11 m, v 1.3e-10 m/s
     assert t_err < 10 * 1e-10 / approach and q_err < 10 * 1e-10 and v_err < 10 * 1e-10
-    assert all(a > 20 * b for a, b in zip(errors[1e-10], errors[1e-12], strict=True))
+    assert all(g > 20 for g in gains)  # measured 99.9, 99.8, 98.6

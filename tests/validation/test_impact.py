@@ -112,33 +112,42 @@ def test_stick_slip_boundary(side, regime):
     out = law(e, mu_s, mu_k).apply(SimpleNamespace(u1=u1, u2=u2, u3=w), Contact(z, 0.0, 0.0))
     ref = lab_impact(u1, u2, w, z, 0.0, 0.0, e, mu_s, mu_k)
     assert out.regime == ref[5] == regime
-    assert (out.u1, out.u2, out.u3) == pytest.approx(ref[:3], rel=1e-12)
-    expected_rt = -(mu_s if regime == "stick" else mu_k) * (1 + e) * M * abs(vn)
-    assert out.Rt == pytest.approx(expected_rt, rel=2e-9)
+    velocity = max(abs(a / b - 1) for a, b in zip((out.u1, out.u2, out.u3), ref[:3], strict=True))
+    # on the stick side the impulse is the no-slip one, `side` times the cone's
+    cone = (1 + e) * M * abs(vn)
+    expected_rt = -side * mu_s * cone if regime == "stick" else -mu_k * cone
+    rt = out.Rt / expected_rt - 1
+    print(
+        f"[validation] stick/slip boundary, {regime} side: u1, u2, omega {velocity:.1e}, "
+        f"Rt {rt:+.1e} rel."
+    )
+    assert velocity <= 2e-14  # measured 2.2e-16 (both sides)
+    assert abs(rt) <= 2e-14  # measured 2.2e-16 (both sides)
 
 
 def test_spin_after_the_impact_has_the_physical_sign():
     floor = Contact(0.0, 0.0, 0.0)
     impact = law(0.5, 0.61, 0.47)
+    rel, rolling = [], []  # relative errors; contact-point speeds after a stick (m/s)
     # sliding to the right without spin, gently: it sticks and leaves rolling, i.e.
     # turning clockwise (negative), with vt+ = vt / (1 + k) = 5/7 vt for a solid sphere
     out = impact.apply(SimpleNamespace(u1=0.3, u2=-1.0, u3=0.0), floor)
     assert out.regime == "stick" and out.u3 < 0.0
-    assert out.u1 == pytest.approx(0.3 / (1 + K), rel=1e-12)
-    assert out.u1 + R * out.u3 == pytest.approx(0.0, abs=1e-15)
+    rel.append(out.u1 / (0.3 / (1 + K)) - 1)
+    rolling.append(out.u1 + R * out.u3)
     # weak backspin (counter-clockwise while moving right, k r w < vt), sticking: the
     # spin reverses and the ball leaves rolling forwards, vt+ = (vt - k r w) / (1 + k)
     w = 0.5 * 0.3 / (K * R)
     out = impact.apply(SimpleNamespace(u1=0.3, u2=-3.0, u3=w), floor)
     assert out.regime == "stick" and out.u3 < 0.0 < out.u1
-    assert out.u1 == pytest.approx((0.3 - K * R * w) / (1 + K), rel=1e-12)
+    rel.append(out.u1 / ((0.3 - K * R * w) / (1 + K)) - 1)
     # strong backspin (k r w > vt), sticking: the ball bounces back, rolling backwards,
     # so its spin keeps the counter-clockwise sign
     w = 2.0 * 0.3 / (K * R)
     out = impact.apply(SimpleNamespace(u1=0.3, u2=-3.0, u3=w), floor)
     assert out.regime == "stick" and out.u1 < 0.0 < out.u3
-    assert out.u1 == pytest.approx((0.3 - K * R * w) / (1 + K), rel=1e-12)
-    assert out.u1 + R * out.u3 == pytest.approx(0.0, abs=1e-15)
+    rel.append(out.u1 / ((0.3 - K * R * w) / (1 + K)) - 1)
+    rolling.append(out.u1 + R * out.u3)
     # fast sliding with strong backspin: it slips, friction acts backwards (Rt < 0) and
     # its torque r Rt only slows the spin down (by mu_k (1 + e) |vn| / (k r) =
     # 569 rad/s here), which keeps its sign; with 300 rad/s instead it would reverse
@@ -146,8 +155,15 @@ def test_spin_after_the_impact_has_the_physical_sign():
         out = impact.apply(SimpleNamespace(u1=2.0, u2=-0.5, u3=w), floor)
         assert out.regime == "slip" and out.Rt < 0.0 and out.u3 < w
         assert math.copysign(1.0, out.u3) == sign
-        assert out.u3 == pytest.approx(w - 0.47 * 1.5 * 0.5 / (K * R), rel=1e-12)
-    assert out.Rt == pytest.approx(-0.47 * out.Rn, rel=1e-12)
+        rel.append(out.u3 / (w - 0.47 * 1.5 * 0.5 / (K * R)) - 1)
+    rel.append(out.Rt / (-0.47 * out.Rn) - 1)
+    worst, slip = max(abs(x) for x in rel), max(abs(x) for x in rolling)
+    print(
+        f"[validation] spin sign: vt+, omega+, Rt {worst:.1e} rel.; contact point after a "
+        f"stick {slip:.1e} m/s"
+    )
+    assert worst <= 2e-14  # measured 2.2e-16
+    assert slip <= 1e-15  # measured 0: rolling to the bit, 1e-15 m/s is 18 ulp of 0.3 m/s
 
 
 # ------------------------------------------------------------ complete simulations
@@ -224,7 +240,7 @@ def test_ball_thrown_onto_a_plane(case, tmp_path, monkeypatch):
         f"[validation] thrown onto a plane, {case}: t {t_err:.1e} rel., q {q_err:.1e} m, "
         f"v, omega, R {rel:.1e} rel., z {abs(row['z'] - z):.1e} rad"
     )
-    # measured (max over the 8 cases): t 4.2e-15, q 1.9e-16 m, v, omega, R 3.3e-15
+    # measured (max over the 8 cases): t 4.2e-15, q 1.9e-16 m, v, omega, R 3.3e-15, z 0
     assert t_err <= 1e-14
     assert q_err <= 1e-15
     assert (row["v1"], row["v2"]) == pytest.approx(ref[:2], rel=3e-13, abs=1e-14)

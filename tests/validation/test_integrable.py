@@ -90,6 +90,7 @@ def test_right_angle_wedge_separates_into_two_conserved_energies():
     drift_r = float(np.max(np.abs(e_r - e_r0)) / total)
     drift_l = float(np.max(np.abs(e_l - e_l0)) / total)
     print(f"[validation] 90-degree wedge: drift of E_R {drift_r:.2e}, of E_L {drift_l:.2e}")
+    # the rounding bound 4 N eps = 2.2e-11 (as for the energy); measured 6.7e-13, 7.2e-13
     assert max(drift_r, drift_l) <= 4 * impacts * EPS
     # both walls were hit many times and the split of energy is far from trivial
     walls = c["wall"]
@@ -104,7 +105,9 @@ def test_other_wedge_angles_mix_the_two_energies():
     c = simulate(scene, collisions=2000).columns
     e_r, e_l = wall_energies(c, C)
     total = e_r[0] + e_l[0]
-    assert np.ptp(e_r) / total > 0.05 and np.ptp(e_l) / total > 0.05
+    swing = (float(np.ptp(e_r) / total), float(np.ptp(e_l) / total))
+    print(f"[validation] wedge b = 1.85: E_R, E_L swing by {swing[0]:.2f}, {swing[1]:.2f}")
+    assert min(swing) > 0.05  # measured 0.53, 0.53
 
 
 # -------------------------------------------------------------------------- parabola
@@ -149,14 +152,15 @@ def test_parabola_integral_is_preserved_by_every_impact_at_the_contact_point():
             f"[validation] parabola r = {radius:g} m: largest jump of I at the contact "
             f"point {jump:.2e}"
         )
-        assert jump < 1e-13
+        assert jump < 1e-13  # measured 2.0e-15 (r = 1e-7 m), 1.8e-15 (r = 1.55e-3 m)
 
 
 def test_parabola_integral_of_the_centre_drifts_linearly_in_the_radius():
     """For the ball's centre I is conserved only as r -> 0: its drift is proportional to
-    r (ratio 10 for radii a factor 10 apart), and the straight line through the drifts
-    at r = 1e-8 m and 1e-7 m meets r = 0 within 5 % of the smaller drift: what is left
-    for a point particle is below the resolution of this extrapolation."""
+    r (ratio 10 for radii a factor 10 apart, to O(r / p), p = 9.6 mm the focal length),
+    and the straight line through the drifts at r = 1e-8 m and 1e-7 m meets r = 0 within
+    0.1 % of the smaller drift: what is left for a point particle is below the
+    resolution of this extrapolation."""
     impacts = 3000
     drifts = {r: centre_drift(r, impacts) for r in (1e-8, 1e-7, 1e-6)}
     for r, d in drifts.items():
@@ -166,13 +170,15 @@ def test_parabola_integral_of_the_centre_drifts_linearly_in_the_radius():
         )
     slope = (drifts[1e-7] - drifts[1e-8]) / (1e-7 - 1e-8)
     at_zero = drifts[1e-8] - slope * 1e-8
+    ratios = (drifts[1e-7] / drifts[1e-8] / 10 - 1, drifts[1e-6] / drifts[1e-7] / 10 - 1)
     print(
         f"[validation] parabola: drift per unit radius {slope:.4g} /m, "
-        f"extrapolated to r = 0: {at_zero:.2e}"
+        f"extrapolated to r = 0: {at_zero:.2e} ({at_zero / drifts[1e-8]:+.1e} of the drift "
+        f"at 1e-8 m); ratios of the drifts to 10: {ratios[0]:+.1e}, {ratios[1]:+.1e}"
     )
-    assert abs(at_zero) < 0.05 * drifts[1e-8]
-    assert drifts[1e-7] / drifts[1e-8] == pytest.approx(10.0, rel=0.05)
-    assert drifts[1e-6] / drifts[1e-7] == pytest.approx(10.0, rel=0.05)
+    assert abs(at_zero) < 1e-3 * drifts[1e-8]  # measured 1.5e-5 of it (-1.9e-11)
+    assert abs(ratios[0]) < 1e-3  # measured +1.4e-5
+    assert abs(ratios[1]) < 1e-2  # measured +1.5e-4, O(r / p) = 1e-4 at r = 1e-6 m
 
 
 @pytest.mark.slow
@@ -185,5 +191,5 @@ def test_parabola_integral_drift_for_the_paper_ball():
         f"[validation] parabola over 25000 impacts: drift of I {drift_point:.3e} at "
         f"r = 1e-7 m, {drift_ball:.3e} at r = 1.55e-3 m"
     )
-    assert drift_point < 1e-4
-    assert drift_ball > 1e3 * drift_point
+    assert drift_point < 1e-4  # measured 1.248e-5, as over 3000 impacts: bounded
+    assert drift_ball > 1e3 * drift_point  # measured 0.193, 1.5e4 times the point's

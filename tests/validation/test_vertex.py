@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import math
 
+import numpy as np
 import pytest
 
 from billiard.engine.simulation import Simulation
@@ -151,7 +152,9 @@ def test_a_ball_released_on_a_wall_comes_to_rest_in_the_vertex():
     assert times["roll"] > 0.05 and times["held"] > 0.0  # rolled down, then held
     assert result.contacts["mode"][-1] == "roll" and result.contacts["end"][-1] == "impact"
     energy = result.columns["energy"]
-    assert (energy[1:] <= energy[:-1] * (1 + 1e-12)).all()  # nothing gains energy
+    gain = float(np.max(energy[1:] / energy[:-1] - 1))
+    print(f"[validation] released on a wall: largest energy change between impacts {gain:+.1e}")
+    assert gain < 0.0  # nothing gains energy: each impact loses at least 1.8e-3 (measured)
 
 
 def test_a_held_state_round_trips_through_a_checkpoint():
@@ -259,7 +262,9 @@ def test_a_vertically_shaken_wedge_keeps_a_ball_in_its_vertex_without_cycles():
 
     sc = with_values(load_scene("wedge-6.6hz"), SHAKEN_VERTEX)
     start = Simulation(sc).initial
-    assert abs(start.q1) < 1e-15 and start.u1 == start.u2 == 0.0  # at rest in the vertex
+    print(f"[validation] shaken vertex: the ball starts {start.q1:+.1e} m from the vertex")
+    # at rest in the vertex; measured q1 = 0 m
+    assert abs(start.q1) < 1e-15 and start.u1 == start.u2 == 0.0
     result = simulate(sc, collisions=1_000_000, duration=10.0)
     assert result.status is Status.TIME_LIMIT, result.message
     assert len(result) > 50  # it bounces: the drive's peak acceleration is 5.7 g
