@@ -551,6 +551,7 @@ def derive_user_curve(
     *,
     force: bool = False,
     timeout: float | None = DERIVE_TIMEOUT,
+    derived: list[curve.CurveDerivation] | None = None,
 ) -> Path:
     """Derive a user's curve into ``directory/<name>.py`` and return the path.
 
@@ -560,7 +561,9 @@ def derive_user_curve(
     place: another process never sees a partial module. An existing module is replaced
     only with ``force``. Names starting with ``expr_`` are the cache of scene expressions
     (derived with ``force``). The derivation stops after ``timeout`` seconds (None: no
-    limit; enforced in the main thread).
+    limit; enforced in the main thread). ``derived``: a list that receives the curve's
+    derivation as soon as sympy has it, before the checks that may refuse the curve (the
+    report of ``billiard derive --report`` says why).
 
     Raises:
         CurveDerivationError: a bad name, an existing curve, a curve that cannot be
@@ -581,6 +584,8 @@ def derive_user_curve(
         with _deadline(timeout):
             cd = curve_from_text(name, text, params)
             source = curve_module(cd)
+        if derived is not None:
+            derived.append(cd)
     except codegen.NonFiniteConstantError as exc:
         raise curve.CurveDerivationError(f"curve {text!r}: {exc}") from None
     except _Deadline:

@@ -11,8 +11,11 @@ from billiard.cli.common import UserError
 
 def cmd_derive(args: argparse.Namespace) -> int:
     from billiard.derivation import build
+    from billiard.derivation.curve import CurveDerivationError
     from billiard.derivation.expr import CurveExpressionError
 
+    if args.report is not None and not (args.curve and args.name):
+        raise UserError("derive: --report DIR goes with --name and --curve")
     if args.curve is not None or args.name is not None:
         if not (args.curve and args.name):
             raise UserError("derive: --name and --curve go together")
@@ -32,12 +35,22 @@ def cmd_derive(args: argparse.Namespace) -> int:
             raise UserError(
                 f"derive: --timeout must be a number of seconds > 0, got {args.timeout}"
             )
+        report = _report_dir(args)
         started = time.perf_counter()
+        derived: list = []
         try:
             path = build.derive_user_curve(
-                args.name, args.curve, params, directory, force=args.force, timeout=args.timeout
+                args.name,
+                args.curve,
+                params,
+                directory,
+                force=args.force,
+                timeout=args.timeout,
+                derived=derived,
             )
-        except CurveExpressionError as exc:
+        except (CurveExpressionError, CurveDerivationError) as exc:
+            if report is not None and derived:
+                _write_report(derived[0], args, report, refusal=str(exc))
             raise UserError(str(exc)) from None
         except OSError as exc:
             where = "" if args.dir else " (the user curve directory: $BILLIARD_HOME/curves)"
@@ -49,6 +62,8 @@ def cmd_derive(args: argparse.Namespace) -> int:
             f"({time.perf_counter() - started:.1f} s); a scene can now use "
             f'curve = "{args.name}"'
         )
+        if report is not None:
+            _write_report(derived[0], args, report)
         return 0
     root = build.repo_root()
     where = (
@@ -86,6 +101,45 @@ def cmd_derive(args: argparse.Namespace) -> int:
         print(f"wrote {path}")
     print(f"derive: {len(written)} file(s) changed ({time.perf_counter() - started:.1f} s)")
     return 0
+
+
+def _report_dir(args: argparse.Namespace) -> Path | None:
+    """``--report DIR``, checked before the derivation starts (None without it)."""
+    if args.report is None:
+        return None
+    if not (0 < args.radius < float("inf")):
+        raise UserError(f"derive: --radius must be a length > 0 in metres, got {args.radius}")
+    folder = Path(args.report)
+    if folder.exists() and not folder.is_dir():
+        raise UserError(f"derive --report {folder}: not a directory")
+    if not folder.exists() and not folder.parent.is_dir():
+        raise UserError(
+            f"derive --report {folder}: its parent directory {folder.parent} does not exist"
+        )
+    return folder
+
+
+def _write_report(cd, args: argparse.Namespace, folder: Path, refusal: str | None = None) -> None:
+    from billiard.derivation.curve_report import HTML, MARKDOWN, report_curve
+
+    started = time.perf_counter()
+    try:
+        report = report_curve(cd, args.radius, folder, refusal)
+    except OSError as exc:
+        raise UserError(
+            f"derive --report: cannot write the report to {folder}: {exc.strerror or exc}"
+        ) from None
+    failed = [c.name for c in report.checks if not c.passed]
+    verdict = (
+        f"all {len(report.checks)} checks passed"
+        if not failed
+        else f"{len(failed)} of {len(report.checks)} checks FAILED: {'; '.join(failed)}"
+    )
+    what = "the refused curve's report" if refusal else "report"
+    print(
+        f"derive: wrote {what} {folder / MARKDOWN} and {folder / HTML} "
+        f"({time.perf_counter() - started:.1f} s; {verdict})"
+    )
 
 
 class _DeriveParser(argparse.ArgumentParser):
@@ -156,5 +210,22 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
         metavar="SECONDS",
         help="longest time the derivation of --curve may take (s; inf: no limit); an "
         "expression sympy cannot simplify is refused after it",
+    )
+    p.add_argument(
+        "--report",
+        metavar="DIR",
+        help="with --name and --curve: write report.md and report.html (offline) into DIR: "
+        "the curve's pieces and joins, its offset curve and where it is valid, the "
+        "equations in readable form and the checks passed; also for a refused curve",
+    )
+    from billiard.scene.spec import BallSpec
+
+    p.add_argument(
+        "--radius",
+        type=float,
+        default=BallSpec.radius,
+        metavar="METRES",
+        help="ball radius (m) the report checks the curvature against "
+        f"(default {BallSpec.radius:g}, the default scene's ball)",
     )
     p.set_defaults(func=cmd_derive)
