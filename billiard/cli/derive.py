@@ -62,8 +62,9 @@ def cmd_derive(args: argparse.Namespace) -> int:
             f"({time.perf_counter() - started:.1f} s); a scene can now use "
             f'curve = "{args.name}"'
         )
-        if report is not None:
-            _write_report(derived[0], args, report)
+        if report is not None and not _write_report(derived[0], args, report):
+            print("derive --report: a check failed: the generated code does not agree with it")
+            return 1
         return 0
     root = build.repo_root()
     where = (
@@ -119,7 +120,8 @@ def _report_dir(args: argparse.Namespace) -> Path | None:
     return folder
 
 
-def _write_report(cd, args: argparse.Namespace, folder: Path, refusal: str | None = None) -> None:
+def _write_report(cd, args: argparse.Namespace, folder: Path, refusal: str | None = None) -> bool:
+    """Write the report; True when all its checks passed."""
     from billiard.derivation.curve_report import HTML, MARKDOWN, report_curve
 
     started = time.perf_counter()
@@ -140,6 +142,7 @@ def _write_report(cd, args: argparse.Namespace, folder: Path, refusal: str | Non
         f"derive: wrote {what} {folder / MARKDOWN} and {folder / HTML} "
         f"({time.perf_counter() - started:.1f} s; {verdict})"
     )
+    return report.passed
 
 
 class _DeriveParser(argparse.ArgumentParser):
