@@ -30,6 +30,8 @@ from .curve import CurveDerivation, x
 
 #: File names written into the report's folder.
 MARKDOWN, HTML = "report.md", "report.html"
+#: How many evenly spaced abscissas the radius of curvature is compared with r at.
+POINTS = 4001
 
 m, r, k, g, e = sm.symbols("m r k g e", positive=True)
 mu_k, sgn = sm.symbols("mu_k sgn", real=True)
@@ -257,7 +259,7 @@ def joins(walls: list[dict]) -> list[tuple[float, float, float, str]]:
     return out
 
 
-def validity(walls: list[dict], radius: float, points: int = 4001) -> dict:
+def validity(walls: list[dict], radius: float, points: int = POINTS) -> dict:
     """Where on the usable range (:func:`shape.usable_range`) the radius of curvature
     (1 + f'^2)^(3/2) / |f''| of the curve is above ``radius`` (m): there the ball touches
     the curve at one point and its centre follows the offset curve."""
@@ -365,13 +367,14 @@ def curve_report(cd: CurveDerivation, radius: float, refusal: str | None = None)
             offset.text(f"Wall {j} ({_interval(walls[j]['lo'], walls[j]['hi'])}):")
         offset.eq(sm.Symbol("C_x"), c1)
         offset.eq(sm.Symbol("C_y"), c2)
-        offset.eq(sm.Symbol("rho"), (1 + df**2) ** sm.Rational(3, 2) / sm.Abs(d2f))
+        rho = (1 + df**2) ** sm.Rational(3, 2) / sm.Abs(d2f)
+        offset.eq(sm.Symbol("rho"), sm.oo if rho.has(sm.zoo) else rho)  # a straight wall
     valid = validity(walls, radius)
     left, right = valid["range"]
     offset.text(
         "The ball touches the curve at a single point, and its centre follows the offset "
         "curve, where the radius of curvature rho = (1 + f'^2)^(3/2) / |f''| is above r = "
-        f"{radius:g} m. Checked at {4001} points of the range the ball can reach, "
+        f"{radius:g} m. Checked at {POINTS} points of the range the ball can reach, "
         f"{left:.6g} m <= x <= {right:.6g} m:"
     )
     if valid["smallest"] is None:

@@ -84,6 +84,17 @@ def test_the_report_of_a_curve_with_a_kink(tmp_path, capsys):
     assert results["the maximum of the walls is the curve (joins)"] == "passed"
 
 
+def test_the_report_of_the_wedge_with_parameters(tmp_path):
+    curve = ("b*abs(x) + c", "--param", "b=1.85", "--param", "c=0.0063")
+    assert derive(tmp_path, "wedgelike", *curve) == 0
+    text = (tmp_path / "wedgelike" / "report.md").read_text()
+    assert "Parameters: b = 1.85, c = 0.0063 (SI)." in text
+    assert "| 0 | -1.85 | 1.85 | kink |" in text
+    assert text.count("\\rho = \\infty") == 2  # straight walls: f'' = 0
+    assert "The walls are straight" in text
+    assert set(checks(text).values()) == {"passed"}
+
+
 def test_a_curve_too_tight_for_the_ball_is_marked_where(tmp_path):
     # f = a x^2 has rho = (1 + 4 a^2 x^2)^(3/2) / (2 a): 0.25 mm at its bottom, below r
     a = 2000.0
