@@ -269,10 +269,15 @@ def validity(walls: list[dict], radius: float, points: int = POINTS) -> dict:
     for w in walls:
         held = (xs >= w["lo"]) & (xs <= w["hi"])
         for i in np.flatnonzero(held):
-            df, d2f = float(w["df"](xs[i])), float(w["d2f"](xs[i]))
+            try:  # a complex value: TypeError
+                at = float(xs[i])  # a Python float: 1/0 raises, as in the runtime
+                df, d2f = float(w["df"](at)), float(w["d2f"](at))
+            except (ArithmeticError, ValueError, TypeError):
+                rho[i] = math.nan  # not real here: the ball cannot follow the curve
+                continue
             value = (1 + df * df) ** 1.5 / abs(d2f) if d2f != 0 else math.inf
-            rho[i] = min(rho[i], value)
-    bad = rho <= radius
+            rho[i] = min(rho[i], value)  # NaN (f' not finite) stays NaN
+    bad = ~(rho > radius)
     spans = []
     i = 0
     while i < len(xs):
@@ -284,13 +289,19 @@ def validity(walls: list[dict], radius: float, points: int = POINTS) -> dict:
             i = j + 1
         else:
             i += 1
-    finite = np.isfinite(rho)
+    finite = np.isfinite(rho)  # a straight wall's infinite rho has no place to name
     smallest = (
         (float(rho[finite].min()), float(xs[finite][rho[finite].argmin()]))
         if finite.any()
         else None
     )
-    return {"range": (left, right), "too_tight": spans, "smallest": smallest}
+    undefined = int(np.isnan(rho).sum())
+    return {
+        "range": (left, right),
+        "too_tight": spans,
+        "smallest": smallest,
+        "undefined": undefined,
+    }
 
 
 # --- the report --------------------------------------------------------------------------
@@ -382,6 +393,11 @@ def curve_report(cd: CurveDerivation, radius: float, refusal: str | None = None)
     else:
         small, where = valid["smallest"]
         offset.text(f"The smallest radius of curvature is {small:.6g} m, at x = {where:.6g} m.")
+    if valid["undefined"]:
+        offset.text(
+            f"At {valid['undefined']} of the points f' or f'' is not real and finite; they "
+            "count as not valid."
+        )
     if valid["too_tight"]:
         spans = "; ".join(f"{a:.6g} m <= x <= {b:.6g} m" for a, b in valid["too_tight"])
         offset.text(f"**Not valid** (rho <= r) on {spans}: the ball cannot follow the curve there.")

@@ -128,6 +128,22 @@ def test_a_smooth_join_is_refused_with_a_report_saying_why(tmp_path, capsys):
     assert not (tmp_path / "curves" / "smoothjoin.py").exists()
 
 
+def test_a_curve_refused_for_its_shape_gets_a_report(tmp_path, capsys):
+    # x**1.5 is not real left of 0: the shape check refuses the curve, and the report
+    # counts those points as not valid instead of failing on them
+    assert derive(tmp_path, "halfreal", "x**1.5 + abs(x)") == 2
+    captured = capsys.readouterr()
+    assert "cannot hold a ball" in captured.err and "Traceback" not in captured.err
+    text = (tmp_path / "halfreal" / "report.md").read_text()
+    assert checks(text)["the curve can hold a ball"] == "**FAILED**"
+    left = number(text, r"reach, ([0-9.e-]+) m <= x")
+    right = number(text, r"reach, [0-9.e-]+ m <= x <= ([0-9.e-]+) m")
+    xs = np.linspace(left, right, curve_report.POINTS)
+    undefined = number(text, r"At ([0-9]+) of the points f' or f'' is not real")
+    assert undefined == np.count_nonzero(xs <= 0)  # f'' = 0.75/sqrt(x): 1/0 at 0 too
+    assert number(text, r"\*\*Not valid\*\* \(rho <= r\) on ([0-9.e-]+) m") == left
+
+
 def test_a_wrong_textbook_form_shows_as_failed(tmp_path, capsys, monkeypatch):
     right = curve_report.TEXTBOOK
 
