@@ -159,6 +159,22 @@ def impact_checks() -> list[Check]:
     return checks
 
 
+def flight_check() -> Check:
+    """The generated flight equals the textbook form m dv/dt = -m g n2 - (c_lin + c_quad
+    |v|) v."""
+    from billiard.generated import ball
+
+    c_lin, c_quad = sm.symbols("c_lin c_quad", real=True)
+    got = symbolic(ball.flight_rhs_drag)(u1, u2, m, g, c_lin, c_quad)
+    drag = (c_lin + c_quad * sm.sqrt(u1**2 + u2**2)) / m
+    textbook = (-drag * u1, -g - drag * u2)
+    return Check(
+        "flight: dv/dt = -g n2 - (c_lin + c_quad |v|) v / m",
+        "generated flight_rhs_drag minus the textbook form, both components; exact",
+        all(_zero(a - b) for a, b in zip(got, textbook, strict=True)),
+    )
+
+
 def flight_energy_check() -> Check:
     """Without drag, d/dt of the generated energy along the generated flight is 0."""
     from billiard.generated import ball
@@ -412,7 +428,7 @@ def curve_report(cd: CurveDerivation, radius: float, refusal: str | None = None)
 
     sections += _equation_sections(cd, defaults)
 
-    checks = impact_checks() + [flight_energy_check(), rolling_energy_check()]
+    checks = impact_checks() + [flight_check(), flight_energy_check(), rolling_energy_check()]
     checks += offset_checks(cd, defaults)
     checks.append(
         Check(

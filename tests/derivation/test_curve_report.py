@@ -48,7 +48,7 @@ def number(markdown: str, pattern: str) -> float:
 def test_the_report_of_a_user_curve(tmp_path, capsys):
     assert derive(tmp_path, "bowl", "30*x**4 + 0.0063") == 0
     out = capsys.readouterr().out
-    assert "all 10 checks passed" in out
+    assert "all 11 checks passed" in out
     text = (tmp_path / "bowl" / "report.md").read_text()
     assert (tmp_path / "bowl" / "report.html").is_file()
     assert "| 0 | all x | `30*x**4 + 63/10000` |" in text
@@ -60,7 +60,7 @@ def test_the_report_of_a_user_curve(tmp_path, capsys):
     assert "R_{n} = - m w_{n} \\left(e + 1\\right)" in text
     assert "R_{t} = - \\frac{k m w_{t}}{k + 1}" in text
     results = checks(text)
-    assert len(results) == 10 and set(results.values()) == {"passed"}
+    assert len(results) == 11 and set(results.values()) == {"passed"}
     assert "stick impact: R_n = m*w_n*(-e - 1)" in results
     assert "the curve: as r -> 0 the offset curve is the curve" in results
     # the smallest radius of curvature: (1 + f'^2)^(3/2) / f'' on a fine grid of its own
@@ -156,7 +156,7 @@ def test_a_wrong_textbook_form_shows_as_failed(tmp_path, capsys, monkeypatch):
     monkeypatch.setattr(curve_report, "TEXTBOOK", planted)
     assert derive(tmp_path, "bowl", "30*x**4 + 0.0063") == 1
     out = capsys.readouterr().out
-    assert "1 of 10 checks FAILED: stick impact: R_t" in out
+    assert "1 of 11 checks FAILED: stick impact: R_t" in out
     results = checks((tmp_path / "bowl" / "report.md").read_text())
     failed = [name for name, result in results.items() if result != "passed"]
     assert failed == ["stick impact: R_t = -k*m*w_t/(2*k + 1)"]
