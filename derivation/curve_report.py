@@ -459,8 +459,9 @@ def _equation_sections(cd: CurveDerivation, defaults: dict) -> list[Section]:
         "spin (constant in flight). Generated `flight_rhs_drag`:"
     )
     du1, du2 = symbolic(ball.flight_rhs_drag)(u1, u2, m, g, *sm.symbols("c_lin c_quad"))
-    flight.eq(sm.Derivative(sm.Function("u_1")(t), t), du1)
-    flight.eq(sm.Derivative(sm.Function("u_2")(t), t), du2)
+    # d/dt of plain symbols, unevaluated: both printers subscript u_1 (not so a u_1(t))
+    flight.eq(sm.Derivative(sm.Symbol("u_1"), t, evaluate=False), du1)
+    flight.eq(sm.Derivative(sm.Symbol("u_2"), t, evaluate=False), du2)
 
     geometry = Section("Contact: the wall's geometry for this curve")
     geometry.text(
@@ -485,8 +486,8 @@ def _equation_sections(cd: CurveDerivation, defaults: dict) -> list[Section]:
         "-mu_k N sgn (sliding); c_drag = c_lin + c_quad |v|; ab1, ab2 the boundary's "
         "acceleration. Insert the geometry above for this curve."
     )
-    s_ddot = sm.Derivative(sm.Function("s")(t), (t, 2))
-    spin_dot = sm.Derivative(sm.Function("u_3")(t), t)
+    s_ddot = sm.Derivative(sm.Symbol("s"), (t, 2), evaluate=False)
+    spin_dot = sm.Derivative(sm.Symbol("u_3"), t, evaluate=False)
     rolling.text("Rolling: the spin follows the no-slip condition, and")
     rolling.eq(sm.Symbol("u_3"), printable(contact.roll_spin))
     for lhs, expr in zip(
@@ -496,10 +497,6 @@ def _equation_sections(cd: CurveDerivation, defaults: dict) -> list[Section]:
     rolling.text("Sliding (F = -mu_k N sgn):")
     for lhs, expr in zip((s_ddot, spin_dot, sm.Symbol("N")), contact.slide[:3], strict=True):
         rolling.eq(lhs, printable(expr))
-    for label, expr in zip(
-        ("\\ddot{s}_{slide}", "\\dot{u}_{3,slide}", "N_{slide}"), contact.slide[:3], strict=True
-    ):
-        rolling.eq(sm.Symbol(label), printable(expr))
 
     impact = Section("Impact")
     impact.text(

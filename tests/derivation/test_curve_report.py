@@ -59,6 +59,8 @@ def test_the_report_of_a_user_curve(tmp_path, capsys):
     assert "f' = 120 s^{3}" in text and "f''' = 720 s" in text
     assert "R_{n} = - m w_{n} \\left(e + 1\\right)" in text
     assert "R_{t} = - \\frac{k m w_{t}}{k + 1}" in text
+    rolling = text.split("## Contact: rolling and sliding", 1)[1].split("## Impact", 1)[0]
+    assert rolling.count("$$") == 2 * 7  # rolling: u3, s'', F, N; sliding: s'', u3', N
     results = checks(text)
     assert len(results) == 11 and set(results.values()) == {"passed"}
     assert "stick impact: R_n = m*w_n*(-e - 1)" in results
@@ -191,6 +193,8 @@ def test_the_page_loads_nothing_from_outside(tmp_path):
     assert re.search(r"(?i)https?:|//[a-z0-9.-]+\.[a-z]{2,}/|ftp:|wss?:", page) is None
     assert re.findall(r'(?i)\b(?:src|href)\s*=\s*"([^"]*)"', page) == ["data:,"]
     assert "<script" not in page.lower() and "@import" not in page
+    # every symbol is MathML, not LaTeX left in a token (\\ddot{s} printed as text)
+    assert re.search(r"<m[ino]>[^<]*\\", page) is None
     (policy,) = re.findall(r'http-equiv="Content-Security-Policy"\s+content="([^"]*)"', page)
     assert "default-src 'none'" in policy
 
