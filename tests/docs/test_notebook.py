@@ -153,3 +153,10 @@ def test_a_sign_error_planted_in_the_derivation_fails_its_checks(tmp_path) -> No
     named = re.search(r"checks that fail: \[([^\]]*)\]", str(error))
     assert named is not None, error
     assert set(re.findall(r"'(\w+)'", named.group(1))) == {n for n in failed if checks[n] is False}
+
+
+def test_the_documentation_index_links_the_notebook_and_says_how_to_run_it() -> None:
+    index = (ROOT / "docs" / "index.md").read_text()
+    assert "](notebooks/derivation.ipynb)" in index
+    assert "jupyter execute docs/notebooks/derivation.ipynb" in index
+    assert 'pip install -e ".[test]"' in index
