@@ -1,0 +1,1 @@
+"""Tests of the documentation that runs: the derivation notebook."""
