@@ -355,7 +355,10 @@ def is_zero(expr) -> bool:
     rational in tau, and the difference of two equal rational functions cancels to 0.
     (This holds for all z but z = pi, which continuity then covers.) Any square root left
     (the drag speed, sqrt(1 + f'^2)) is replaced by one symbol per distinct canonical
-    radicand, so equal roots written differently still match.
+    radicand, so equal roots written differently still match, and the numerator is
+    reduced by each root's square. True only when the difference is proven zero; with
+    roots nested in roots a False may be a zero this reduction cannot see (a test then
+    fails, it never passes wrongly).
     """
     expr = sm.expand_trig(canonical(expr))
     zs = S["z"]
@@ -378,16 +381,26 @@ def is_zero(expr) -> bool:
         if not inner:
             break
         for atom in sorted(inner, key=sm.default_sort_key):
-            radicand = sm.factor(sm.cancel(atom.base))
+            radicand = sm.factor(sm.cancel(_reduce(atom.base, roots)))
             root = roots.setdefault(radicand, sm.Dummy("root"))
             expr = expr.xreplace({atom: root ** (2 * atom.exp)})
-    numerator = sm.numer(sm.cancel(sm.together(expr)))
+    numerator = sm.numer(sm.cancel(sm.together(expr)))  # nonzero denominator: drop it
     # a root's square is its radicand: reduce the numerator, a polynomial in the roots,
     # to degree one in each; it is zero iff every coefficient is (a root of a radicand that
     # is no perfect square is no rational function of the other symbols)
     for radicand, root in roots.items():
         numerator = sm.rem(sm.expand(numerator), root**2 - radicand, root)
     return sm.expand(numerator) == 0
+
+
+def _reduce(expr, roots: dict) -> sm.Basic:
+    """*expr* with each known root's square replaced by its radicand, in the numerator
+    and the denominator, so that one radicand written two ways gets one root."""
+    num, den = sm.fraction(sm.cancel(sm.together(expr)))
+    for radicand, root in roots.items():
+        num = sm.rem(sm.expand(num), root**2 - radicand, root)
+        den = sm.rem(sm.expand(den), root**2 - radicand, root)
+    return num / den
 
 
 def _has_root(expr) -> bool:
