@@ -21,8 +21,7 @@ import types
 import pytest
 import sympy as sm
 from billiard.derivation import build, textbook
-from billiard.derivation.ball import derive_ball, plain
-from billiard.derivation.contact import derive_contact
+from billiard.derivation.ball import plain
 from billiard.derivation.expr import PAPER_CURVES
 
 S = textbook.S
@@ -33,9 +32,8 @@ _MATH = types.SimpleNamespace(
 )  # fmt: skip
 
 
-@functools.lru_cache(maxsize=1)
 def derived():
-    return derive_ball(), derive_contact()
+    return build.derivations()
 
 
 def _exact(value):
