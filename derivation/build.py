@@ -409,10 +409,17 @@ def repo_root() -> Path | None:
 
 
 @functools.lru_cache(maxsize=1)
+def derivations() -> tuple[BallDerivation, ContactDerivation]:
+    """The ball's and the contact's derivation, made once per process (~5 s of sympy):
+    the writer of the files and the tests that check the textbook forms share them.
+    Callers must not modify them."""
+    return derive_ball(), derive_contact()
+
+
+@functools.lru_cache(maxsize=1)
 def _expected_texts() -> tuple[tuple[str, str], ...]:
     """(relative path, text) of every file the derivation writes. Cached: ~8 s of sympy."""
-    d = derive_ball()
-    contact = derive_contact()
+    d, contact = derivations()
     files = [
         ("generated/ball.py", ball_module(d)),
         ("generated/contact.py", contact_module(contact)),

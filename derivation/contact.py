@@ -182,7 +182,7 @@ def derive_contact() -> ContactDerivation:
                 (r"L_s = \frac{dL}{ds}", geometry_shown[L_s]),
                 (r"z_{ss} = \frac{d^2 z}{ds^2}", geometry_shown[z_ss]),
                 (
-                    r"\left(\frac{dW}{ds}\cdot\hat c_1,\ \frac{dW}{ds}\cdot\hat c_2\right)",
+                    r"\frac{dW}{ds}\cdot\left(\hat c_1,\ \hat c_2\right)",
                     tangent_c.T.xreplace(show),
                 ),
             ],
