@@ -323,16 +323,6 @@ def validity(walls: list[dict], radius: float, points: int = POINTS) -> dict:
 # --- the report --------------------------------------------------------------------------
 
 
-def _interval(lo: float, hi: float) -> str:
-    if lo == -math.inf and hi == math.inf:
-        return "all x"
-    if lo == -math.inf:
-        return f"x < {hi:g} m"
-    if hi == math.inf:
-        return f"x > {lo:g} m"
-    return f"{lo:g} m < x < {hi:g} m"
-
-
 def curve_report(cd: CurveDerivation, radius: float, refusal: str | None = None) -> CurveReport:
     """Everything the report says about ``cd`` for a ball of ``radius`` (m); ``refusal``:
     why ``billiard derive`` refused the curve (the report is written all the same)."""
@@ -362,7 +352,7 @@ def curve_report(cd: CurveDerivation, radius: float, refusal: str | None = None)
     pieces.table(
         ["wall", "interval", "f(x) on it"],
         [
-            [str(j), _interval(wd["lo"], wd["hi"]), f"`{sm.sstr(w.f.subs(s, x))}`"]
+            [str(j), shape.interval_text(wd["lo"], wd["hi"]), f"`{sm.sstr(w.f.subs(s, x))}`"]
             for j, (w, wd) in enumerate(zip(cd.walls, walls, strict=True))
         ],
     )
@@ -391,7 +381,7 @@ def curve_report(cd: CurveDerivation, radius: float, refusal: str | None = None)
         f, df, d2f = (sm.sympify(v).subs(defaults) for v in (w.f, w.df, w.d2f))
         c1, c2 = centre(s, 0, f, df, d2f, 0, 0, 0, 0, r)[:2]
         if len(cd.walls) > 1:
-            offset.text(f"Wall {j} ({_interval(walls[j]['lo'], walls[j]['hi'])}):")
+            offset.text(f"Wall {j} ({shape.interval_text(walls[j]['lo'], walls[j]['hi'])}):")
         offset.eq(sm.Symbol("C_x"), c1)
         offset.eq(sm.Symbol("C_y"), c2)
         rho = (1 + df**2) ** sm.Rational(3, 2) / sm.Abs(d2f)

@@ -56,15 +56,22 @@ def _real(fn: Callable[[float], float], x: float) -> float | None:
     return value if math.isfinite(value) else None
 
 
+def interval_text(lo: float, hi: float) -> str:
+    """The interval (lo, hi) of x (m) in words: ``x < 1 m``, ``0 m < x < 1 m``, ``all x``."""
+    if lo == -math.inf and hi == math.inf:
+        return "all x"
+    if lo == -math.inf:
+        return f"x < {hi:g} m"
+    if hi == math.inf:
+        return f"x > {lo:g} m"
+    return f"{lo:g} m < x < {hi:g} m"
+
+
 def _piece(wall: dict) -> str:
     lo, hi = wall["lo"], wall["hi"]
     if lo == -math.inf and hi == math.inf:
         return ""
-    if lo == -math.inf:
-        return f"its piece for x < {hi:g} m "
-    if hi == math.inf:
-        return f"its piece for x > {lo:g} m "
-    return f"its piece for {lo:g} < x < {hi:g} m "
+    return f"its piece for {interval_text(lo, hi)} "
 
 
 class _Curve:

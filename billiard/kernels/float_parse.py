@@ -128,6 +128,24 @@ def _eisel_lemire(man, exp10):
 
 
 @inline
+def _digits(data, p, stop, man, digits):
+    """(position after them, mantissa, significant digits, digits read) of the decimal
+    digits from ``data[p]`` on, appended to the mantissa ``man`` of ``digits``
+    significant digits; past _MAX_DIGITS significant digits the mantissa stops growing
+    and the count says so (the caller gives up: it would overflow)."""
+    count = 0
+    while p < stop and _ZERO <= data[p] <= _ZERO + 9:
+        d = np.uint64(data[p] - _ZERO)
+        if man != _U0 or d != _U0:
+            if digits < _MAX_DIGITS:
+                man = man * _U10 + d
+            digits += 1
+        count += 1
+        p += 1
+    return p, man, digits, count
+
+
+@inline
 def _parse_float(data, start, stop):
     """(ok, value) of the field ``data[start:stop]``: ok False unless it is a plain
     decimal (``-``, digits, ``.`` and digits, ``e`` or ``E``, a sign and digits) whose
@@ -137,32 +155,15 @@ def _parse_float(data, start, stop):
     if p < stop and data[p] == _MINUS:
         negative = True
         p += 1
-    man = _U0
-    digits = 0  # significant digits in man
+    p, man, digits, whole = _digits(data, p, stop, _U0, 0)
     exp10 = 0
-    seen = False
-    while p < stop and _ZERO <= data[p] <= _ZERO + 9:
-        d = np.uint64(data[p] - _ZERO)
-        seen = True
-        if man != _U0 or d != _U0:
-            if digits == _MAX_DIGITS:
-                return False, 0.0
-            man = man * _U10 + d
-            digits += 1
-        p += 1
+    fraction = 0
     if p < stop and data[p] == _DOT:
-        p += 1
-        while p < stop and _ZERO <= data[p] <= _ZERO + 9:
-            d = np.uint64(data[p] - _ZERO)
-            seen = True
-            if man != _U0 or d != _U0:
-                if digits == _MAX_DIGITS:
-                    return False, 0.0
-                man = man * _U10 + d
-                digits += 1
-            exp10 -= 1
-            p += 1
-    if not seen:
+        p, man, digits, fraction = _digits(data, p + 1, stop, man, digits)
+        exp10 = -fraction
+    if digits > _MAX_DIGITS:
+        return False, 0.0
+    if whole + fraction == 0:
         return False, 0.0
     if p < stop and (data[p] == _LOWER_E or data[p] == _UPPER_E):
         p += 1

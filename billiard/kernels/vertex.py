@@ -110,6 +110,12 @@ def holds(ctx, za, zb, theta, u3):
 
 
 @inline
+def spin_rate(ctx, n_a, n_b, sigma):
+    """du3/dt (rad/s^2) from the kinetic friction of both walls."""
+    return -ctx[PH_MUK] * sigma * (n_a + n_b) / (ctx[PH_K] * ctx[PH_M] * ctx[PH_R])
+
+
+@inline
 def held_spin(ctx, za, zb, theta, u3):
     """The spin (rad/s) with which both walls hold a ball arriving with spin u3 at drive
     angle theta, or NaN where they cannot hold it.
@@ -130,16 +136,11 @@ def held_spin(ctx, za, zb, theta, u3):
     n_a, n_b = forces(ctx, za, zb, theta, 0.0)
     if not (n_a > 0.0 and n_b > 0.0):
         return math.nan
-    stop = ctx[PH_K] * ctx[PH_M] * ctx[PH_R] * abs(u3) / (ctx[PH_MUK] * (n_a + n_b))
+    # the time the spinless hold's kinetic friction takes to stop the spin
+    stop = abs(u3 / spin_rate(ctx, n_a, n_b, 1.0))
     if stop <= CHATTER_TAIL * chatter_period(ctx[OMEGA]):
         return 0.0
     return math.nan
-
-
-@inline
-def spin_rate(ctx, n_a, n_b, sigma):
-    """du3/dt (rad/s^2) from the kinetic friction of both walls."""
-    return -ctx[PH_MUK] * sigma * (n_a + n_b) / (ctx[PH_K] * ctx[PH_M] * ctx[PH_R])
 
 
 @inline

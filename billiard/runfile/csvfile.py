@@ -128,6 +128,21 @@ def check_recorded(
             )
 
 
+def rows_past_flush(flushed: int, appended: int, rows: int | None) -> int | None:
+    """For a side file's mark after the first ``rows`` rows appended since it was opened
+    (``SideCsv.mark``, ``SideNpy.mark``): how many rows after those of the last flush
+    (``flushed`` of ``appended`` rows) it lies, or None at the end of the file.
+
+    Raises:
+        ValueError: ``rows`` is before the last flush or after the last row.
+    """
+    if rows is None or rows == appended:
+        return None
+    if not flushed <= rows < appended:
+        raise ValueError(f"no mark after {rows} rows: {flushed} to {appended} can be marked")
+    return rows - flushed
+
+
 @dataclass(frozen=True)
 class Truncation:
     """What reopening a CSV file at a mark found after it: complete rows written after

@@ -41,6 +41,7 @@ from billiard.runfile.csvfile import (
     check_recorded,
     crc32_range,
     is_crc32,
+    rows_past_flush,
 )
 from billiard.runfile.npyfile import (
     COLLISIONS,
@@ -549,11 +550,10 @@ class SideNpy:
         written; a resume cuts the file back to the size and counts again."""
         done, size, crc = self._flushed
         end = self.flush()
-        if rows is None or rows == self.appended:
+        past = rows_past_flush(done, self.appended, rows)
+        if past is None:
             return end, self.crc32
-        if not done <= rows < self.appended:
-            raise ValueError(f"no mark after {rows} rows: {done} to {self.appended} can be marked")
-        stop = size + (rows - done) * self.table.dtype.itemsize
+        stop = size + past * self.table.dtype.itemsize
         return stop, crc32_range(self._file.fileno(), size, stop, crc)
 
     def close(self) -> None:

@@ -16,7 +16,7 @@ from typing import Any
 import numpy as np
 
 from billiard.runfile.checkpoint import CheckpointError, open_checked
-from billiard.runfile.csvfile import _read_at, check_recorded, prefix_crc32
+from billiard.runfile.csvfile import _read_at, check_recorded, prefix_crc32, rows_past_flush
 from billiard.runfile.record import RunDataError, format_field
 from billiard.runfile.rows import contact_walls, wall_code
 from billiard.scene.userfile import read_limited
@@ -120,11 +120,10 @@ class SideCsv:
         """
         done, size, crc = self._flushed
         end = self.flush()
-        if rows is None or rows == self.appended:
+        past = rows_past_flush(done, self.appended, rows)
+        if past is None:
             return end, self.crc32
-        if not done <= rows < self.appended:
-            raise ValueError(f"no mark after {rows} rows: {done} to {self.appended} can be marked")
-        return _line_mark(self._file.fileno(), size, crc, rows - done)
+        return _line_mark(self._file.fileno(), size, crc, past)
 
     def close(self) -> None:
         if not self._file.closed:
