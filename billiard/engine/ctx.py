@@ -27,6 +27,7 @@ from billiard.models.flight import AdaptiveFlight, ExactFlight, RK4Flight
 __all__ = [
     "COUNT_KEYS",
     "RING",
+    "constants_vector",
     "engine_state",
     "read_motion",
     "state_vector",
@@ -66,6 +67,20 @@ def state_vector(sim: Any) -> list[float]:
     Raises:
         ValueError: a flight model or surface the kernels do not have.
     """
+    ctx = constants_vector(sim)
+    write_state(ctx, sim.state)
+    if sim.phases:
+        write_motion(ctx, sim.state)
+    return ctx
+
+
+def constants_vector(sim: Any) -> list[float]:
+    """The kernels' ``ctx`` (a list of floats) for ``sim``: the scene's constants and
+    the warm starts its objects hold; no engine state.
+
+    Raises:
+        ValueError: a flight model or surface the kernels do not have.
+    """
     ctx = [0.0] * L.SIZE
     # the drive and the locator's substep lengths, as the locator's own ctx holds them
     loc = sim.locator.ctx
@@ -85,8 +100,25 @@ def state_vector(sim: Any) -> list[float]:
         ctx[base + L.S_WS] = float(warm[0])
         ctx[base + L.S_WSLOPE] = float(warm[1])
     ctx[L.EN_UNTIL] = sim.end_time
-    write_state(ctx, sim.state)
+    ctx[L.LOC_KIND] = L.LOC_RK4 if sim.method == "rk4" else L.LOC_EVENT
+    if sim.phases:
+        _machine_constants(ctx, sim)
     return ctx
+
+
+def _machine_constants(ctx: list[float], sim: Any) -> None:
+    """Contact phases: the phases' constants (as the contact model's own ``ctx`` holds
+    them), the contact span, the container's range of x and the walls' intervals; the
+    flights end after an impact that settles (the landing test reads the law's
+    restitution and elastic_below, IM_E and IM_EB)."""
+    phase = sim.contact_model.new_ctx()
+    ctx[L.PH_M : L.PH_RTOL + 1] = phase[L.PH_M : L.PH_RTOL + 1]
+    ctx[L.MC_SPAN] = float(sim.scene.run.contact_span)
+    ctx[L.MC_X_LO], ctx[L.MC_X_HI] = (float(x) for x in sim.boundary.x_range)
+    for wall in sim.boundary.walls:
+        ctx[L.MC_WALL_LO + wall.index] = float(wall.lo)
+        ctx[L.MC_WALL_HI + wall.index] = float(wall.hi)
+    ctx[L.EN_LAND_ON] = 1.0
 
 
 def write_ball(ctx: Any, ball: BallState) -> None:
@@ -171,6 +203,7 @@ def write_motion(ctx: Any, state: EngineState) -> None:
     last = state.ball.t if state.last_impact is None else state.last_impact
     ctx[L.MC_LAST_IMPACT] = float(last)
     ctx[L.MC_PHASE_ON] = 0.0
+    ctx[L.MC_HOLD_ON] = 0.0
     ctx[L.MC_FLYING] = 0.0
 
 

@@ -120,7 +120,6 @@ def prepare(scene: Any) -> EnsembleSetup:
         ValueError: the scene cannot be simulated (SceneError, GeometryError), or the
             ensemble kernel does not take it (see :func:`supports`).
     """
-    from billiard.engine.kernel_engine import supports as kernel_supports
     from billiard.engine.simulation import Simulation
     from billiard.geometry.wall_functions import wall_functions
 
@@ -128,9 +127,6 @@ def prepare(scene: Any) -> EnsembleSetup:
     if why is not None:
         raise ValueError(f"the ensemble kernel does not take this scene: {why}")
     sim = Simulation(at_rest_scene(scene))
-    why = kernel_supports(sim)
-    if why is not None:
-        raise ValueError(f"the ensemble kernel does not take this scene: {why}")
     at_rest_ctx = np.array(state_vector(sim), dtype=np.float64)
     template = at_rest_ctx.copy()
     # the warm starts as a run's set-up has them before its start check moves them

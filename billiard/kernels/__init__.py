@@ -22,7 +22,10 @@ One concept per module:
 * :mod:`~billiard.kernels.loop`: one impact, and ``run_chunk`` (up to N impacts into a
   preallocated array; ``run_chunk_fixed`` for method ``rk4``).
 
-:mod:`billiard.engine.kernel_engine` builds the state vector from a scene and runs the chunks.
+:mod:`~billiard.kernels.machine`: the trajectory state machine, the one engine that
+  advances every scene; :mod:`~billiard.kernels.samples`: its trajectory samples.
+
+:mod:`billiard.engine.driver` builds the state vector from a scene and runs the chunks.
 :mod:`billiard.kernels.interpreted` loads these files again as plain Python
 (``billiard.kernels_py``), which the runtime's classes call.
 """

@@ -108,3 +108,9 @@ def stop_text(code: int, value: float) -> str:
 def stop(exc: Exception, ctx: list) -> SimulationError:
     """The :class:`SimulationError` for a ``KernelError`` out of a twin's kernel."""
     return SimulationError(stop_text(exc.args[0], ctx[layout.EN_ERR_VALUE]))
+
+
+def engine_modules() -> tuple[ModuleType, ModuleType, ModuleType]:
+    """The twin's state machine, impact loop and samples (loaded on first use: only a
+    run that asks for the interpreted engine needs them)."""
+    return _load("machine"), _load("loop"), _load("samples")

@@ -418,6 +418,37 @@ MC_FLIGHT_FROM = _ctx("MC_FLIGHT_FROM", "flight_from", 1, "s", "the ball's time 
 # a flight's contact without impulse under contact phases (loop.impact): no row, no
 # impact counted; the ball goes on from it (or lands)
 EN_NO_ROW = _ctx("EN_NO_ROW", "no_row", 1, "", "1.0: the last contact gave no impulse (no row)")
+MC_HOLD_ON = _ctx("MC_HOLD_ON", "hold_on", 1, "", "a hold under way between two calls: 1 on")
+LOC_KIND = _ctx("LOC_KIND", "locator", 1, "", "LOC_EVENT or LOC_RK4: how flights find impacts")
+EN_ONE = _ctx("EN_ONE", "one_flight", 1, "", "1.0: run_chunk returns after each flight (FLOWN)")
+CTX.end()
+
+# --- trajectory samples (run --sample; kernels: samples.py, machine.py) --------------
+# Samples at t0 + k dt from the run's start, written as rows of SCOL floats into the
+# machine's sample buffer: from the flight's own closed form or integrator restarted at
+# the flight's start (a second flight state, the sample ctx, ``sctx``), from a phase's
+# dense output, from a hold's spin law. A flight's samples are written when it ends, up
+# to its end; an emission that fills the buffer stays pending (SM_PENDING) and goes on
+# at the next call.
+CTX.begin("samples")
+SM_DT = _ctx("SM_DT", "dt", 1, "s", "sample interval (0: no samples)")
+SM_T0 = _ctx("SM_T0", "t0", 1, "s", "time of sample 0 (the run's start)")
+SM_K = _ctx("SM_K", "count", 1, "", "samples reported so far (engine state)")
+SM_GEN = _ctx("SM_GEN", "next_k", 1, "", "index of the phase's or hold's next sample")
+SM_ROW = _ctx("SM_ROW", "row", 1, "", "sample rows written in this call")
+SM_MARK = _ctx("SM_MARK", "mark", 1, "", "the count at the phase's or chatter's start")
+SM_PENDING = _ctx("SM_PENDING", "pending", 1, "", "an emission under way: SRC_FLIGHT, SRC_CHATTER")
+SM_DONE = _ctx("SM_DONE", "chatter_done", 1, "", "1.0: the chatter's samples are written")
+SM_AFTER = _ctx("SM_AFTER", "after", 1, "", "the flight's status, returned once its samples are")
+SM_FROM = _ctx("SM_FROM", "from", 1, "s", "the emission: from ...")
+SM_TO = _ctx("SM_TO", "to", 1, "s", "... to")
+SM_BALL = _ctx("SM_BALL", "ball", 7, "", "the flight's start: t, theta, q1, q2, u1, u2, u3")
+SM_REACHED = _ctx("SM_REACHED", "reached", 1, "s", "the sample flight's integration reached")
+# the rk4 flight's last step in the sample ctx (RK4Flight keeps them on the object)
+SF_TA = _ctx("SF_TA", "rk4_ta", 1, "s", "sample ctx, rk4: the last step's start ...")
+SF_TB = _ctx("SF_TB", "rk4_tb", 1, "s", "... and end")
+SF_YA = _ctx("SF_YA", "rk4_ya", 4, "m, m/s", "... the state at its start ...")
+SF_YB = _ctx("SF_YB", "rk4_yb", 4, "m, m/s", "... and at its end")
 CTX.end()
 
 SIZE = CTX.size
@@ -447,6 +478,17 @@ LAND = 4  # the last row's impact settles on a wall (EN_LAST_J, EN_LAST_S, EN_LA
 PAUSED = 5  # a long phase paused between two steps (it goes on at the next call)
 IN_CONTACT = 6  # no impact for run.contact_span (MC_FINAL: the time)
 CONTACTS_FULL = 7  # the contact rows are full
+SAMPLES_FULL = 8  # the sample rows are full (an emission may be pending)
+FLOWN = 9  # run_chunk with EN_ONE: one flight done (an impact or a contact without impulse)
+
+# --- locators (LOC_KIND) --------------------------------------------------------------
+LOC_EVENT = 0.0  # event location on the flight's own integrator (locate.py)
+LOC_RK4 = 1.0  # the paper's fixed-step detection (fixed_step.py)
+
+# --- trajectory samples -----------------------------------------------------------------
+SCOL = 8  # t, q1, q2, u1, u2, u3, energy, mode (MC_MODE code)
+SRC_FLIGHT = 1.0  # samples of a free flight from SM_BALL
+SRC_CHATTER = 2.0  # samples of a ball landing at the end of a summed chatter series
 
 # --- motion states (MC_MODE) --------------------------------------------------------
 M_FLIGHT = 0.0

@@ -33,6 +33,7 @@ from .layout import (
     EN_LAST_S,
     EN_LAST_WN,
     EN_NO_ROW,
+    EN_ONE,
     EN_Q1,
     EN_Q2,
     EN_Q3,
@@ -49,6 +50,7 @@ from .layout import (
     EN_UNTIL,
     EN_ZERO,
     ESCAPE,
+    FLOWN,
     FULL,
     HORIZ,
     IM_E,
@@ -59,6 +61,8 @@ from .layout import (
     LAND,
     LID,
     LID_LABEL,
+    LOC_KIND,
+    LOC_RK4,
     MC_LAST_IMPACT,
     NCOL,
     OMEGA,
@@ -300,7 +304,7 @@ def no_impulse(ctx, t, theta, q1, q2, u1, u2, u3, q3, total, error, tau, j):
 def settles(ctx, j, kind, s, wn, regime, accel):
     """After an impact on surface j at s with the normal velocity wn (m/s) of the
     contact point relative to the boundary before it: does the
-    chattering it starts settle (``ContactPhases._settles``: an inelastic contact with a
+    chattering it starts settle (an inelastic contact with a
     wall whose rebound speed e |wn| is at most the landing speed, or the low-velocity
     rule applied; e and the landing speed are the impact law's IM_E and IM_EB), or may
     its tail be summed (``chatter_tail``, ``accel`` the free flight's acceleration into
@@ -377,4 +381,18 @@ def chunk_ends(ctx):
         return COLLAPSE
     if ctx[EN_SETTLES] != 0.0:
         return LAND
+    if ctx[EN_ONE] != 0.0:
+        # the state machine samples each flight when it ends (machine.run_machine)
+        return FLOWN
     return -1
+
+
+@jit
+def run_flights(ctx, p, walls, nears, out, rows):
+    """The state machine's flights: :func:`run_chunk_fixed` for the paper's fixed-step
+    detection (``ctx[LOC_KIND]`` = LOC_RK4; ``nears``: the walls' nearest-point
+    functions), else :func:`run_chunk` (the locator chosen by its kind, as the flight
+    model is by FL_KIND)."""
+    if ctx[LOC_KIND] == LOC_RK4:
+        return run_chunk_fixed(ctx, p, walls, nears, out, rows)
+    return run_chunk(ctx, p, walls, out, rows)
