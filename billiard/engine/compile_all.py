@@ -96,6 +96,9 @@ JOBS: tuple[tuple[str, dict[str, Any], int, bool, bool, bool], ...] = (
 )
 #: the job after which a worker also runs a small ensemble (the impact loop's scene)
 ENSEMBLE_JOB = 0
+#: the job after which its worker runs a small ensemble of its scene on the state
+#: machine (a sweep's points under contact phases), the machine then in the cache
+MACHINE_ENSEMBLE_JOB = 3
 #: a worker's step that tells the other worker that the impact loop is in the cache ...
 LOOP_CACHED = "loop-cached"
 #: ... and the other worker's step that waits for it (at most WAIT_S seconds)
@@ -192,6 +195,8 @@ def run_jobs(jobs: list[int | str], package: str | None = None) -> None:
             sim.sample_dt = 0.01
             sim.on_sample = _ignore
         sim.run(impacts, MemoryRecorder())
+        if index == MACHINE_ENSEMBLE_JOB:
+            _ensemble(scene)
         if index == ENSEMBLE_JOB:
             # after the other worker is told the loop is cached (LOOP_CACHED)
             ensemble_scene = scene
