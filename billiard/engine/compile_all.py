@@ -95,6 +95,9 @@ JOBS: tuple[tuple[str, dict[str, Any], int, bool, bool, bool], ...] = (
 )
 #: a worker's step that runs a small ensemble (the ensemble kernels)
 ENSEMBLE_JOB = "ensemble"
+#: the job after which its worker runs a small ensemble of its scene on the state
+#: machine (a sweep's points under contact phases), the machine then in the cache
+MACHINE_ENSEMBLE_JOB = 3
 #: a worker's step that tells the other worker that the impact loop is in the cache ...
 LOOP_CACHED = "loop-cached"
 #: ... and the other worker's step that waits for it (at most WAIT_S seconds)
@@ -193,6 +196,8 @@ def run_jobs(jobs: list[int | str], package: str | None = None) -> None:
             sim.sample_dt = 0.01
             sim.on_sample = _ignore
         sim.run(impacts, MemoryRecorder())
+        if index == MACHINE_ENSEMBLE_JOB:
+            _ensemble(scene)
 
 
 def _ignore(*_: Any) -> None:
@@ -208,8 +213,9 @@ def _ensemble(scene: Any) -> None:
     ctxs, ok = ensemble.start(setup, [0.0, 0.01], [0.05, 0.06])
     consts = ensemble.constants(scene, 1e-5, 64, 256)
     ensemble.advance(
-        ctxs[ok], setup.params, setup.walls, consts, transient=1, impacts=2, width=4, threads=1
-    )
+        ctxs[ok], setup.params, setup.walls, consts, transient=1, impacts=2, width=4,
+        threads=1, nears=setup.nears,
+    )  # fmt: skip
 
 
 def compile_all() -> bool:

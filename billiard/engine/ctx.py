@@ -101,6 +101,8 @@ def constants_vector(sim: Any) -> list[float]:
         ctx[base + L.S_WSLOPE] = float(warm[1])
     ctx[L.EN_UNTIL] = sim.end_time
     ctx[L.LOC_KIND] = L.LOC_RK4 if sim.method == "rk4" else L.LOC_EVENT
+    # samples count from the run's start (billiard run --sample)
+    ctx[L.SM_T0] = sim.initial.t
     if sim.phases:
         _machine_constants(ctx, sim)
     return ctx

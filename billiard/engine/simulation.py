@@ -360,7 +360,6 @@ class Simulation:
         ctx = self.ctx
         sampled = self.sample_dt is not None and self.on_sample is not None
         ctx[L.SM_DT] = float(self.sample_dt) if sampled else 0.0
-        ctx[L.SM_T0] = self.initial.t
         ctx[L.MC_FINAL] = self.final_time
 
     # ------------------------------------------------------------------ the loop

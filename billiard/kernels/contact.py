@@ -30,6 +30,7 @@ from .layout import (
     AMP,
     E_AT_REST,
     E_PHASE_STEPS,
+    EN_STOP,
     OMEGA,
     PH_CNEW,
     PH_CPREV,
@@ -268,6 +269,7 @@ def step(ctx, p, walls):
             break
         h *= pmax(0.2, 0.9 * err**-0.2)
     if not accepted:
+        ctx[EN_STOP] = E_PHASE_STEPS
         raise KernelError(E_PHASE_STEPS)
     ctx[PH_STEPS] += 1.0
     ctx[PH_H] = h
@@ -325,6 +327,7 @@ def accept(ctx):
         # at rest relative to the boundary, with every condition kept, for a whole drive
         # period (or, on a static boundary, a few steps): the drive is periodic, so this
         # repeats for ever
+        ctx[EN_STOP] = E_AT_REST
         raise KernelError(E_AT_REST)
     if span > 0.0 and steady:
         # the same argument with a time limit: whole drive periods repeat the one just

@@ -35,6 +35,7 @@ from .impact import CHATTER_TAIL, chatter_period
 from .layout import (
     AMP,
     E_AT_REST,
+    EN_STOP,
     OMEGA,
     PH_CLIN,
     PH_CQUAD,
@@ -325,6 +326,7 @@ def advance(ctx):
             tau, limit = ctx[VX_TAU], ctx[VX_LIMIT]
             since, span = ctx[VX_RSINCE], ctx[VX_RSPAN]
             if math.isinf(limit) and tau - since >= span:
+                ctx[EN_STOP] = E_AT_REST
                 raise KernelError(E_AT_REST)
             if span > 0.0 and tau - since >= span:
                 # at rest through a whole period: the next ones repeat it exactly

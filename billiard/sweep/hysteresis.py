@@ -272,7 +272,8 @@ def run_hysteresis(
     Raises:
         ValueError: fewer than 2 values, a value that is not a number, a key of the
             ball's start or one of :data:`REFUSED`, impacts < 1 or transient < 0, or a
-            scene the ensemble kernel does not take (contact phases, method rk4) or
+            scene the ensemble kernel does not take (method rk4), one under contact
+            phases (the state carried between values is the ball's in flight), or
             that cannot be simulated.
         OutputSizeError: (a ``SceneError``) the sweep would take more than 1 GB of
             memory or of CSV file and ``allow_large`` is False; checked first.
@@ -303,6 +304,9 @@ def run_hysteresis(
     if impacts < 1 or transient < 0:
         raise ValueError("impacts must be >= 1 and transient >= 0")
     why = EN.supports(scene)
+    if getattr(scene.contact, "model", "impacts") == "phases":
+        # the state carried from one value to the next is the ball's in flight
+        why = "contact.model = 'phases' (an up/down sweep carries the flight state only)"
     if why is not None:
         raise ValueError(f"the ensemble kernel does not take this scene: {why}")
     values = np.sort(np.asarray(values, dtype=np.float64))
