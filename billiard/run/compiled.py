@@ -21,6 +21,7 @@ from billiard.engine.kernel_engine import LAST_CHUNK, supports
 from billiard.engine.simulation import Simulation
 from billiard.geometry.wall_functions import WallFunction, wall_functions
 from billiard.kernels import layout as L
+from billiard.kernels.names import write
 from billiard.runfile.record import COLUMNS, MemoryRecorder
 from billiard.scene.spec import check_collisions
 from billiard.status import Status
@@ -92,7 +93,7 @@ def prepare(scene: Any, collisions: int | None = None, chunk: int = CHUNK) -> Pr
     kernel = sim.kernel_engine
     assert kernel is not None
     ctx, params = kernel.ctx, kernel.params
-    ctx[L.EN_TARGET] = float(total)
+    write(ctx, "engine.target", float(total))
     if _jit.ENABLED:
         buffer: Any = np.empty(chunk * L.NCOL, dtype=np.float64)
     else:
