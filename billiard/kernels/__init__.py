@@ -5,6 +5,8 @@ One concept per module:
 
 * :mod:`~billiard.kernels.layout`: where each quantity lives in the state vector ``ctx``
   (a float64 array; a list of Python floats when interpreted), the codes;
+* :mod:`~billiard.kernels.names`: the state vector by name, for the wings outside the
+  kernels and the engine;
 * :mod:`~billiard.kernels.ball`: the generated ball equations, under the same decorator;
 * :mod:`~billiard.kernels.flight`: the exact flight and the Dormand-Prince flight;
 * :mod:`~billiard.kernels.surfaces`: gaps, rates and bounds of the offset walls, lid

@@ -128,6 +128,31 @@ class Layout:
             )
         return "\n".join(lines)
 
+    def spans(self) -> list[tuple[str, int, int, list[Slot]]]:
+        """(name, start, stop, quantities) of each block and of each quantity declared
+        outside one (named after itself), in order: the layout from start to end."""
+        spans: list[tuple[str, int, int, list[Slot]]] = []
+        blocks = iter(self.blocks)
+        block = next(blocks, None)
+        for s in self.slots:
+            if block is not None and block[1] <= s.index < block[2]:
+                if not spans or spans[-1][0] != block[0]:
+                    spans.append((block[0], block[1], block[2], []))
+                spans[-1][3].append(s)
+                if s.stop == block[2]:
+                    block = next(blocks, None)
+            else:
+                spans.append((s.name, s.index, s.stop, [s]))
+        return spans
+
+    def markdown(self) -> str:
+        """:meth:`describe` as a Markdown table (one row per quantity)."""
+        lines = ["| slots | constant | name | unit | meaning |", "| --- | --- | --- | --- | --- |"]
+        for s in self.slots:
+            cells = (_span(s.index, s.stop), f"`{s.constant}`", f"`{s.name}`", s.unit or "-")
+            lines.append(f"| {' | '.join(cells)} | {s.meaning.replace('|', '&#124;')} |")
+        return "\n".join(lines)
+
     def mismatches(self, namespace: Mapping[str, object]) -> list[str]:
         """The declared constants that ``namespace`` (a module's globals) does not
         bind to their index."""
@@ -457,6 +482,42 @@ SIZE = CTX.size
 def describe() -> str:
     """The state vector's layout and a surface block's, as tables."""
     return f"{CTX.describe()}\n\n{SURFACE.describe()}"
+
+
+def _span(start: int, stop: int) -> str:
+    return str(start) if stop == start + 1 else f"{start}-{stop - 1}"
+
+
+def markdown() -> str:
+    """:func:`describe` in Markdown, the state vector's section of
+    ``docs/compiled-engine.md`` (a test checks that the page holds it): the blocks, then
+    every quantity of ``ctx`` and of a surface's block."""
+    rows = []
+    for name, start, stop, slots in CTX.spans():
+        # a block lists its quantities; a quantity outside one says what it holds
+        held = [s.name.removeprefix(f"{name}.") for s in slots]
+        what = slots[0].meaning if held == [name] else ", ".join(held)
+        rows.append(f"| {name} | {_span(start, stop)} | {what} |")
+    return "\n".join(
+        [
+            f"`ctx` holds {SIZE:,} slots; a surface's block, {SURF_STRIDE} "
+            f"(`SURF` holds {MAX_SURFACES} of them).",
+            "",
+            "| block | slots | quantities |",
+            "| --- | --- | --- |",
+            *rows,
+            "",
+            "<details><summary>Every quantity of <code>ctx</code></summary>",
+            "",
+            CTX.markdown(),
+            "",
+            "</details>",
+            "",
+            "A surface's block (offsets from the block's start, `S_*`):",
+            "",
+            SURFACE.markdown(),
+        ]
+    )
 
 
 # --- rows ---------------------------------------------------------------------------

@@ -26,6 +26,7 @@ from typing import Any
 import numpy as np
 
 from billiard.kernels import layout as L
+from billiard.kernels.names import column
 from billiard.sweep.attractor import CLASSES, CONTACT_CLASSES, PERIOD_WINDOW
 
 __all__ = [
@@ -246,9 +247,9 @@ def run_ensemble(
     columns = {"q1_start": arrays[0].ravel(), "q2_start": arrays[1].ravel()} | columns
     last_height, last_tof = last_impacts(stats, rings, keep)
     final = {
-        name: ctxs[:, slot].reshape(shape)
-        for name, slot in (("t", L.EN_T), ("q1", L.EN_Q1), ("q2", L.EN_Q2))
-        + (("v1", L.EN_U1), ("v2", L.EN_U2), ("omega", L.EN_U3))
+        name: column(ctxs, quantity).reshape(shape)
+        for name, quantity in (("t", "engine.t"), ("q1", "engine.q1"), ("q2", "engine.q2"))
+        + (("v1", "engine.u1"), ("v2", "engine.u2"), ("omega", "engine.u3"))
     }
     return EnsembleResult(
         scene=scene,
