@@ -32,6 +32,7 @@ __all__ = [
     "contact",
     "contact_equations",
     "contact_forces",
+    "drive",
     "flight",
     "impact",
     "kernel_errors",
@@ -52,6 +53,7 @@ def _load(name: str) -> ModuleType:
 
 
 layout = _load("layout")
+drive = _load("drive")
 ball = _load("ball")
 flight = _load("flight")
 surfaces = _load("surfaces")

@@ -145,15 +145,15 @@ SURFACE = Layout("surface")
 _ctx = CTX.add
 _surface = SURFACE.add
 
-# --- drive ------------------------------------------------------------------------
-CTX.begin("drive")
+# --- drive (kernels: drive.py; written by billiard.geometry.drive.Drive.write) ------
+DR = CTX.begin("drive")
 AMP = _ctx("AMP", "amplitude", 1, "m", "drive amplitude")
 OMEGA = _ctx("OMEGA", "omega", 1, "rad/s", "drive angular frequency")
 HORIZ = _ctx("HORIZ", "horizontal", 1, "", "1.0: horizontal drive, 0.0: vertical")
 DRIVE_ACCEL = _ctx("DRIVE_ACCEL", "peak_acceleration", 1, "m/s^2", "A w^2")
 
 # --- locator ----------------------------------------------------------------------
-CTX.begin("locator")
+DR_END = CTX.begin("locator")
 G = _ctx("G", "gravity", 1, "m/s^2", "gravity (the flight's too)")
 H_FIRST = _ctx("H_FIRST", "first_substep", 1, "s", "first substep of a flight")
 H_LONGEST = _ctx("H_LONGEST", "longest_substep", 1, "s", "longest proven-clear substep")

@@ -28,8 +28,11 @@ import math
 from .ball import energy, frame_velocity
 from .contact import pmax, pmin, run_phase
 from .contact_equations import centre_state, roll_spin, s_dot_of_velocity, slip_velocity
-from .contact_forces import boundary, forces
+from .contact_forces import forces
 from .decorators import inline, jit
+from .drive import boundary_motion as boundary
+from .drive import displacement, to_lab_frame
+from .drive import to_boundary_frame as boundary_frame
 from .impact import (
     CHATTER_TAIL,
     NOT_SUMMED,
@@ -40,7 +43,6 @@ from .impact import (
     rebound_settles,
 )
 from .layout import (
-    AMP,
     CCOL,
     COLLAPSE,
     CONTACTS_FULL,
@@ -164,7 +166,6 @@ from .layout import (
     KernelError,
 )
 from .loop import (
-    boundary_frame,
     compensated_add,
     remember_impact,
     run_chunk,
@@ -192,14 +193,6 @@ PHASE_CUT = 3.0
 
 
 # ---------------------------------------------------------------------- kinematics
-
-
-@inline
-def displacement(ctx, theta):
-    """The boundary's displacement (m) along the drive's axis at drive angle theta (as
-    :class:`billiard.geometry.drive.Drive` computes it; its velocity:
-    :func:`~billiard.kernels.contact_forces.boundary`)."""
-    return ctx[AMP] * math.sin(theta)
 
 
 @jit
@@ -517,11 +510,7 @@ def continue_on(ctx, p, walls, j, px, theta, u3, t):
 @inline
 def held_lab(ctx, theta, px, py):
     """(q1, q2, u1, u2) of a ball held at (px, py) in the boundary's frame."""
-    d = displacement(ctx, theta)
-    if ctx[HORIZ] == 1.0:
-        q1, q2 = px + d, py
-    else:
-        q1, q2 = px, py + d
+    q1, q2 = to_lab_frame(ctx, theta, px, py)
     u1, u2, _, _ = boundary(ctx, theta)
     return q1, q2, u1, u2
 

@@ -164,10 +164,7 @@ class EventLocator:
         self.h_longest = min(_LONGEST_STEP, flight.max_step)
         self.turn_length = _TURN_FRACTION * boundary.smallest_offset_radius
         ctx = [0.0] * _L.SIZE
-        ctx[_L.AMP] = self.amplitude
-        ctx[_L.OMEGA] = self.omega
-        ctx[_L.HORIZ] = 1.0 if self.horizontal else 0.0
-        ctx[_L.DRIVE_ACCEL] = self.drive_accel
+        drive.write(ctx)
         ctx[_L.G] = self.g
         ctx[_L.H_FIRST] = self.h_first
         ctx[_L.H_LONGEST] = self.h_longest

@@ -43,11 +43,7 @@ def fixed_step_constants(ctx: list[float], boundary: Boundary, step: float) -> N
     """Write the fixed-step locator's constants for ``boundary`` into a state vector
     (the drive's and the surfaces' are the event locator's): the step (s), the radius,
     the walls and their intervals, where the lid and the escape level are."""
-    drive = boundary.drive
-    ctx[_L.AMP] = drive.amplitude
-    ctx[_L.OMEGA] = drive.omega
-    ctx[_L.HORIZ] = 1.0 if drive.horizontal else 0.0
-    ctx[_L.DRIVE_ACCEL] = drive.peak_acceleration
+    boundary.drive.write(ctx)
     surfaces = boundary.surfaces
     ctx[_L.NSURF] = float(len(surfaces))
     for j, surface in enumerate(surfaces):
