@@ -92,6 +92,8 @@ def stop_text(code: int, value: float) -> str:
             f"the flight's step-size control failed (Dormand-Prince, 200 rejected steps "
             f"from tau = {value!r} s)"
         )
+    if code == layout.E_KIND:
+        return f"the kernels have no impact law of kind {value:g}"
     if code == layout.E_INVERSION:
         return f"offset-curve inversion did not converge at x = {value!r} m"
     if code == layout.E_DEPARTURES:

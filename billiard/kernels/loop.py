@@ -12,7 +12,7 @@ from . import fixed_step, flight
 from .ball import energy, frame_velocity
 from .decorators import inline, jit
 from .drive import accel_to_boundary_frame, boundary_velocity, to_boundary_frame
-from .impact import chatter_tail, kane_levinson, rebound_settles
+from .impact import chatter_tail, impact_law, rebound_settles
 from .layout import (
     COLLAPSE,
     COUNTS,
@@ -161,8 +161,7 @@ def impact(ctx, p, walls, out, row, tau, j, q1, q2, u1, u2, theta, s, z):
     # under contact phases a lying ball lands or reflects: the low-velocity rule's
     # relaunch (which adds energy) is the impacts model's alone
     press = accel > 0.0 and ctx[EN_LAND_ON] == 0.0
-    n1, n2, n3, rt, rn, regime, resting, _, wn = kane_levinson(ctx, u1, u2, u3, z, vb1, vb2,
-                                                               press)  # fmt: skip
+    n1, n2, n3, rt, rn, regime, resting, _, wn = impact_law(ctx, u1, u2, u3, z, vb1, vb2, press)
     u4, un = frame_velocity(n1, n2, z)
     m, r, k = ctx[IM_M], ctx[IM_R], ctx[IM_K]
     e = energy(q2, n1, n2, n3, m, r, k, ctx[G])

@@ -39,7 +39,7 @@ from .impact import (
     chatter_bounded,
     chatter_period,
     chatter_time,
-    kane_levinson,
+    impact_law,
     rebound_settles,
 )
 from .layout import (
@@ -595,7 +595,7 @@ def impact_from_contact(ctx, p, walls, out, other, index, t, tau, theta, q3):
     vb1, vb2, _, _ = boundary(ctx, theta)
     # a ball that reaches a second wall or the lid lands, is held or reflects: under
     # contact phases the low-velocity rule never relaunches it (that adds energy)
-    n1, n2, n3, rt, rn, regime, _, _, wn = kane_levinson(ctx, u1, u2, u3, z, vb1, vb2, False)
+    n1, n2, n3, rt, rn, regime, _, _, wn = impact_law(ctx, u1, u2, u3, z, vb1, vb2, False)
     elastic = regime == ELASTIC
     if rn == 0.0 and rt == 0.0:
         # no impulse: no impact (billiard.models.corner.is_impact)
