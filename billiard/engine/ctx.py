@@ -22,7 +22,7 @@ from billiard.engine.state import BallState, EngineState
 from billiard.geometry.surfaces import FlatLid, OffsetWall
 from billiard.kernels import layout as L
 from billiard.kernels.rules import COLLAPSE_COUNT
-from billiard.models.flight import AdaptiveFlight, ExactFlight, RK4Flight
+from billiard.models.kinds import require_kernel
 
 __all__ = [
     "COUNT_KEYS",
@@ -47,13 +47,6 @@ def _ball_values(ball: BallState) -> tuple[float, ...]:
     return (ball.t, ball.theta, ball.q1, ball.q2, ball.u1, ball.u2, ball.u3, ball.q3)
 
 
-def _flight_constants(ctx: list[float], fl: Any) -> None:
-    if not isinstance(fl, (ExactFlight, AdaptiveFlight, RK4Flight)):
-        raise ValueError(f"the kernels have no flight model {type(fl).__name__}")
-    # the model's constants and step proposal, as its own ctx holds them
-    ctx[L.FL_KIND : L.FL_U3] = fl.ctx[L.FL_KIND : L.FL_U3]
-
-
 def _surface_constants(ctx: list[float], j: int, surface: Any) -> None:
     if not isinstance(surface, (OffsetWall, FlatLid)):
         raise ValueError(f"the kernels have no surface {type(surface).__name__}")
@@ -62,10 +55,13 @@ def _surface_constants(ctx: list[float], j: int, surface: Any) -> None:
 
 
 def state_vector(sim: Any) -> list[float]:
-    """The kernels' ``ctx`` (a list of floats) for ``sim`` in its current engine state.
+    """The kernels' ``ctx`` (a list of floats) for ``sim`` in its current engine state:
+    the locator (with the drive), the flight model and the impact law each write their
+    block, their kind first.
 
     Raises:
-        ValueError: a flight model or surface the kernels do not have.
+        SceneError: a locator, flight model or impact law without a compiled kernel.
+        ValueError: a surface the kernels do not have.
     """
     ctx = constants_vector(sim)
     write_state(ctx, sim.state)
@@ -82,17 +78,15 @@ def constants_vector(sim: Any) -> list[float]:
         ValueError: a flight model or surface the kernels do not have.
     """
     ctx = [0.0] * L.SIZE
-    # the drive and the locator's substep lengths, as the locator's own ctx holds them
-    loc = sim.locator.ctx
-    ctx[L.AMP : L.H_BRACKET + 1] = loc[L.AMP : L.H_BRACKET + 1]
-    if sim.method == "rk4":
-        # the fixed-step detection's constants and memory, as its own ctx holds them
-        ctx[L.RK : L.RK_END] = loc[L.RK : L.RK_END]
+    for model, what in (
+        (sim.locator, "locator"),
+        (sim.flight, "flight model"),
+        (sim.impact, "impact law"),
+    ):
+        require_kernel(model, what)
+        model.write(ctx)
     surfaces = sim.boundary.surfaces
     ctx[L.NSURF] = float(len(surfaces))
-    _flight_constants(ctx, sim.flight)
-    # Kane and Levinson's law (see supports): its coefficients, as its own ctx holds them
-    ctx[L.IM_M : L.IM_EB + 1] = sim.impact.ctx[L.IM_M : L.IM_EB + 1]
     for j, surface in enumerate(surfaces):
         _surface_constants(ctx, j, surface)
         base = L.SURF + j * L.SURF_STRIDE
@@ -100,7 +94,6 @@ def constants_vector(sim: Any) -> list[float]:
         ctx[base + L.S_WS] = float(warm[0])
         ctx[base + L.S_WSLOPE] = float(warm[1])
     ctx[L.EN_UNTIL] = sim.end_time
-    ctx[L.LOC_KIND] = L.LOC_RK4 if sim.method == "rk4" else L.LOC_EVENT
     # samples count from the run's start (billiard run --sample)
     ctx[L.SM_T0] = sim.initial.t
     if sim.phases:

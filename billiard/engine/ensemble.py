@@ -225,7 +225,7 @@ def _boundary_frame(
     """The centres (m) relative to the boundary at time t (s), as
     Drive.to_boundary_frame computes them."""
     drive = setup.drive
-    d = drive.amplitude * math.sin(drive.angle(t))
+    d = drive.displacement(drive.angle(t))
     return (q1 - d, q2) if drive.horizontal else (q1, q2 - d)
 
 

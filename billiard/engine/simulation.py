@@ -46,7 +46,8 @@ from billiard.kernels.rules import COLLAPSE_COUNT, COLLAPSE_SPAN, ZERO_FLIGHT_LI
 from billiard.models.contact import ContactModel
 from billiard.models.flight import flight_model
 from billiard.models.hold import HELD, VertexHold
-from billiard.models.impact import ImpactLaw, KaneLevinsonImpact, impact_law
+from billiard.models.impact import ImpactLaw, impact_law
+from billiard.models.kinds import require_kernel
 from billiard.models.locators import LOCATORS
 from billiard.runfile.checkpoint import CheckpointError
 from billiard.runfile.record import ContactRecord, ImpactRecord
@@ -102,11 +103,11 @@ class Simulation:
             self.boundary, self.flight, scene.run.gravity, self.warm
         )
         self.impact: ImpactLaw = law if law is not None else impact_law(scene)
-        if not isinstance(self.impact, KaneLevinsonImpact):
-            raise SceneError(
-                f"the impact law {type(self.impact).__name__} has no kernel: the engine "
-                "runs Kane and Levinson's law (kane-levinson)"
-            )
+        # every model runs on the kernels, chosen there by its kind: one without is
+        # refused here, never run another way
+        for model, what in ((self.locator, "locator"), (self.flight, "flight model")):
+            require_kernel(model, what)
+        require_kernel(self.impact, "impact law")
         self.initial = self.initial_state()
         #: simulated time (s) at which a run ends (inf when the scene sets no duration)
         self.end_time = (

@@ -23,11 +23,11 @@ from __future__ import annotations
 
 import math
 
+from . import drive
 from .contact_forces import at_rest, conditions, n_conditions, n_y, rhs
 from .decorators import inline, jit
 from .illinois import narrow, secant_point
 from .layout import (
-    AMP,
     E_AT_REST,
     E_PHASE_STEPS,
     EN_STOP,
@@ -222,7 +222,7 @@ def begin(ctx, p, walls):
     conditions(ctx, p, walls, 0.0, PH_Y, PH_CPREV)
     ctx[PH_STEPS] = 0.0
     omega = ctx[OMEGA]
-    static = ctx[AMP] == 0.0 or omega == 0.0
+    static = drive.static(ctx)
     # the step is at most 1/20 of the drive period, so that the conditions, which the
     # drive moves, cannot change sign twice unseen within a step
     ctx[PH_HMAX] = math.inf if static else 0.1 * math.pi / abs(omega)

@@ -18,7 +18,10 @@ read; :data:`CTX` is the declaration, by which a reader finds a quantity by name
 
 Each model (flight, impact law, locator, contact phase, hold) keeps its coefficients in
 its own block, and the interpreted models keep their own ``ctx`` in this layout; the
-engine's is assembled from theirs (:mod:`billiard.engine.ctx`). ``contact.restitution`` and
+engine's is assembled from theirs (:mod:`billiard.engine.ctx`: each model's ``write``).
+A block's first slot names the model's kind where there is a choice (``LOC_KIND``,
+``FL_KIND``, ``IM_KIND``): the kernels branch on it, so every model with a kind runs
+compiled (:mod:`billiard.models.kinds`). ``contact.restitution`` and
 ``contact.elastic_below`` have one slot each, the impact law's (``IM_E``, ``IM_EB``),
 which the landing test of ``contact.model = "phases"`` reads too. No file stores a slot
 number.
@@ -170,15 +173,16 @@ SURFACE = Layout("surface")
 _ctx = CTX.add
 _surface = SURFACE.add
 
-# --- drive ------------------------------------------------------------------------
-CTX.begin("drive")
+# --- drive (kernels: drive.py; written by billiard.geometry.drive.Drive.write) ------
+DR = CTX.begin("drive")
 AMP = _ctx("AMP", "amplitude", 1, "m", "drive amplitude")
 OMEGA = _ctx("OMEGA", "omega", 1, "rad/s", "drive angular frequency")
 HORIZ = _ctx("HORIZ", "horizontal", 1, "", "1.0: horizontal drive, 0.0: vertical")
 DRIVE_ACCEL = _ctx("DRIVE_ACCEL", "peak_acceleration", 1, "m/s^2", "A w^2")
 
 # --- locator ----------------------------------------------------------------------
-CTX.begin("locator")
+DR_END = CTX.begin("locator")
+LOC_KIND = _ctx("LOC_KIND", "kind", 1, "", "LOC_EVENT or LOC_RK4: which search the run takes")
 G = _ctx("G", "gravity", 1, "m/s^2", "gravity (the flight's too)")
 H_FIRST = _ctx("H_FIRST", "first_substep", 1, "s", "first substep of a flight")
 H_LONGEST = _ctx("H_LONGEST", "longest_substep", 1, "s", "longest proven-clear substep")
@@ -188,8 +192,11 @@ SPLIT = _ctx("SPLIT", "split", 1, "", "1.0 when a substep had to be split")
 THETA0 = _ctx("THETA0", "theta0", 1, "rad", "drive angle at the start of the flight")
 NSURF = _ctx("NSURF", "surfaces", 1, "", "number of surfaces")
 
+LOC_EVENT = 0.0  # the event locator (method "event"; kernels: locate.py, loop.run_chunk)
+LOC_RK4 = 1.0  # the paper's fixed-step detection (method "rk4"; loop.run_chunk_fixed)
+
 # --- flight -------------------------------------------------------------------------
-CTX.begin("flight")
+FL = CTX.begin("flight")
 FL_KIND = _ctx("FL_KIND", "kind", 1, "", "FLIGHT_EXACT, FLIGHT_ADAPTIVE or FLIGHT_RK4")
 FL_M = _ctx("FL_M", "mass", 1, "kg", "mass")
 FL_CLIN = _ctx("FL_CLIN", "c_lin", 1, "N s/m", "Fowles linear drag")
@@ -204,6 +211,7 @@ FL_YA = _ctx("FL_YA", "ya", 4, "m, m/s", "(q1, q2, u1, u2) at FL_TA")
 FL_YB = _ctx("FL_YB", "yb", 4, "m, m/s", "(q1, q2, u1, u2) at FL_TB")
 FL_KA = _ctx("FL_KA", "ka", 2, "m/s^2", "acceleration at FL_TA")
 FL_KB = _ctx("FL_KB", "kb", 2, "m/s^2", "acceleration at FL_TB")
+FL_END = CTX.end()
 
 FLIGHT_EXACT = 0.0
 FLIGHT_ADAPTIVE = 1.0
@@ -212,7 +220,8 @@ FLIGHT_RK4 = 2.0  # the paper's fixed-step RK4 (method "rk4"; kernels: fixed_ste
 # --- impact law and ball ------------------------------------------------------------
 # contact.restitution and contact.elastic_below: the impact law's, and the landing test's
 # of contact.model = "phases" (loop.settles)
-CTX.begin("impact")
+IM = CTX.begin("impact")
+IM_KIND = _ctx("IM_KIND", "kind", 1, "", "the impact law: KANE_LEVINSON")
 IM_M = _ctx("IM_M", "mass", 1, "kg", "mass")
 IM_R = _ctx("IM_R", "radius", 1, "m", "radius")
 IM_K = _ctx("IM_K", "inertia_factor", 1, "", "inertia factor I / (m r^2)")
@@ -220,6 +229,10 @@ IM_E = _ctx("IM_E", "restitution", 1, "", "Newton's coefficient of restitution")
 IM_MUS = _ctx("IM_MUS", "mu_static", 1, "", "static friction")
 IM_MUK = _ctx("IM_MUK", "mu_kinetic", 1, "", "kinetic friction")
 IM_EB = _ctx("IM_EB", "elastic_below", 1, "m/s", "low-velocity threshold; the landing speed")
+IM_END = CTX.end()
+
+# the kinds (kernels: impact.impact_law; models: billiard.models.kinds)
+KANE_LEVINSON = 0.0  # Kane and Levinson's law with the low-velocity rule (impact.py)
 
 # --- engine state -------------------------------------------------------------------
 CTX.begin("engine")
@@ -444,7 +457,6 @@ MC_FLIGHT_FROM = _ctx("MC_FLIGHT_FROM", "flight_from", 1, "s", "the ball's time 
 # impact counted; the ball goes on from it (or lands)
 EN_NO_ROW = _ctx("EN_NO_ROW", "no_row", 1, "", "1.0: the last contact gave no impulse (no row)")
 MC_HOLD_ON = _ctx("MC_HOLD_ON", "hold_on", 1, "", "a hold under way between two calls: 1 on")
-LOC_KIND = _ctx("LOC_KIND", "locator", 1, "", "LOC_EVENT or LOC_RK4: how flights find impacts")
 EN_ONE = _ctx("EN_ONE", "one_flight", 1, "", "1.0: run_chunk returns after each flight (FLOWN)")
 CTX.end()
 
@@ -542,10 +554,6 @@ CONTACTS_FULL = 7  # the contact rows are full
 SAMPLES_FULL = 8  # the sample rows are full (an emission may be pending)
 FLOWN = 9  # run_chunk with EN_ONE: one flight done (an impact or a contact without impulse)
 
-# --- locators (LOC_KIND) --------------------------------------------------------------
-LOC_EVENT = 0.0  # event location on the flight's own integrator (locate.py)
-LOC_RK4 = 1.0  # the paper's fixed-step detection (fixed_step.py)
-
 # --- trajectory samples -----------------------------------------------------------------
 SCOL = 8  # t, q1, q2, u1, u2, u3, energy, mode (MC_MODE code)
 SRC_FLIGHT = 1.0  # samples of a free flight from SM_BALL
@@ -596,6 +604,7 @@ E_DEPARTURES = 11  # rk4: DEPARTURE_LIMIT departures in a row (the step, s, in E
 E_FOOT = 12  # rk4: Newton failed from both starts: the global nearest point at RK_ASK
 E_PHASE_NON_FINITE = 13  # a non-finite state at a phase's end (MC_FINAL: the time)
 E_LEFT = 14  # a phase left the container's range of x (EN_ERR_VALUE: s; MC_FINAL: t)
+E_KIND = 15  # a model kind (IM_KIND) the kernels do not have (EN_ERR_VALUE: the kind)
 
 
 class KernelError(Exception):

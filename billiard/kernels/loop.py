@@ -11,9 +11,9 @@ import math
 from . import fixed_step, flight
 from .ball import energy, frame_velocity
 from .decorators import inline, jit
-from .impact import chatter_tail, kane_levinson, rebound_settles
+from .drive import accel_to_boundary_frame, boundary_velocity, to_boundary_frame
+from .impact import chatter_tail, impact_law, rebound_settles
 from .layout import (
-    AMP,
     COLLAPSE,
     COUNTS,
     DONE,
@@ -52,7 +52,6 @@ from .layout import (
     ESCAPE,
     FLOWN,
     FULL,
-    HORIZ,
     IM_E,
     IM_EB,
     IM_K,
@@ -105,28 +104,12 @@ def pressing(ctx, p, walls, j, theta, q1, q2, u1, u2):
 
 
 @inline
-def boundary_frame(ctx, theta, q1, q2, u1, u2):
-    """(px, py, vx, vy): the centre's position (m) and velocity (m/s) relative to the
-    boundary at drive angle theta (``Drive.to_boundary_frame``)."""
-    a = ctx[AMP]
-    d = a * math.sin(theta)
-    v = a * ctx[OMEGA] * math.cos(theta)
-    if ctx[HORIZ] != 0.0:
-        return q1 - d, q2, u1 - v, u2
-    return q1, q2 - d, u1, u2 - v
-
-
-@inline
 def gap_acceleration(ctx, p, walls, j, theta, q1, q2, u1, u2):
     """d2G/dt2 (m/s^2) of surface j for the ball in free flight: negative when its
     acceleration relative to the boundary pushes it into the surface."""
-    px, py, vx, vy = boundary_frame(ctx, theta, q1, q2, u1, u2)
+    px, py, vx, vy = to_boundary_frame(ctx, theta, q1, q2, u1, u2)
     a1, a2 = flight.acceleration(ctx, u1, u2)
-    ab = -ctx[AMP] * ctx[OMEGA] * ctx[OMEGA] * math.sin(theta)
-    if ctx[HORIZ] != 0.0:
-        ax, ay = a1 - ab, a2
-    else:
-        ax, ay = a1, a2 - ab
+    ax, ay = accel_to_boundary_frame(ctx, theta, a1, a2)
     return gap_accel(ctx, p, walls, j, px, py, vx, vy, ax, ay)
 
 
@@ -177,17 +160,12 @@ def impact(ctx, p, walls, out, row, tau, j, q1, q2, u1, u2, theta, s, z):
         ctx[EN_STOP] = E_ESCAPED
         raise KernelError(E_ESCAPED)
     q3 = ctx[EN_Q3] + u3 * tau
-    v = ctx[AMP] * ctx[OMEGA] * math.cos(theta)
-    if ctx[HORIZ] != 0.0:
-        vb1, vb2 = v, 0.0
-    else:
-        vb1, vb2 = 0.0, v
+    vb1, vb2 = boundary_velocity(ctx, theta)
     accel = -gap_acceleration(ctx, p, walls, j, theta, q1, q2, u1, u2)
     # under contact phases a lying ball lands or reflects: the low-velocity rule's
     # relaunch (which adds energy) is the impacts model's alone
     press = accel > 0.0 and ctx[EN_LAND_ON] == 0.0
-    n1, n2, n3, rt, rn, regime, resting, _, wn = kane_levinson(ctx, u1, u2, u3, z, vb1, vb2,
-                                                               press)  # fmt: skip
+    n1, n2, n3, rt, rn, regime, resting, _, wn = impact_law(ctx, u1, u2, u3, z, vb1, vb2, press)
     u4, un = frame_velocity(n1, n2, z)
     m, r, k = ctx[IM_M], ctx[IM_R], ctx[IM_K]
     e = energy(q2, n1, n2, n3, m, r, k, ctx[G])

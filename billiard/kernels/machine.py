@@ -29,19 +29,21 @@ import math
 from .ball import energy, frame_velocity
 from .contact import pmax, pmin, run_phase
 from .contact_equations import centre_state, roll_spin, s_dot_of_velocity, slip_velocity
-from .contact_forces import boundary, forces
+from .contact_forces import forces
 from .decorators import inline, jit
+from .drive import boundary_motion as boundary
+from .drive import displacement, to_lab_frame
+from .drive import to_boundary_frame as boundary_frame
 from .impact import (
     CHATTER_TAIL,
     NOT_SUMMED,
     chatter_bounded,
     chatter_period,
     chatter_time,
-    kane_levinson,
+    impact_law,
     rebound_settles,
 )
 from .layout import (
-    AMP,
     CCOL,
     COLLAPSE,
     CONTACTS_FULL,
@@ -185,7 +187,6 @@ from .layout import (
     KernelError,
 )
 from .loop import (
-    boundary_frame,
     compensated_add,
     remember_impact,
     run_flights,
@@ -221,14 +222,6 @@ PHASE_CUT = 3.0
 
 
 # ---------------------------------------------------------------------- kinematics
-
-
-@inline
-def displacement(ctx, theta):
-    """The boundary's displacement (m) along the drive's axis at drive angle theta (as
-    :class:`billiard.geometry.drive.Drive` computes it; its velocity:
-    :func:`~billiard.kernels.contact_forces.boundary`)."""
-    return ctx[AMP] * math.sin(theta)
 
 
 @jit
@@ -660,11 +653,7 @@ def continue_on(ctx, p, walls, j, px, theta, u3, t):
 @inline
 def held_lab(ctx, theta, px, py):
     """(q1, q2, u1, u2) of a ball held at (px, py) in the boundary's frame."""
-    d = displacement(ctx, theta)
-    if ctx[HORIZ] == 1.0:
-        q1, q2 = px + d, py
-    else:
-        q1, q2 = px, py + d
+    q1, q2 = to_lab_frame(ctx, theta, px, py)
     u1, u2, _, _ = boundary(ctx, theta)
     return q1, q2, u1, u2
 
@@ -784,7 +773,7 @@ def impact_from_contact(ctx, p, walls, out, other, index, t, tau, theta, q3):
     vb1, vb2, _, _ = boundary(ctx, theta)
     # a ball that reaches a second wall or the lid lands, is held or reflects: under
     # contact phases the low-velocity rule never relaunches it (that adds energy)
-    n1, n2, n3, rt, rn, regime, _, _, wn = kane_levinson(ctx, u1, u2, u3, z, vb1, vb2, False)
+    n1, n2, n3, rt, rn, regime, _, _, wn = impact_law(ctx, u1, u2, u3, z, vb1, vb2, False)
     elastic = regime == ELASTIC
     if rn == 0.0 and rt == 0.0:
         # no impulse: no impact (billiard.models.corner.is_impact)
