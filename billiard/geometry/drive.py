@@ -16,6 +16,7 @@ from typing import Any
 
 from billiard.kernels.interpreted import drive as _drive
 from billiard.kernels.interpreted import layout as _L
+from billiard.kernels.names import write
 
 __all__ = ["Drive"]
 
@@ -57,10 +58,10 @@ class Drive:
     def write(self, ctx: MutableSequence[float]) -> None:
         """Write the drive block of a state vector: amplitude (m), omega (rad/s), the
         axis and the peak acceleration A w^2 (m/s^2)."""
-        ctx[_L.AMP] = float(self.amplitude)
-        ctx[_L.OMEGA] = float(self.omega)
-        ctx[_L.HORIZ] = 1.0 if self.horizontal else 0.0
-        ctx[_L.DRIVE_ACCEL] = self.peak_acceleration
+        write(ctx, "drive.amplitude", float(self.amplitude))
+        write(ctx, "drive.omega", float(self.omega))
+        write(ctx, "drive.horizontal", 1.0 if self.horizontal else 0.0)
+        write(ctx, "drive.peak_acceleration", self.peak_acceleration)
 
     @property
     def static(self) -> bool:
