@@ -94,6 +94,29 @@ CLI = "billiard run --collisions 1 --no-plot, whole process"
 STARTUP = {FIRST: "wedge-6.6hz", PROCESS: "wedge-6.6hz", CLI: "parabola-5.4hz"}
 
 
+#: Run first in every process: ``billiard.derivation`` and ``billiard.generated`` from
+#: the folders beside the tree's ``billiard/`` (the current directory), as the package's
+#: own checkout finder does in later commits; in a commit without it, an editable install
+#: of the main checkout would answer for them, and the process would import them from
+#: outside its tree.
+_PRELUDE = """
+import importlib.util as _util, os as _os, sys as _sys
+class _TreeFolders:
+    names = {"billiard.derivation": "derivation", "billiard.generated": "generated"}
+    @classmethod
+    def find_spec(cls, name, path=None, target=None):
+        folder = cls.names.get(name)
+        if folder is None:
+            return None
+        folder = _os.path.join(_os.getcwd(), folder)
+        init = _os.path.join(folder, "__init__.py")
+        return _util.spec_from_file_location(name, init, submodule_search_locations=[folder])
+_sys.meta_path.insert(0, _TreeFolders)
+"""
+#: ``python -m MODULE ARGS`` with the prelude first
+_RUN_MODULE = "import runpy; runpy.run_module({module!r}, run_name='__main__', alter_sys=True)"
+
+
 class TreeError(RuntimeError):
     """A process of one tree failed, or imported billiard from outside its tree."""
 
@@ -123,10 +146,19 @@ def check_files(tree: Path, files: list[str]) -> None:
 
 
 def _python(tree: Path, args: list[str]) -> tuple[float, str]:
-    """Run ``python ARGS`` in ``tree``: (wall seconds of the process, its stdout)."""
+    """Run ``python ARGS`` in ``tree`` (``-c CODE ...`` or ``-m MODULE ...``, the
+    prelude first): (wall seconds of the process, its stdout)."""
+    if args[0] == "-m":
+        code = [_PRELUDE + _RUN_MODULE.format(module=args[1]), *args[2:]]
+    else:
+        code = [_PRELUDE + args[1], *args[2:]]
     start = time.perf_counter()
     done = subprocess.run(
-        [sys.executable, *args], cwd=tree, env=environment(tree), capture_output=True, text=True
+        [sys.executable, "-c", *code],
+        cwd=tree,
+        env=environment(tree),
+        capture_output=True,
+        text=True,
     )
     seconds = time.perf_counter() - start
     if done.returncode != 0:

@@ -444,15 +444,17 @@ class Driver:
         self, control: RunControl, sink: Any, start: int, done: int, contacts: int, samples: int
     ) -> int | None:
         """Give the chunk's rows to the recorder and the hooks in the order of time:
-        each impact after the contact phases that ended before it and the samples up to
-        its time. Returns the row after which a stop was requested (by a hook, before
-        the chunk's last row), else None."""
+        each impact after the samples up to its time and the contact phases that ended
+        before it. Returns the row after which a stop was requested (by a hook, before
+        the chunk's last row, or while the samples before a row or after the last were
+        handed out: then the row before them), else None."""
         buffer = self._buffer
         progress, on_record = control.progress, control.on_record
         handed = handed_samples = 0
         i = 0
         while i < done:
-            if on_record is not None:
+            if on_record is not None or samples:
+                # one impact a block: a stop among the samples lands on the impact before
                 j = i + 1
             elif progress is not None:
                 j = min(
@@ -460,6 +462,13 @@ class Driver:
                 )
             else:
                 j = done
+            if samples:
+                last = self._samples_before(handed_samples, samples, buffer[(j - 1) * L.NCOL + 1])
+                self._hand_samples(handed_samples, last)
+                handed_samples = last
+                if control.request.signum:
+                    # a stop among the samples before this block: the state before it
+                    return i
             if contacts:
                 # the phases that ended before impact start + j
                 last = handed
@@ -468,10 +477,6 @@ class Driver:
                     last += 1
                 self._hand_contacts(handed, last)
                 handed = last
-            if samples:
-                last = self._samples_before(handed_samples, samples, buffer[(j - 1) * L.NCOL + 1])
-                self._hand_samples(handed_samples, last)
-                handed_samples = last
             block = as_block(buffer, i, j)
             if sink is not None:
                 sink(block)
@@ -487,9 +492,13 @@ class Driver:
             if control.request.signum and j < done:
                 return j
             i = j
+        if handed_samples < samples:
+            self._hand_samples(handed_samples, samples)
+            if control.request.signum and done:
+                # a stop among the samples after the last impact: the state after it
+                return done
         if handed < contacts:
             self._hand_contacts(handed, contacts)
-        self._hand_samples(handed_samples, samples)
         return None
 
     def _redo(self, saved: Any, saved_samples: Any, start: int, cut: int, until: float) -> None:
@@ -613,6 +622,9 @@ class Driver:
                 if cut is not None:
                     self._redo(saved, saved_samples, start, cut, until)
                     sim.final_time = float(ctx[L.MC_FINAL])
+                    if ctx[L.MC_PHASE_ON] != 0.0 or ctx[L.MC_HOLD_ON] != 0.0:
+                        # back at a chunk's start inside a phase: cut it there
+                        self._cut_phase(until)
                     raise RunInterrupted(request.signum)
                 if error is not None:
                     self._drain()
