@@ -281,8 +281,6 @@ class Simulation:
             self.driver.set_locator_memory(state.locator)
         except ValueError as exc:
             raise CheckpointError(f"its engine state does not fit this engine: {exc}") from None
-        if (state.mode != "flight" or state.contact) and not self.phases:
-            raise CheckpointError("its engine state is in contact, the scene has no phases")
         for warm, (s, slope) in zip(self.warm, state.walls, strict=False):
             warm[0], warm[1] = s, slope
         ctx = self.ctx
