@@ -29,7 +29,7 @@ from .ball import energy, frame_velocity
 from .contact import pmax, pmin, run_phase
 from .contact_equations import centre_state, roll_spin, s_dot_of_velocity, slip_velocity
 from .contact_forces import boundary, forces
-from .decorators import inline, jit
+from .decorators import borrow, inline, jit
 from .impact import (
     CHATTER_TAIL,
     NOT_SUMMED,
@@ -822,6 +822,8 @@ def run_machine(ctx, p, walls, out, rows, cout, crows):
     IN_CONTACT (no impact for the contact span, at MC_FINAL) or PAUSED (a long phase,
     or a phase cut by a stop request: MC_PHASE_ON). A documented stop raises
     KernelError, the rows written so far counted."""
+    # the caller owns the arrays throughout: no reference counting inside
+    ctx, p, out, cout = borrow(ctx), borrow(p), borrow(out), borrow(cout)
     flight_walls = (walls[0], walls[1], walls[2])
     ctx[MC_ROW] = 0.0
     ctx[MC_CROW] = 0.0
