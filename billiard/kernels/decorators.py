@@ -14,8 +14,10 @@ strides with a null memory-info pointer, through numba's documented extension AP
 (``numba.extending.intrinsic``; the array's fields set through the lowering context's
 ``make_helper``). numba's counting of a null pointer is a test that LLVM folds away
 once the kernels are inlined into the entry, so the counting is gone, not just made
-cheap. A borrowed array must not outlive the call (none is returned or stored).
-Interpreted (and in a device twin), ``borrow`` is the identity.
+cheap (``tests/kernels/test_loop.py`` counts the calls left in ``run_chunk``'s optimised
+IR: none); a kernel the entry calls without inlining it tests a null pointer per count.
+A borrowed array must not outlive the call (none is returned or stored). Interpreted
+(and in a device twin), ``borrow`` is the identity.
 
 A call between two compiled kernels passes every array as its seven fields and the
 wall functions' tuple as twelve words, through memory, and counts references on the
