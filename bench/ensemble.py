@@ -1,6 +1,7 @@
 """Section ``ensemble``: the ensemble kernel's impacts per second on one core and on all,
-the sweep's fixed cost per point and its scaling with workers, and the GPU when there is
-one, against the targets of the issue "Ensembles".
+the sweep's fixed cost per point and its scaling with workers, a point under contact
+phases against one under the impacts model, and the GPU when there is one, against the
+targets of the issues "Ensembles" and "One engine".
 
 Run as a section of the benchmark (``billiard bench --only ensemble``) or alone from a
 source checkout::
@@ -9,7 +10,12 @@ source checkout::
     python -m bench.ensemble --quick    # under a minute, smaller sizes
 
 It saves ``docs/figures/ensemble/bench.json`` and rewrites the section between the markers
-``<!-- ensemble-bench -->`` and ``<!-- /ensemble-bench -->`` of ``docs/sweeps.md``.
+``<!-- ensemble-bench -->`` and ``<!-- /ensemble-bench -->`` of ``docs/sweeps.md``, and
+the cost of a point under contact phases between ``<!-- phases-point-bench -->`` and
+``<!-- /phases-point-bench -->`` of ``docs/performance.md``; ``--phases`` measures that
+part alone (the section's other saved results kept)::
+
+    python -m bench.ensemble --phases   # about a minute
 Times are wall-clock medians of several runs taken alternately, numba's cache loaded
 first; the machine's load average is recorded with them.
 """
@@ -21,6 +27,7 @@ import os
 import platform
 import resource
 import statistics
+import sys
 import tempfile
 import time
 from pathlib import Path
@@ -32,6 +39,7 @@ from bench.common import section_arguments
 from bench.markdown import publish_section
 
 BEGIN, END = "<!-- ensemble-bench -->", "<!-- /ensemble-bench -->"
+PHASES_BEGIN, PHASES_END = "<!-- phases-point-bench -->", "<!-- /phases-point-bench -->"
 SCENE = "wedge-6.6hz"
 #: the issue's targets
 TARGETS = {
@@ -40,9 +48,12 @@ TARGETS = {
     "scaling_16": 12.0,
     "gpu_impacts_per_s": 1e8,
     "basin_seconds": 600.0,
+    "phases_ratio": 2.0,
 }
 #: (starts, impacts per start, repeats) of the kernel measurement
 SIZES = {False: (4000, 1000, 3), True: (1000, 500, 2)}
+#: (points, impacts per point, repeats) of the contact phases' cost per point
+PHASES_SIZES = {False: (400, 100, 5), True: (100, 100, 3)}
 
 
 def _starts(n: int) -> tuple[np.ndarray, np.ndarray]:
@@ -70,7 +81,7 @@ def kernel_rates(starts: int, impacts: int, repeats: int, threads: list[int]) ->
         began = time.perf_counter()
         stats, _ = EN.advance(
             c, setup.params, setup.walls, consts, transient=0, impacts=impacts, width=256,
-            threads=n_threads,
+            threads=n_threads, nears=setup.nears,
         )  # fmt: skip
         return time.perf_counter() - began, int(stats[:, E.ST_TOTAL].sum())
 
@@ -88,6 +99,57 @@ def kernel_rates(starts: int, impacts: int, repeats: int, threads: list[int]) ->
             {"threads": t, "walls": walls[t], "impacts": done, "impacts_per_s": done / median}
         )
     return rows
+
+
+def phases_ratio(quick: bool) -> dict:
+    """The cost of a sweep point under ``contact.model = "phases"`` over that of the
+    same point under ``"impacts"``: the same starts in the wedge (q1 = 1 cm, q2 from 4
+    to 12 cm), the same impacts per point, each model's points measured as a worker
+    measures a chunk of them (``measure_chunk``: set-up, trajectories, measurements),
+    the two models alternately; wall-clock medians of the repeats. Also the phases
+    points one by one (a Simulation each: the path of ``--lyapunov``, and of every
+    contact-phases point before the batched state machine)."""
+    from billiard.scene.scene import load_scene, with_values
+    from billiard.sweep import Sweep, parse_vary
+    from billiard.sweep.measure import ChunkTask, _measure_points, measure_chunk
+
+    points, impacts, repeats = PHASES_SIZES[quick]
+    axes = (parse_vary(f"initial.q2=0.04:0.12:{points}"),)
+    rows: dict[str, dict] = {}
+    for model in ("impacts", "phases"):
+        scene = with_values(load_scene(SCENE), {"contact.model": model, "initial.q1": 0.01})
+        sweep = Sweep(scene, axes, impacts=impacts, transient=0)
+        measure_chunk(ChunkTask(sweep, 0, sweep.size))  # numba's cache loaded, set up
+        rows[model] = {"sweep": sweep, "walls": []}
+    for _ in range(repeats):
+        for row in rows.values():
+            task = ChunkTask(row["sweep"], 0, row["sweep"].size)
+            began = time.perf_counter()
+            chunk = measure_chunk(task)
+            row["walls"].append(time.perf_counter() - began)
+            row["impacts"] = int(chunk.columns["total_impacts"].sum())
+    single = []
+    phases = rows["phases"]["sweep"]
+    for _ in range(min(repeats, 3)):
+        began = time.perf_counter()
+        _measure_points(ChunkTask(phases, 0, phases.size), np.arange(phases.size))
+        single.append(time.perf_counter() - began)
+    out: dict[str, Any] = {
+        "command": "python -m bench.ensemble --phases" + (" --quick" if quick else ""),
+        "date": time.strftime("%Y-%m-%d %H:%M"),
+        "load": ", ".join(f"{x:.1f}" for x in os.getloadavg()),
+        "points": points,
+        "impacts_per_point": impacts,
+        "one_by_one": {"walls": single, "us_per_point": statistics.median(single) / points * 1e6},
+    }
+    for model, row in rows.items():
+        out[model] = {
+            "walls": row["walls"],
+            "impacts": row["impacts"],
+            "us_per_point": statistics.median(row["walls"]) / points * 1e6,
+        }
+    out["ratio"] = out["phases"]["us_per_point"] / out["impacts"]["us_per_point"]
+    return out
 
 
 def gpu_rate(starts: int, impacts: int, repeats: int) -> dict:
@@ -187,6 +249,9 @@ def measure(quick: bool, save: Any = None) -> dict:
     _save(save, result)
     print("bench.ensemble: the sweep's cost per point ...", flush=True)
     result["overhead"] = sweep_overhead(quick)
+    _save(save, result)
+    print("bench.ensemble: a point under contact phases against impacts ...", flush=True)
+    result["phases"] = phases_ratio(quick)
     _save(save, result)
     pair = sorted({1, min(cores, 16)})
     print(f"bench.ensemble: a sweep on {pair} workers ...", flush=True)
@@ -319,6 +384,19 @@ def render(results: dict) -> str:
         f"**{o['bytes_per_point']:.0f} bytes** in `points.npy` beyond the kept impacts.",
         "",
     ]
+    ph = results.get("phases")
+    if ph is not None:
+        a, b = ph["impacts"], ph["phases"]
+        lines += [
+            f'**Contact phases** (a sweep point under `contact.model = "phases"` against the '
+            f'same point under `"impacts"`: {ph["points"]} wedge starts of '
+            f"{ph['impacts_per_point']} impacts, measured as a worker measures a chunk, the "
+            f"two models alternately; `{ph['command']}` on {ph['date']}, load average "
+            f"{ph['load']}): {b['us_per_point']:.0f} us per point against "
+            f"{a['us_per_point']:.0f} us ({b['impacts']:,} and {a['impacts']:,} impacts "
+            f"made), **{ph['ratio']:.2f}x**.",
+            "",
+        ]
     sc = results["scaling"]
     runs = sc["runs"]
     lines += [
@@ -371,6 +449,12 @@ def render(results: dict) -> str:
         f"{o['bytes_per_point']:.0f} | "
         f"{_verdict(o['bytes_per_point'], TARGETS['point_bytes'], False)} |"
     )
+    if ph is not None:
+        lines.append(
+            f"| a point under contact phases <= {TARGETS['phases_ratio']:.0f}x one under "
+            f"impacts | {ph['ratio']:.2f}x | "
+            f"{_verdict(ph['ratio'], TARGETS['phases_ratio'], False)} |"
+        )
     if runs[-1]["workers"] >= 16:
         lines.append(
             f"| 16 workers >= {TARGETS['scaling_16']:.0f}x one worker | {sc['speedup']:.1f}x | "
@@ -394,10 +478,64 @@ def saved_results(docs: Path) -> Path:
     return docs / "figures" / "ensemble" / "bench.json"
 
 
+def render_phases(results: dict) -> str:
+    """The section of docs/performance.md: a sweep point under contact phases."""
+    ph = results.get("phases")
+    if ph is None:
+        return f"{PHASES_BEGIN}\n{PHASES_END}\n"
+    a, b, one = ph["impacts"], ph["phases"], ph["one_by_one"]
+    verdict = _verdict(ph["ratio"], TARGETS["phases_ratio"], False)
+    lines = [
+        PHASES_BEGIN,
+        "## Sweep points under contact phases",
+        "",
+        'A sweep point under `contact.model = "phases"` runs, batched with the other points '
+        "of its chunk, on the compiled state machine of `billiard run`, as a point under "
+        '`"impacts"` runs on the impact loop (docs/sweeps.md, "What takes the ensemble '
+        f'path"). Measured by `{ph["command"]}` on {ph["date"]} (load average '
+        f"{ph['load']}): {ph['points']} wedge starts of {ph['impacts_per_point']} impacts, "
+        "each model's points measured as a worker measures a chunk, alternately, wall-clock "
+        "medians.",
+        "",
+        "| point | us per point | runs (s) |",
+        "| --- | --- | --- |",
+    ]
+    for name, row in (
+        ("impacts, batched", a),
+        ("phases, batched", b),
+        ("phases, one by one (a Simulation each)", one),
+    ):
+        walls = ", ".join(f"{w:.3f}" for w in row["walls"])
+        lines.append(f"| {name} | {row['us_per_point']:,.0f} | {walls} |")
+    lines += [
+        "",
+        f"A point under contact phases costs **{ph['ratio']:.2f}x** one under the impacts "
+        f"model (target <= {TARGETS['phases_ratio']:.0f}x: {verdict}); one by one it cost "
+        f"{one['us_per_point'] / a['us_per_point']:.0f}x.",
+        PHASES_END,
+    ]
+    return "\n".join(lines) + "\n"
+
+
 def publish(docs: Path, results: dict | None = None) -> bool:
-    """Save ``results`` (when given) and write the section of ``docs/sweeps.md`` from
-    the saved results; False when there are none."""
-    return publish_section(saved_results(docs), docs / "sweeps.md", render, BEGIN, END, results)
+    """Save ``results`` (when given) and write the section of ``docs/sweeps.md`` and the
+    contact phases' part of ``docs/performance.md`` from the saved results; False when
+    there are none."""
+    saved = saved_results(docs)
+    if not publish_section(saved, docs / "sweeps.md", render, BEGIN, END, results):
+        return False
+    return publish_section(saved, docs / "performance.md", render_phases, PHASES_BEGIN, PHASES_END)
+
+
+def remeasure_phases(docs: Path, quick: bool) -> None:
+    """Measure the cost of a point under contact phases again and publish it, the
+    section's other saved results kept."""
+    saved = saved_results(docs)
+    results = json.loads(saved.read_text()) if saved.exists() else None
+    if results is None:
+        raise SystemExit(f"bench.ensemble: no saved results in {saved}: measure them all first")
+    results["phases"] = phases_ratio(quick)
+    publish(docs, results)
 
 
 def _partial(docs: Path, results: dict) -> None:
@@ -408,10 +546,15 @@ def _partial(docs: Path, results: dict) -> None:
 
 
 def main(argv: list[str] | None = None) -> int:
+    argv = list(sys.argv[1:] if argv is None else argv)
+    phases = "--phases" in argv
+    argv = [a for a in argv if a != "--phases"]
     args, docs = section_arguments(
         "python -m bench.ensemble", __doc__, "small sizes, under a minute", argv
     )
-    if args.render:
+    if phases:
+        remeasure_phases(docs, args.quick)
+    elif args.render:
         publish(docs)
     else:
         publish(docs, measure(args.quick, save=lambda r: _partial(docs, r)))

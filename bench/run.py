@@ -195,7 +195,7 @@ def main(
     (out / page.TABLES).write_text(report.render_tables(results, command))
     # the page is written whole: put the sweep section back (measured again if asked)
     sweep_bench.publish(out, sweep_bench.measure(cfg.quick) if "sweep" in only else None)
-    # and the ensemble section of sweeps.md (docs/sweeps.md, beside the page)
-    if "ensemble" in only:
-        ensemble_bench.publish(out, ensemble_bench.measure(cfg.quick))
+    # and the ensemble section of sweeps.md (docs/sweeps.md, beside the page), with its
+    # part of the page (put back as the sweep section is)
+    ensemble_bench.publish(out, ensemble_bench.measure(cfg.quick) if "ensemble" in only else None)
     return path

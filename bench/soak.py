@@ -69,6 +69,7 @@ simulated time (a ball rolling to and fro in a drag-free bowl never ends its pha
 from __future__ import annotations
 
 import argparse
+import contextlib
 import filecmp
 import json
 import math
@@ -80,7 +81,7 @@ import sys
 import tempfile
 import time
 from collections import Counter
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Iterator, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -88,10 +89,12 @@ from typing import Any
 import numpy as np
 
 from billiard.engine.interrupt import signal_after
+from billiard.engine.state import BallState
 from billiard.errors import GeometryError
 from billiard.geometry.boundary import Boundary, Drive
 from billiard.geometry.curves import load_curve
-from billiard.models.impact import ImpactResult
+from billiard.kernels.layout import REGIMES
+from billiard.models.impact import Contact, ImpactResult
 from billiard.run.simulate import (
     CSV_NAME,
     RunInterrupted,
@@ -323,7 +326,14 @@ class ImpactAudit:
         return self.law.regimes
 
     def apply(self, state: Any, contact: Any) -> ImpactResult:
+        """The wrapped law's outcome, checked."""
         res = self.law.apply(state, contact)
+        self.check(state, contact, res)
+        return res
+
+    def check(self, state: Any, contact: Any, res: ImpactResult) -> None:
+        """Check one impact: the ball's ``state`` before it (t, q1, q2, u1, u2, u3), the
+        ``contact`` (its vb1, vb2) and the law's outcome ``res``."""
         law = self.law
         m, inertia = law.m, law.k * law.m * law.r * law.r
         vb1, vb2 = contact.vb1, contact.vb2
@@ -361,7 +371,6 @@ class ImpactAudit:
                 )
         if self.on_impact is not None:
             self.on_impact(state, res)
-        return res
 
 
 class _Clearances:
@@ -669,35 +678,107 @@ class PhaseAudit:
 
 
 class AuditedSimulation(Simulation):
-    """The engine with every event audited: the impact law wrapped by
-    :class:`ImpactAudit` (``impact_audit``) and, with ``contact.model = "phases"``,
-    every finished contact phase also given to a :class:`PhaseAudit`
-    (``phase_audit``) before it goes wherever ``on_contact`` sends it (a streamed run
-    sets that to contacts.csv). On a static boundary each phase's accepted steps
-    (the contact model's ``steps``, read at each finished phase) scale the energy
+    """The engine with every event audited: every impact checked by :class:`ImpactAudit`
+    (``impact_audit``) and, with ``contact.model = "phases"``, every finished contact
+    phase also given to a :class:`PhaseAudit` (``phase_audit``) before it goes wherever
+    ``on_contact`` sends it (a streamed run sets that to contacts.csv). On a static
+    boundary each phase's accepted steps (``PH_STEPS`` at its end) scale the energy
     tolerance.
+
+    The engine runs interpreted (``driver.interpreted``: the same source as compiled, to
+    the bit), and while it runs the audit taps its functions in the interpreted twin:
+    the impact law (with the state and time of the impact, from the function that makes
+    it), the landing at the end of a summed chatter series, and the end of a phase. The
+    phase audit takes these events in the order the engine made them, each finished
+    phase with the events before it.
     """
 
     def __init__(self, scene: Any, method: str | None = None, history: list | None = None):
         self._forward: Callable[[Any], None] | None = None
         self.phase_audit: PhaseAudit | None = None
-        self._steps_seen = 0
         super().__init__(scene, method)
+        self.driver.interpreted = True
         self.impact_audit = ImpactAudit(self.impact, history=history)
-        self.impact = self.impact_audit
+        #: the events made since the last finished phase was audited, in order
+        self._events: list[tuple[Any, ...]] = []
+        #: the impact being made: (t or None: EN_EVENT_T, q1, q2)
+        self._at: tuple[Any, ...] = (None, 0.0, 0.0)
         if self.phases:
             self.impact_audit.lift_allowed = False
             self.phase_audit = PhaseAudit.of(self)
-            self.impact_audit.on_impact = self.phase_audit.impact
 
-    def _end_chatter(self, until: float) -> bool:
-        # a landing after a summed chatter series moves the ball on to the series' end:
-        # the phase audit checks that step as a transition
-        before = self._ball
-        moved = super()._end_chatter(until)
-        if moved:
-            self.phase_audit.chatter(before, self._ball)
-        return moved
+    # ------------------------------------------------------------------ the taps
+
+    @contextlib.contextmanager
+    def _tapped(self) -> Iterator[None]:
+        """The interpreted engine's functions wrapped while a run or step runs."""
+        from billiard.kernels.interpreted import engine_modules
+
+        machine, loop, _ = engine_modules()
+        law_loop, law_machine = loop.impact_law, machine.impact_law
+        impact, from_contact = loop.impact, machine.impact_from_contact
+        end_chatter, end_phase = machine.end_chatter, machine.end_phase
+        layout = machine.M_HELD, machine.PH_STEPS, machine.EN_EVENT_T
+
+        def flight_impact(ctx, p, walls, out, row, tau, j, q1, q2, *rest):
+            self._at = (None, q1, q2)
+            return impact(ctx, p, walls, out, row, tau, j, q1, q2, *rest)
+
+        def contact_impact(ctx, p, walls, out, other, index, t, *rest):
+            self._at = (t, ctx[machine.EN_Q1], ctx[machine.EN_Q2])
+            return from_contact(ctx, p, walls, out, other, index, t, *rest)
+
+        def audited(law):
+            def tapped(ctx, u1, u2, u3, z, vb1, vb2, pressing):
+                out = law(ctx, u1, u2, u3, z, vb1, vb2, pressing)
+                t, q1, q2 = self._at
+                t = ctx[layout[2]] if t is None else t
+                state = BallState(t, 0.0, q1, q2, u1, u2, u3, 0.0)
+                res = ImpactResult(*out[:5], REGIMES[int(out[5])], out[7], out[8], out[6])
+                self.impact_audit.check(state, Contact(z, vb1, vb2, pressing), res)
+                self._events.append(("impact", state, res))
+                return out
+
+            return tapped
+
+        def chatter(ctx, p, walls, until):
+            before = self.ball
+            moved = end_chatter(ctx, p, walls, until)
+            if moved:
+                self._events.append(("chatter", before, self.ball))
+            return moved
+
+        def phase_ended(ctx, mode, *rest):
+            steps = 0 if mode == layout[0] else int(ctx[layout[1]])
+            self._events.append(("phase", steps))
+            return end_phase(ctx, mode, *rest)
+
+        taps = (
+            (loop, "impact_law", audited(law_loop)),
+            (machine, "impact_law", audited(law_machine)),
+            (loop, "impact", flight_impact),
+            (machine, "impact_from_contact", contact_impact),
+            (machine, "end_chatter", chatter),
+            (machine, "end_phase", phase_ended),
+        )
+        kept = [(module, name, getattr(module, name)) for module, name, _ in taps]
+        try:
+            for module, name, tap in taps:
+                setattr(module, name, tap)
+            yield
+        finally:
+            for module, name, original in kept:
+                setattr(module, name, original)
+
+    def step(self, until: float = math.inf) -> Any:
+        with self._tapped():
+            return super().step(until)
+
+    def run(self, *args: Any, **kwargs: Any) -> str | None:
+        with self._tapped():
+            return super().run(*args, **kwargs)
+
+    # ------------------------------------------------------------------ the phases
 
     @property  # type: ignore[override]
     def on_contact(self) -> Callable[[Any], None] | None:
@@ -708,9 +789,18 @@ class AuditedSimulation(Simulation):
         self._forward = forward
 
     def _tap(self, record: Any) -> None:
-        done = self.contact_model.steps
-        steps, self._steps_seen = done - self._steps_seen, done
-        self.phase_audit.contact(record, steps)
+        """A finished phase: the events before it go to the phase audit first."""
+        audit, steps = self.phase_audit, 0
+        while self._events:
+            event = self._events.pop(0)
+            if event[0] == "impact":
+                audit.impact(event[1], event[2])
+            elif event[0] == "chatter":
+                audit.chatter(event[1], event[2])
+            else:
+                steps = event[1]
+                break
+        audit.contact(record, steps)
         if self._forward is not None:
             self._forward(record)
 

@@ -2,11 +2,10 @@
 progress.
 
 :mod:`~billiard.engine.simulation` (the :class:`Simulation`),
-:mod:`~billiard.engine.kernel_engine` (its runs on the compiled kernels),
-:mod:`~billiard.engine.event_step` and :mod:`~billiard.engine.contact_phases` (one event,
-and the contact phases, on the models' classes), :mod:`~billiard.engine.state` (the ball
-and the engine state), :mod:`~billiard.engine.ctx` (the kernels' state vector from a
-simulation), :mod:`~billiard.engine.interrupt` and :mod:`~billiard.engine.progress`;
+:mod:`~billiard.engine.driver` (its chunked calls into the compiled state machine, the
+one engine), :mod:`~billiard.engine.state` (the ball and the engine state),
+:mod:`~billiard.engine.ctx` (the kernels' state vector from a simulation),
+:mod:`~billiard.engine.interrupt` and :mod:`~billiard.engine.progress`;
 :mod:`~billiard.engine.compile_all` (every kernel compiled together, once).
 """
 

@@ -12,10 +12,11 @@ and cache what those runs need, and marks the cache. The process that asked then
 each kernel from the cache in milliseconds. numba compiles one function at a time in a
 process; two processes compile on two cores at once.
 
-The state machine of contact phases (:mod:`billiard.kernels.machine`) links the impact
-loop, the phase and the hold, so it compiles last, in the worker that compiled the phase
-and the hold, once the other worker has put the impact loop in the cache
-(:data:`LOOP_CACHED`, :data:`WAIT_LOOP`).
+Every run is the state machine (:mod:`billiard.kernels.machine`), which links the
+impact loop, the phase and the hold: the first worker compiles it for the curves of up
+to two walls; the second compiles the ensemble kernels meanwhile, then waits until the
+machine is in the cache (:data:`LOOP_CACHED`, :data:`WAIT_LOOP`) and runs the jobs that
+load it (compiling what they add: the CSV formatting, the resting scan).
 
 Not compiled here (each on its first use, with its own notice): method ``rk4``'s fixed
 steps, a curve with more than two walls, and the wall functions of a curve other than
@@ -66,14 +67,13 @@ ALL_NOTICE_DONE = "billiard: compiled the engine's kernels in {seconds:.1f} s"
 #: every kernel a run of a curve of up to two walls can need (the wall tables of such
 #: curves share one type: :data:`billiard.geometry.wall_functions.WALL_SLOTS`); ``CSV``:
 #: the CSV formatting too; ``rolling``: the ball starts at rest on the bowl's wall 2 mm
-#: from its vertex; ``sampled``: with trajectory samples, so that its contact phases run
-#: through the models' classes (the phase and hold kernels, called from Python), not the
-#: state machine. Duration-limited where the ball makes no impact.
+#: from its vertex; ``sampled``: with trajectory samples. Duration-limited where the
+#: ball makes no impact.
 JOBS: tuple[tuple[str, dict[str, Any], int, bool, bool, bool], ...] = (
-    # the impact loop (exact flight and air drag), the resting scan
+    # the state machine: the impact loop (exact flight and air drag), the resting scan
     ("wedge-6.6hz", {}, 20, False, False, False),
     # the CSV formatting, the contact phases of a ball rolling in the bowl, then the hold
-    # of a ball in the vertex: neither flies (the impact loop is the other worker's)
+    # of a ball in the vertex
     (
         "parabola-5.4hz",
         {"drive.amplitude": 0.0, "contact.model": "phases", "run.duration": 0.05},
@@ -90,23 +90,27 @@ JOBS: tuple[tuple[str, dict[str, Any], int, bool, bool, bool], ...] = (
         False,
         True,
     ),
-    # the trajectory state machine (billiard.kernels.machine), which calls the impact
-    # loop, the phase and the hold: compiled once they are in the cache
+    # flights, landings and phases in one run
     ("wedge-6.6hz", {"contact.model": "phases"}, 20, False, False, False),
 )
-#: the job after which a worker also runs a small ensemble (the impact loop's scene)
-ENSEMBLE_JOB = 0
+#: a worker's step that runs a small ensemble (the ensemble kernels)
+ENSEMBLE_JOB = "ensemble"
+#: the job after which its worker runs a small ensemble of its scene on the state
+#: machine (a sweep's points under contact phases), the machine then in the cache
+MACHINE_ENSEMBLE_JOB = 3
 #: a worker's step that tells the other worker that the impact loop is in the cache ...
 LOOP_CACHED = "loop-cached"
 #: ... and the other worker's step that waits for it (at most WAIT_S seconds)
 WAIT_LOOP = "wait-loop"
 WAIT_S = 300.0
 #: the jobs of each worker process, run side by side (numba compiles one function at a
-#: time in a process: two processes compile on two cores). The state machine links the
-#: impact loop, the phase and the hold: it is compiled by the worker that compiled the
-#: phase and the hold, after the other has put the impact loop in the cache (numba
-#: would otherwise compile the loop a second time, some 18 s).
-WORKERS: tuple[tuple[int | str, ...], ...] = ((0, LOOP_CACHED), (1, 2, WAIT_LOOP, 3))
+#: time in a process: two processes compile on two cores). The state machine is compiled
+#: once, by the first; the second waits for it after the ensemble kernels (numba would
+#: otherwise compile the machine a second time).
+WORKERS: tuple[tuple[int | str, ...], ...] = (
+    (0, LOOP_CACHED),
+    (ENSEMBLE_JOB, WAIT_LOOP, 1, 2, 3),
+)
 #: what a worker runs (``python -P -c``: the current folder not on ``sys.path``): it
 #: ends when its standard input, a pipe the starting process holds, reaches its end (that
 #: process ended, even by SIGKILL), imports the package from the starting process's
@@ -165,13 +169,13 @@ def run_jobs(jobs: list[int | str], package: str | None = None) -> None:
     from billiard.scene.scene import load_scene, with_values
 
     handover = os.environ.get(_SIGNAL_ENV)
-    ensemble_scene = None
     for index in jobs:
         if index == LOOP_CACHED:
             if handover:
                 open(handover, "w").close()
-            if ensemble_scene is not None:
-                _ensemble(ensemble_scene)
+            continue
+        if index == ENSEMBLE_JOB:
+            _ensemble(load_scene("wedge-6.6hz"))
             continue
         if index == WAIT_LOOP:
             waited = time.monotonic() + WAIT_S
@@ -192,11 +196,8 @@ def run_jobs(jobs: list[int | str], package: str | None = None) -> None:
             sim.sample_dt = 0.01
             sim.on_sample = _ignore
         sim.run(impacts, MemoryRecorder())
-        if index == ENSEMBLE_JOB:
-            # after the other worker is told the loop is cached (LOOP_CACHED)
-            ensemble_scene = scene
-    if ensemble_scene is not None and LOOP_CACHED not in jobs:
-        _ensemble(ensemble_scene)
+        if index == MACHINE_ENSEMBLE_JOB:
+            _ensemble(scene)
 
 
 def _ignore(*_: Any) -> None:
@@ -212,8 +213,9 @@ def _ensemble(scene: Any) -> None:
     ctxs, ok = ensemble.start(setup, [0.0, 0.01], [0.05, 0.06])
     consts = ensemble.constants(scene, 1e-5, 64, 256)
     ensemble.advance(
-        ctxs[ok], setup.params, setup.walls, consts, transient=1, impacts=2, width=4, threads=1
-    )
+        ctxs[ok], setup.params, setup.walls, consts, transient=1, impacts=2, width=4,
+        threads=1, nears=setup.nears,
+    )  # fmt: skip
 
 
 def compile_all() -> bool:

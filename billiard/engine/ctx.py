@@ -22,11 +22,12 @@ from billiard.engine.state import BallState, EngineState
 from billiard.geometry.surfaces import FlatLid, OffsetWall
 from billiard.kernels import layout as L
 from billiard.kernels.rules import COLLAPSE_COUNT
-from billiard.models.flight import AdaptiveFlight, ExactFlight, RK4Flight
+from billiard.models.kinds import require_kernel
 
 __all__ = [
     "COUNT_KEYS",
     "RING",
+    "constants_vector",
     "engine_state",
     "read_motion",
     "state_vector",
@@ -46,13 +47,6 @@ def _ball_values(ball: BallState) -> tuple[float, ...]:
     return (ball.t, ball.theta, ball.q1, ball.q2, ball.u1, ball.u2, ball.u3, ball.q3)
 
 
-def _flight_constants(ctx: list[float], fl: Any) -> None:
-    if not isinstance(fl, (ExactFlight, AdaptiveFlight, RK4Flight)):
-        raise ValueError(f"the kernels have no flight model {type(fl).__name__}")
-    # the model's constants and step proposal, as its own ctx holds them
-    ctx[L.FL_KIND : L.FL_U3] = fl.ctx[L.FL_KIND : L.FL_U3]
-
-
 def _surface_constants(ctx: list[float], j: int, surface: Any) -> None:
     if not isinstance(surface, (OffsetWall, FlatLid)):
         raise ValueError(f"the kernels have no surface {type(surface).__name__}")
@@ -61,23 +55,38 @@ def _surface_constants(ctx: list[float], j: int, surface: Any) -> None:
 
 
 def state_vector(sim: Any) -> list[float]:
-    """The kernels' ``ctx`` (a list of floats) for ``sim`` in its current engine state.
+    """The kernels' ``ctx`` (a list of floats) for ``sim`` in its current engine state:
+    the locator (with the drive), the flight model and the impact law each write their
+    block, their kind first.
+
+    Raises:
+        SceneError: a locator, flight model or impact law without a compiled kernel.
+        ValueError: a surface the kernels do not have.
+    """
+    ctx = constants_vector(sim)
+    write_state(ctx, sim.state)
+    if sim.phases:
+        write_motion(ctx, sim.state)
+    return ctx
+
+
+def constants_vector(sim: Any) -> list[float]:
+    """The kernels' ``ctx`` (a list of floats) for ``sim``: the scene's constants and
+    the warm starts its objects hold; no engine state.
 
     Raises:
         ValueError: a flight model or surface the kernels do not have.
     """
     ctx = [0.0] * L.SIZE
-    # the drive and the locator's substep lengths, as the locator's own ctx holds them
-    loc = sim.locator.ctx
-    ctx[L.AMP : L.H_BRACKET + 1] = loc[L.AMP : L.H_BRACKET + 1]
-    if sim.method == "rk4":
-        # the fixed-step detection's constants and memory, as its own ctx holds them
-        ctx[L.RK : L.RK_END] = loc[L.RK : L.RK_END]
+    for model, what in (
+        (sim.locator, "locator"),
+        (sim.flight, "flight model"),
+        (sim.impact, "impact law"),
+    ):
+        require_kernel(model, what)
+        model.write(ctx)
     surfaces = sim.boundary.surfaces
     ctx[L.NSURF] = float(len(surfaces))
-    _flight_constants(ctx, sim.flight)
-    # Kane and Levinson's law (see supports): its coefficients, as its own ctx holds them
-    ctx[L.IM_M : L.IM_EB + 1] = sim.impact.ctx[L.IM_M : L.IM_EB + 1]
     for j, surface in enumerate(surfaces):
         _surface_constants(ctx, j, surface)
         base = L.SURF + j * L.SURF_STRIDE
@@ -85,8 +94,26 @@ def state_vector(sim: Any) -> list[float]:
         ctx[base + L.S_WS] = float(warm[0])
         ctx[base + L.S_WSLOPE] = float(warm[1])
     ctx[L.EN_UNTIL] = sim.end_time
-    write_state(ctx, sim.state)
+    # samples count from the run's start (billiard run --sample)
+    ctx[L.SM_T0] = sim.initial.t
+    if sim.phases:
+        _machine_constants(ctx, sim)
     return ctx
+
+
+def _machine_constants(ctx: list[float], sim: Any) -> None:
+    """Contact phases: the phases' constants (as the contact model's own ``ctx`` holds
+    them), the contact span, the container's range of x and the walls' intervals; the
+    flights end after an impact that settles (the landing test reads the law's
+    restitution and elastic_below, IM_E and IM_EB)."""
+    phase = sim.contact_model.new_ctx()
+    ctx[L.PH_M : L.PH_RTOL + 1] = phase[L.PH_M : L.PH_RTOL + 1]
+    ctx[L.MC_SPAN] = float(sim.scene.run.contact_span)
+    ctx[L.MC_X_LO], ctx[L.MC_X_HI] = (float(x) for x in sim.boundary.x_range)
+    for wall in sim.boundary.walls:
+        ctx[L.MC_WALL_LO + wall.index] = float(wall.lo)
+        ctx[L.MC_WALL_HI + wall.index] = float(wall.hi)
+    ctx[L.EN_LAND_ON] = 1.0
 
 
 def write_ball(ctx: Any, ball: BallState) -> None:
@@ -171,6 +198,7 @@ def write_motion(ctx: Any, state: EngineState) -> None:
     last = state.ball.t if state.last_impact is None else state.last_impact
     ctx[L.MC_LAST_IMPACT] = float(last)
     ctx[L.MC_PHASE_ON] = 0.0
+    ctx[L.MC_HOLD_ON] = 0.0
     ctx[L.MC_FLYING] = 0.0
 
 

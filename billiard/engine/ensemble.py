@@ -11,6 +11,11 @@ starts that overlap a wall, the lid or the escape height; :func:`advance` runs t
 A trajectory's state vector after :func:`start` is the one ``billiard run`` builds for
 that start, slot for slot, and its impacts are the run's, bit for bit.
 
+Under ``contact.model = "phases"`` the state vector is the one such a run hands the state
+machine (:mod:`billiard.kernels.machine`: its contact constants, the motion state a
+start lying on a wall starts in) and the trajectories run on it
+(:func:`billiard.kernels.ensemble.run_batch_phases`).
+
 Plain Python around the kernels; nothing here runs per impact.
 """
 
@@ -26,7 +31,7 @@ from typing import Any
 import numpy as np
 
 from billiard import jit as _jit
-from billiard.engine.ctx import state_vector
+from billiard.engine.ctx import engine_state, state_vector, write_motion
 from billiard.kernels import layout as L
 
 __all__ = [
@@ -43,6 +48,8 @@ __all__ = [
     "VERDICTS",
 ]
 
+#: why the GPU does not run a contact-phases scene
+GPU_PHASES = "contact.model = 'phases' runs on the CPU only (the GPU kernels have impacts only)"
 #: the scene keys of a start: what may differ between the trajectories of one set-up
 BALL_KEYS = (
     "initial.q1",
@@ -59,8 +66,6 @@ _OVERLAP = 1e-12
 
 def supports(scene: Any) -> str | None:
     """None when trajectories of ``scene`` run on the ensemble kernel, else why not."""
-    if getattr(scene.contact, "model", "impacts") != "impacts":
-        return "contact.model = 'phases' (the ensemble kernel has the impacts model)"
     if scene.run.method != "event":
         return f"run.method = {scene.run.method!r} (the ensemble kernel has method 'event')"
     if not _jit.ENABLED:
@@ -84,6 +89,11 @@ class EnsembleSetup:
             height (m; inf: none).
         at_rest: the state vector of a run whose ball starts at rest on the bottom (no
             ``initial.q1``, ``initial.q2``) at time ``t`` (s).
+        phases: ``contact.model = "phases"``: the trajectories run on the state
+            machine, ``walls`` holds f, f', f'' and the third derivative, ``nears`` the
+            walls' nearest-point functions (its flights' other locator's).
+        sim: the Simulation of the ball at rest (under contact phases, the engine whose
+            set-up finds the motion state of a start lying on a wall).
     """
 
     scene: Any
@@ -98,6 +108,8 @@ class EnsembleSetup:
     at_rest: np.ndarray
     t: float
     sim: Any = None
+    phases: bool = False
+    nears: Any = None
 
 
 def at_rest_scene(scene: Any) -> Any:
@@ -120,30 +132,39 @@ def prepare(scene: Any) -> EnsembleSetup:
         ValueError: the scene cannot be simulated (SceneError, GeometryError), or the
             ensemble kernel does not take it (see :func:`supports`).
     """
-    from billiard.engine.kernel_engine import supports as kernel_supports
     from billiard.engine.simulation import Simulation
-    from billiard.geometry.wall_functions import wall_functions
+    from billiard.geometry.wall_functions import (
+        near_functions,
+        phase_wall_functions,
+        wall_functions,
+    )
 
     why = supports(scene)
     if why is not None:
         raise ValueError(f"the ensemble kernel does not take this scene: {why}")
     sim = Simulation(at_rest_scene(scene))
-    why = kernel_supports(sim)
-    if why is not None:
-        raise ValueError(f"the ensemble kernel does not take this scene: {why}")
-    at_rest_ctx = np.array(state_vector(sim), dtype=np.float64)
+    phases = bool(sim.phases)
+    if phases:
+        at_rest_ctx = machine_vector(sim)
+    else:
+        at_rest_ctx = np.array(state_vector(sim), dtype=np.float64)
     template = at_rest_ctx.copy()
     # the warm starts as a run's set-up has them before its start check moves them
     for j, (s, slope) in enumerate(sim.boundary.initial_warm()):
         base = L.SURF + j * L.SURF_STRIDE
         template[base + L.S_WS] = s
         template[base + L.S_WSLOPE] = slope
+    if phases:
+        # a start in flight (one lying on a wall: see start); no time in phases yet
+        template[L.MC_MODE] = L.M_FLIGHT
+        template[L.MC_CONTACT : L.MC_CONTACT + 6] = 0.0
+        template[L.MC_PHASE_TIME : L.MC_PHASE_TIME + len(L.MOTION_NAMES) - 1] = 0.0
     boundary = sim.boundary
     return EnsembleSetup(
         scene=scene,
         template=template,
         params=np.array(boundary.walls[0].p, dtype=np.float64),
-        walls=wall_functions(sim),
+        walls=phase_wall_functions(sim) if phases else wall_functions(sim),
         offsets=len(boundary.offsets),
         rest_height=float(sim.initial.q2),
         drive=sim.drive,
@@ -152,7 +173,50 @@ def prepare(scene: Any) -> EnsembleSetup:
         at_rest=at_rest_ctx,
         t=float(scene.initial.t),
         sim=sim,
+        phases=phases,
+        nears=near_functions(sim) if phases else None,
     )
+
+
+def machine_vector(sim: Any) -> np.ndarray:
+    """The state vector a run of ``sim`` (contact phases, method event, in its present
+    engine state) hands the state machine: its constants, the engine state and motion
+    state, the run's end so far."""
+    ctx = np.array(state_vector(sim), dtype=np.float64)
+    ctx[L.MC_FINAL] = sim.final_time
+    return ctx
+
+
+#: a start whose centre is farther than this (m) from every wall's offset curve does not
+#: lie on one (the engine's test: within 1e-12 m; the compiled gap and the engine's
+#: agree to rounding)
+_APART = 1e-9
+
+
+def _lying(setup: EnsembleSetup, ctxs: np.ndarray, rows: Any) -> None:
+    """The motion state of the starts ``rows`` of ``ctxs`` (state vectors of a
+    contact-phases set-up), as a run's set-up finds it: a ball lying on a wall that
+    presses it starts rolling or sliding on it (or held by two walls), else in flight
+    (``Simulation._start_in_contact``, asked of the set-up's Simulation with each
+    start's ball and warm starts; its own engine state is put back after)."""
+    sim = setup.sim
+    walls = len(setup.sim.boundary.offsets)
+    regimes = sim.impact.regimes
+    saved = [list(w) for w in sim.warm]
+    try:
+        for i in rows:
+            ctx = ctxs[i]
+            for j, warm in enumerate(sim.warm):
+                base = L.SURF + j * L.SURF_STRIDE
+                warm[0], warm[1] = float(ctx[base + L.S_WS]), float(ctx[base + L.S_WSLOPE])
+            sim.reset(engine_state(ctx, regimes, walls).ball)
+            write_motion(ctx, sim.state)
+            # held by two walls, the ball moves with the boundary
+            ctx[L.EN_U1], ctx[L.EN_U2] = sim.ctx[L.EN_U1], sim.ctx[L.EN_U2]
+    finally:
+        for warm, values in zip(sim.warm, saved, strict=True):
+            warm[:] = values
+        sim.reset()
 
 
 def _boundary_frame(
@@ -161,7 +225,7 @@ def _boundary_frame(
     """The centres (m) relative to the boundary at time t (s), as
     Drive.to_boundary_frame computes them."""
     drive = setup.drive
-    d = drive.amplitude * math.sin(drive.angle(t))
+    d = drive.displacement(drive.angle(t))
     return (q1 - d, q2) if drive.horizontal else (q1, q2 - d)
 
 
@@ -207,7 +271,12 @@ def start(
     py = np.ascontiguousarray(py, dtype=np.float64).ravel()
     start_batch(ctxs, params, setup.walls, setup.template, balls, px, py, setup.offsets, gaps)
     ctxs[:, L.EN_UNTIL] = math.inf if duration is None else t + duration
+    ctxs[:, L.SM_T0] = t
     ok = (py <= setup.lid_level + _OVERLAP) & (py < setup.escape_level) & (gaps >= -_OVERLAP)
+    if setup.phases:
+        ctxs[:, L.MC_LAST_IMPACT] = t
+        ctxs[:, L.MC_FINAL] = t
+        _lying(setup, ctxs, np.nonzero(ok & ~(gaps > _APART))[0])
     return ctxs, ok
 
 
@@ -254,6 +323,11 @@ def start_at_rest(
     ctxs[:, L.EN_U2] = v2
     ctxs[:, L.EN_U3] = omega
     ctxs[:, L.EN_UNTIL] = math.inf if duration is None else setup.t + duration
+    ctxs[:, L.SM_T0] = setup.t
+    if setup.phases:
+        # the set-up's ball lies on the bottom at rest: moving, it may start otherwise
+        moving = (ctxs[:, L.EN_U1] != 0.0) | (ctxs[:, L.EN_U2] != 0.0) | (ctxs[:, L.EN_U3] != 0.0)
+        _lying(setup, ctxs, np.nonzero(moving)[0])
     return ctxs
 
 
@@ -298,10 +372,14 @@ def advance(
     width: int,
     threads: int | None = None,
     progress: Callable[[int], None] | None = None,
+    nears: Any = None,
 ) -> tuple[np.ndarray, np.ndarray]:
     """Run every trajectory (rows of ``ctxs``, advanced in place) to ``transient +
     impacts`` impacts, measuring the last ``impacts``; ``width`` impacts are kept in
     each trajectory's ring. Returns (stats, rings) (``billiard.kernels.ensemble``).
+    State vectors of a contact-phases set-up (landings watched, ``EN_LAND_ON``) run on
+    the state machine, and ``walls`` are then its wall functions and ``nears`` the
+    walls' nearest-point functions (``EnsembleSetup.walls``, ``EnsembleSetup.nears``).
 
     The trajectories run in rounds of :data:`ROUND_IMPACTS` impacts, each round in
     slices of at most :data:`SLICE` trajectories spread over ``threads`` threads
@@ -325,14 +403,25 @@ def advance(
     size = max(1, min(SLICE, -(-n // (4 * threads))))
     slices = [(lo, min(n, lo + size)) for lo in range(0, n, size)]
 
+    phases = n > 0 and bool(ctxs[0, L.EN_LAND_ON] == 1.0)
+    kernel = E.run_batch_phases if phases else E.run_batch
+    if phases and nears is None:
+        raise ValueError("contact phases need the walls' nearest-point functions (nears)")
+
     def call(target: int, lo: int, hi: int) -> None:
+        if phases:
+            E.run_batch_phases(
+                ctxs, params, walls, nears, rings, stats, consts, transient, total, target,
+                lo, hi,
+            )  # fmt: skip
+            return
         E.run_batch(
             ctxs, params, walls, rows, rings, stats, consts, transient, total, target, lo, hi
         )
 
     if n == 0:
         return stats, rings
-    with _jit.compiling(E.run_batch):
+    with _jit.compiling(kernel):
         call(min(total, 1), 0, 1)  # compiled (or loaded) once, before the threads start
     target = 0
     pool = ThreadPoolExecutor(max_workers=threads) if threads > 1 else None
@@ -371,7 +460,14 @@ def advance_setup(
     progress: Callable[[int], None] | None = None,
 ) -> tuple[np.ndarray, np.ndarray]:
     """:func:`advance` of trajectories of ``setup`` on ``device``: ``"cpu"`` (``threads``
-    threads) or ``"gpu"`` (:func:`billiard.engine.gpu.advance_ensemble`)."""
+    threads) or ``"gpu"`` (:func:`billiard.engine.gpu.advance_ensemble`).
+
+    Raises:
+        ValueError: ``"gpu"`` for a contact-phases set-up (the GPU kernels have the
+            impacts model).
+    """
+    if device == "gpu" and setup.phases:
+        raise ValueError(GPU_PHASES)
     if device == "gpu":
         from billiard.engine import gpu
 
@@ -381,5 +477,5 @@ def advance_setup(
         )  # fmt: skip
     return advance(
         ctxs, setup.params, setup.walls, consts, transient=transient, impacts=impacts,
-        width=width, threads=threads, progress=progress,
+        width=width, threads=threads, progress=progress, nears=setup.nears,
     )  # fmt: skip

@@ -5,44 +5,49 @@
 >>> record = sim.step()          # the next impact, as an ImpactRecord  # doctest: +SKIP
 >>> sim.state.impacts            # the complete engine state  # doctest: +SKIP
 
-:meth:`Simulation.step` is the one kernel under every run and analysis (as
-``OdeSolver.step`` in scipy, ``bounce!`` in DynamicalBilliards.jl): it locates the next
-impact with the scene's locator, applies the impact law, and returns one record.
-:meth:`Simulation.run` is a thin loop over it that appends records to a recorder and
-looks after progress, checkpoints and stop requests.
+One engine advances every scene: the compiled trajectory state machine
+(:func:`billiard.kernels.machine.run_machine`), called in chunks by
+:class:`~billiard.engine.driver.Driver`. :class:`Simulation` builds and validates what
+it needs from a scene (the boundary, the drive, the models, which write their constants
+into the state vector) and holds the engine state in that vector. :meth:`Simulation.step`
+is the one kernel under every analysis (as ``OdeSolver.step`` in scipy, ``bounce!`` in
+DynamicalBilliards.jl): it returns the next event's record.
+:meth:`Simulation.run` runs many events, appending records to a recorder and looking
+after progress, checkpoints and stop requests.
 
-A run is deterministic: the same scene gives the same records bit for bit.
+A run is deterministic: the same scene gives the same records bit for bit, compiled or
+interpreted (``NUMBA_DISABLE_JIT=1``).
 """
 
 from __future__ import annotations
 
-import dataclasses
 import math
-import time
-from collections import deque
 from collections.abc import Callable
-from typing import Any, NamedTuple
+from typing import Any
 
-from billiard.engine.contact_phases import (
-    COLLAPSE_COUNT,
-    COLLAPSE_SPAN,
-    ZERO_FLIGHT_LIMIT,
-    ContactPhases,
+from billiard.engine.ctx import (
+    COUNT_KEYS,
+    constants_vector,
+    engine_state,
+    read_motion,
+    write_ball,
+    write_motion,
+    write_state,
 )
-from billiard.engine.ctx import write_motion
-from billiard.engine.event_step import EventStep
-from billiard.engine.interrupt import RunInterrupted, StopRequest
-from billiard.engine.kernel_engine import KernelEngine, supports
+from billiard.engine.driver import Driver, RunControl
+from billiard.engine.interrupt import StopRequest
 from billiard.engine.progress import Progress, report_time
 from billiard.engine.state import BallState, EngineState
 from billiard.errors import GeometryError, SimulationError
 from billiard.geometry.boundary import Boundary, Drive
 from billiard.geometry.curves import load_curve
 from billiard.kernels import layout as L
+from billiard.kernels.rules import COLLAPSE_COUNT, COLLAPSE_SPAN, ZERO_FLIGHT_LIMIT
 from billiard.models.contact import ContactModel
 from billiard.models.flight import flight_model
-from billiard.models.hold import VertexHold
+from billiard.models.hold import HELD, VertexHold
 from billiard.models.impact import ImpactLaw, impact_law
+from billiard.models.kinds import require_kernel
 from billiard.models.locators import LOCATORS
 from billiard.runfile.checkpoint import CheckpointError
 from billiard.runfile.record import ContactRecord, ImpactRecord
@@ -51,34 +56,27 @@ from billiard.status import Status
 
 __all__ = ["COLLAPSE_COUNT", "COLLAPSE_SPAN", "ZERO_FLIGHT_LIMIT", "Simulation"]
 
-_PROGRESS_EVERY = 100
 #: Wall-clock seconds between two checkpoints (and CSV flushes) of a streamed run.
 CHECKPOINT_INTERVAL = 1.0
+#: The ``end`` of a contact phase that the run's end cut (contacts.csv).
+CUT = "cut"
 
 
-class Settled(NamedTuple):
-    """What landing needs of the impact that settles (``ImpactResult``'s fields)."""
-
-    u1: float
-    u2: float
-    u3: float
-    regime: str
-    wn: float
-
-
-class Simulation(ContactPhases, EventStep):
+class Simulation:
     """Everything a run needs, built and validated from a scene, and the engine state.
 
     Args:
         scene: a :class:`billiard.scene.scene.Scene`.
-        method: ``"event"`` or ``"rk4"`` (a key of :data:`billiard.models.event_locator.LOCATORS`);
+        method: ``"event"`` or ``"rk4"`` (a key of :data:`billiard.models.locators.LOCATORS`);
             default ``scene.run.method``.
         law: the impact law; default the scene's (:func:`billiard.models.impact.impact_law`).
+            It must have a kernel (a kind the state machine runs).
 
     Raises:
         GeometryError: the ball is too large for the boundary's curvature, the curve
             has no bottom to rest on, or the initial position overlaps the wall or lid.
-        SceneError: an unknown method, or a curve parameter the curve does not have.
+        SceneError: an unknown method, a curve parameter the curve does not have, or
+            an impact law without a kernel.
     """
 
     def __init__(self, scene: Any, method: str | None = None, law: ImpactLaw | None = None):
@@ -98,33 +96,26 @@ class Simulation(ContactPhases, EventStep):
         self.boundary = Boundary.from_scene(scene, self.curve.walls)
         self.drive: Drive = self.boundary.drive
         self.flight = flight_model(scene, self.method)
-        #: warm starts of the offset inversion, one [s, slope] per surface: engine state
-        #: passed to every geometry query (see billiard.geometry.surfaces)
+        #: warm starts of the offset inversion, one [s, slope] per surface, for the
+        #: geometry queries of the set-up (the engine's own live in its state vector)
         self.warm = self.boundary.initial_warm()
         self.locator = LOCATORS[self.method](
             self.boundary, self.flight, scene.run.gravity, self.warm
         )
         self.impact: ImpactLaw = law if law is not None else impact_law(scene)
+        # every model runs on the kernels, chosen there by its kind: one without is
+        # refused here, never run another way
+        for model, what in ((self.locator, "locator"), (self.flight, "flight model")):
+            require_kernel(model, what)
+        require_kernel(self.impact, "impact law")
         self.initial = self.initial_state()
-        #: (m, r, k, g) of the energy formula, looked up once rather than per impact
-        self._ball_constants = (
-            scene.ball.mass,
-            scene.ball.radius,
-            scene.ball.inertia_factor,
-            scene.run.gravity,
-        )
         #: simulated time (s) at which a run ends (inf when the scene sets no duration)
         self.end_time = (
             math.inf if scene.run.duration is None else self.initial.t + scene.run.duration
         )
-        #: the state vector when the engine runs on the kernels (see supports), else None
-        self._kernel: KernelEngine | None = None
-        self._counts: dict[str, int] = dict.fromkeys(self.impact.regimes, 0)
-        self._counts["resting"] = 0
         self.final_time = self.initial.t
         #: how the latest :meth:`run` ended, and why (None while it goes on)
         self.status: Status | None = None
-        self._fault: SimulationError | None = None
         #: ``contact.model = "phases"``: rolling and sliding phases besides impacts
         self.phases = getattr(scene.contact, "model", "impacts") == "phases"
         self.contact_model = ContactModel(scene, self.drive) if self.phases else None
@@ -135,22 +126,13 @@ class Simulation(ContactPhases, EventStep):
         #: called with the record of the phase in progress when a run ends inside it
         #: (``end`` = ``cut``); the engine's state stays at that phase's start
         self.on_contact_cut: Callable[[ContactRecord], None] | None = None
-        #: while :meth:`run` runs: its stop request, and the pause of long contact
-        #: phases (the stop request looked at, progress reported)
-        self._request: StopRequest | None = None
-        self._pause: Callable[[float], bool] | None = None
         #: sampling: every ``sample_dt`` seconds of simulated time from the start,
         #: ``on_sample(t, q1, q2, v1, v2, omega, energy, mode)`` (trajectory.csv)
         self.sample_dt: float | None = None
         self.on_sample: Callable[..., None] | None = None
-        self._sample_flight = flight_model(scene, self.method)
+        #: the state vector and the calls into the state machine
+        self.driver = Driver(self, constants_vector(self))
         self.reset()
-        if supports(self) is None:
-            self._kernel = KernelEngine(self)
-        #: contact phases: the kernels that run the flights between them (see fly)
-        self._flights: KernelEngine | None = None
-        if self.phases and supports(self, flights=True) is None:
-            self._flights = KernelEngine(self)
 
     # ------------------------------------------------------------------ set-up
 
@@ -195,103 +177,86 @@ class Simulation(ContactPhases, EventStep):
             },
         )
 
+    @property
+    def ctx(self) -> Any:
+        """The engine's state vector (:mod:`billiard.kernels.layout`)."""
+        return self.driver.ctx
+
     # ------------------------------------------------------------------ engine state
 
     def reset(self, ball: BallState | None = None) -> None:
         """Start the event count afresh from ``ball`` (default: the scene's initial
-        state), e.g. a state in flight or just after an impact. The components' memories
-        (warm starts, step proposals) and the regime counters are kept."""
+        state), e.g. a state in flight or just after an impact. The warm starts, the
+        flight's step proposal and the regime counters are kept."""
         ball = self.initial if ball is None else ball
-        self._ball = ball.copy()
-        self._impacts = 0
-        # The clock is a sum of tens of thousands of flight times: keep it with
-        # Neumaier's compensated summation so that t stays the correctly rounded sum
-        # (a plain sum drifts by ~1e-13 s, ~1e-12 rad of drive phase, by 3000 impacts).
-        self._clock, self._clock_error = ball.t, 0.0
-        self._zero_flights = 0
-        self._recent: deque[float] = deque(maxlen=COLLAPSE_COUNT + 1)
-        self._fault = None
-        self._mode = "flight"
-        #: in contact: (surface index, s, s_dot, slip sign, phase start t, settle t)
-        self._contact: tuple[float, ...] = ()
-        self._samples = 0
-        self._phase_time = {"roll": 0.0, "slide": 0.0, "held": 0.0}
-        self._last_impact = ball.t
-        if self._kernel is not None:
-            self._kernel.reset(ball)
+        ctx = self.ctx
+        write_ball(ctx, ball)
+        write_motion(ctx, EngineState(ball, 0, ball.t, 0.0, 0, (), {}, (), {}, {}))
+        ctx[L.SM_K] = 0.0
+        ctx[L.SM_PENDING] = 0.0
+        ctx[L.MC_FINAL] = self.final_time
         if self.phases:
-            self._start_in_contact()
+            self._start_in_contact(ball)
 
     @property
     def counts(self) -> dict[str, int]:
         """Impacts per regime of the impact law, and resting relaunches."""
-        if self._kernel is not None:
-            return self._kernel.counts()
-        return self._counts
+        ctx = self.ctx
+        keys = (*self.impact.regimes, "resting")
+        return {key: int(ctx[L.COUNTS + COUNT_KEYS.index(key)]) for key in keys}
 
     @counts.setter
     def counts(self, value: dict[str, int]) -> None:
-        self._counts = dict(value)
-        if self._kernel is not None:
-            self._kernel.set_counts(self._counts)
+        for i, key in enumerate(COUNT_KEYS):
+            self.ctx[L.COUNTS + i] = float(value.get(key, 0))
 
     @property
     def ball(self) -> BallState:
         """The ball after the last event (a copy)."""
-        if self._kernel is not None:
-            return self._kernel.state().ball
-        return self._ball.copy()
+        return engine_state(self.ctx, self.impact.regimes, 0).ball
+
+    @property
+    def mode(self) -> str:
+        """The ball's motion state: ``flight``, ``roll``, ``slide`` or ``held``."""
+        return L.MOTION_NAMES[int(self.ctx[L.MC_MODE])]
+
+    @property
+    def phase_time(self) -> dict[str, float]:
+        """Simulated time (s) spent in finished rolling, sliding and held phases."""
+        return read_motion(self.ctx)["phase_time"]
+
+    def mode_times(self) -> dict[str, float]:
+        """Simulated time (s) spent flying, rolling, sliding and held by two walls from
+        the scene's start to ``final_time`` (an unfinished contact phase counted up to
+        it)."""
+        motion = read_motion(self.ctx)
+        times = motion["phase_time"]
+        ball_t = float(self.ctx[L.EN_T])
+        end = self.final_time if math.isfinite(self.final_time) else ball_t
+        mode = motion["mode"]
+        if mode != "flight":
+            # (none before a landing at the end of a chatter series, still ahead)
+            times[mode] += max(0.0, end - motion["contact"][4])
+        return {"flight": end - self.initial.t - sum(times.values()), **times}
 
     @property
     def pending_stop(self) -> SimulationError | None:
         """The stop detected after the last impact (an inelastic collapse), which the
         next :meth:`step` raises; None when the run can go on."""
-        if self._kernel is not None:
-            return self._kernel.pending_stop()
-        return self._fault
+        return self.driver.pending_stop()
 
     @property
     def state(self) -> EngineState:
         """The complete engine state after the last event (a snapshot)."""
-        if self._kernel is not None:
-            # the ball, clock and counters live in the kernels' state vector; the warm
-            # starts and the step proposal belong to sim.warm and sim.flight
-            return dataclasses.replace(self._kernel.state(), **self._held_state())
-        return self._python_state()
-
-    def _object_state(self) -> dict[str, Any]:
-        """The parts of the engine state the Python objects hold in every engine (the
-        state machine holds the motion state itself)."""
-        return {
-            "walls": tuple((w[0], w[1]) for w in self.warm[: len(self.boundary.offsets)]),
-            "flight": self.flight.memory(),
-            "locator": self.locator.memory(),
-            "samples": self._samples,
-        }
-
-    def _held_state(self) -> dict[str, Any]:
-        """The parts of the engine state the Python objects hold in either engine."""
-        if self._kernel is not None and self._kernel.machine:
-            return self._object_state()
-        return {
-            **self._object_state(),
-            "mode": self._mode,
-            "contact": self._contact,
-            "phase_time": dict(self._phase_time),
-            "last_impact": self._last_impact if self.phases else None,
-        }
-
-    def _python_state(self) -> EngineState:
-        return EngineState(
-            ball=self._ball.copy(),
-            impacts=self._impacts,
-            clock=self._clock,
-            clock_error=self._clock_error,
-            zero_flights=self._zero_flights,
-            recent=tuple(self._recent),
-            counts=dict(self._counts),
-            **self._held_state(),
-        )
+        ctx = self.ctx
+        state = engine_state(ctx, self.impact.regimes, len(self.boundary.offsets))
+        state.locator = self.driver.locator_memory()
+        state.samples = int(ctx[L.SM_K])
+        if self.phases:
+            motion = read_motion(ctx)
+            state.mode, state.contact = motion["mode"], motion["contact"]
+            state.phase_time, state.last_impact = motion["phase_time"], motion["last_impact"]
+        return state
 
     def start_state(self) -> EngineState:
         """The engine state before the first impact of the scene."""
@@ -313,77 +278,90 @@ class Simulation(ContactPhases, EventStep):
             raise CheckpointError("its engine state has the wrong regime counters")
         try:
             self.flight.restore_memory(state.flight)
-            self.locator.restore_memory(state.locator)
+            self.driver.set_locator_memory(state.locator)
         except ValueError as exc:
             raise CheckpointError(f"its engine state does not fit this engine: {exc}") from None
+        if (state.mode != "flight" or state.contact) and not self.phases:
+            raise CheckpointError("its engine state is in contact, the scene has no phases")
         for warm, (s, slope) in zip(self.warm, state.walls, strict=False):
             warm[0], warm[1] = s, slope
-        self._counts = dict(state.counts)
-        self._ball = state.ball.copy()
-        self._impacts = state.impacts
-        self._clock, self._clock_error = state.clock, state.clock_error
-        self._zero_flights = state.zero_flights
-        self._recent = deque(state.recent, maxlen=COLLAPSE_COUNT + 1)
-        self._fault = None
+        ctx = self.ctx
+        write_state(ctx, state)
+        write_motion(ctx, state)
+        if not self.phases:
+            ctx[L.MC_LAST_IMPACT] = state.ball.t
+        ctx[L.SM_K] = float(state.samples)
+        ctx[L.SM_PENDING] = 0.0
         self.final_time = state.ball.t
-        self._mode = state.mode
-        self._contact = tuple(state.contact)
-        self._samples = state.samples
-        self._phase_time = {"roll": 0.0, "slide": 0.0, "held": 0.0, **state.phase_time}
-        self._last_impact = state.ball.t if state.last_impact is None else state.last_impact
-        if self._kernel is not None:
-            self._kernel.restore(state)
+        ctx[L.MC_FINAL] = self.final_time
+
+    def _start_in_contact(self, ball: BallState) -> None:
+        """A ball that starts lying on a wall (gap and relative normal speed zero to
+        rounding, 1e-12 m and 1e-12 m/s) while the wall presses it starts in contact,
+        without an impact: rolling or sliding on one wall, or held by two."""
+        px, py, vx, vy = self.drive.to_boundary_frame(
+            ball.theta, ball.q1, ball.q2, ball.u1, ball.u2
+        )
+        model = self.contact_model
+        touching = []
+        for j, surface in enumerate(self.boundary.offsets):
+            warm = list(self.warm[j])
+            gap, rate = surface.gap_rate(px, py, vx, vy, warm)
+            s, z, cz = surface.contact(px, warm)
+            if abs(gap) > 1e-12 or abs(rate * cz) > 1e-12 or not surface.lo <= s <= surface.hi:
+                continue
+            touching.append((j, z))
+        contact: tuple[float, ...] | None = None
+        if len(touching) == 2:
+            (a, za), (b, zb) = touching
+            if self.vertex_hold.holds(za, zb, ball.theta, ball.u3):
+                # held where it is, moving with the boundary, its spin kept
+                u1, u2 = self.drive.boundary_velocity(ball.theta)
+                ball = BallState(ball.t, ball.theta, ball.q1, ball.q2, u1, u2, ball.u3, ball.q3)
+                write_ball(self.ctx, ball)
+                mode, contact = HELD, (float(a), float(b), px, py, ball.t, ball.t)
+        if contact is None:
+            for j, _ in touching:
+                surface = self.boundary.offsets[j]
+                s, _, _ = surface.contact(px, list(self.warm[j]))
+                wall = surface.wall
+                sd = model.s_dot(wall, ball.theta, s, ball.u1, ball.u2)
+                mode, sgn = model.mode_for(wall, ball.theta, s, sd, ball.u3)
+                if model.forces(wall, mode, sgn, ball.theta, (s, sd, ball.u3))[2] > 0.0:
+                    contact = (float(j), s, sd, sgn, ball.t, ball.t)
+                    break
+        if contact is not None:
+            ctx = self.ctx
+            ctx[L.MC_MODE] = float(L.MOTION_NAMES.index(mode))
+            for i, value in enumerate(contact):
+                ctx[L.MC_CONTACT + i] = value
 
     # ------------------------------------------------------------------ one event
-    def step(self, until: float = math.inf) -> ImpactRecord | None:
-        """Advance the engine to the next impact and return its record.
+
+    def step(self, until: float = math.inf) -> ImpactRecord | ContactRecord | None:
+        """Advance the engine to the next event and return its record: the next
+        impact, or under contact phases the end of a phase (an impact that ends a
+        phase returns the impact; the phase's record goes to ``on_contact``).
 
         Args:
-            until: simulated time (s): when the next impact comes after it, nothing
-                changes and None is returned.
+            until: simulated time (s): when the next event comes after it, None is
+                returned (a phase under way is cut there: ``on_contact_cut``).
 
         Raises:
             SimulationError: a documented stop (``.status`` says which): the ball
                 escaped, a search failed, a non-finite state, an arithmetic fault in the
                 equations, or an inelastic collapse detected after the previous impact.
-                The state is left as it was after the previous impact.
+                The state is left as it was after the previous event.
         """
-        kernel = self._engine()
-        if kernel is not None:
-            return kernel.step(until)
-        if self._fault is not None:
-            raise self._fault
-        try:
-            return self._step(until)
-        except (ArithmeticError, ValueError) as exc:
-            # Only the equations' arithmetic faults are a documented stop: overflow,
-            # division by zero, and math's domain error (the square root or logarithm of
-            # a negative number). Any other ValueError is a bug and surfaces as one.
-            if isinstance(exc, ValueError) and str(exc) != "math domain error":
-                raise
-            raise SimulationError(
-                f"numerical failure after impact {self._impacts} "
-                f"(t = {self._ball.t:.9g} s): {type(exc).__name__}: {exc}",
-                Status.NUMERICAL_FAULT,
-            ) from None
+        self._prepare_run()
+        return self.driver.step(until)
 
-    @property
-    def kernel_engine(self) -> KernelEngine | None:
-        """The compiled kernels' engine this simulation runs on (its state vector
-        ``ctx``), or None while it runs on the models' classes."""
-        return self._kernel
-
-    def _engine(self) -> KernelEngine | None:
-        """The kernels, while they can run this simulation: an impact law replaced after
-        construction (an audit wrapping it) or trajectory sampling, which the kernels do
-        not do, hand the state over to the classes for good."""
-        kernel = self._kernel
-        if kernel is not None and (self.impact is not kernel.law or self.on_sample is not None):
-            state, fault, final_time = self.state, kernel.pending_stop(), self.final_time
-            self._kernel = None
-            self.restore(state)
-            self._fault, self.final_time = fault, final_time
-        return self._kernel
+    def _prepare_run(self) -> None:
+        """What a run or step reads of the simulation's attributes: the samples."""
+        ctx = self.ctx
+        sampled = self.sample_dt is not None and self.on_sample is not None
+        ctx[L.SM_DT] = float(self.sample_dt) if sampled else 0.0
+        ctx[L.MC_FINAL] = self.final_time
 
     # ------------------------------------------------------------------ the loop
 
@@ -399,7 +377,7 @@ class Simulation(ContactPhases, EventStep):
         until: float | None = None,
         on_record: Callable[[int], None] | None = None,
     ) -> str | None:
-        """Step until ``collisions`` impacts (or ``until``), appending each record to
+        """Run until ``collisions`` impacts (or ``until``), appending each record to
         ``recorder``. Returns None, or the one-line reason the run stopped early;
         ``self.status`` says how it ended.
 
@@ -411,198 +389,32 @@ class Simulation(ContactPhases, EventStep):
             start: continue from this engine state (default: from the current one).
             checkpoint: called with the engine state after the last appended record,
                 about every ``CHECKPOINT_INTERVAL`` seconds of wall-clock time.
-            stop: a stop request set by a signal handler: the loop ends at the next
-                impact boundary by raising :class:`RunInterrupted`.
+            stop: a stop request set by a signal handler: the run ends at the next
+                chunk's end by raising :class:`~billiard.engine.interrupt.RunInterrupted`,
+                its state matching the records handed out.
             until: simulated time (s) at which the run ends; default ``self.end_time``.
             on_record: called with the impact number after each record is appended
                 (a hook for tests and audits).
         """
         if start is not None:
             self.restore(start)
-        until = self.end_time if until is None else until
-        request = stop if stop is not None else StopRequest()
-        kernel = self._engine()
-        if kernel is not None:
-            self.status = None
-            self.status, reason = kernel.run(
-                collisions, recorder, progress, checkpoint, request, until, on_record,
-                interval=CHECKPOINT_INTERVAL,
-            )  # fmt: skip
-            return reason
-        monotonic = time.monotonic
-        next_save = monotonic() + CHECKPOINT_INTERVAL if checkpoint is not None else math.inf
+        control = RunControl(
+            collisions,
+            recorder,
+            self.end_time if until is None else until,
+            progress,
+            checkpoint,
+            stop if stop is not None else StopRequest(),
+            on_record,
+            CHECKPOINT_INTERVAL,
+        )
         self.status = None
-        self._request = request
-        self._pause = self._pause_for(request, progress, collisions)
-        reason: str | None = None
-        status = Status.COMPLETE
-        # the flights between contact phases run on the kernels, as long as nothing
-        # needs the classes (trajectory samples, an impact law replaced)
-        flights = self._flights
-        if flights is not None and (self.on_sample is not None or self.impact is not flights.law):
-            flights = None
-        if flights is not None and flights.machine:
-            self._request = self._pause = None
-            return self._run_machine(
-                flights, collisions, recorder, progress, checkpoint, request, until, on_record
-            )
+        self._prepare_run()
         try:
-            while self._impacts < collisions:
-                # a signal arrived: stop here, where the state matches the records exactly
-                if request.signum:
-                    raise RunInterrupted(request.signum)
-                if flights is not None and self._mode == "flight" and self._fault is None:
-                    ended = self._fly(
-                        flights, collisions, recorder, progress, checkpoint, request,
-                        until, on_record, next_save, CHECKPOINT_INTERVAL,
-                    )  # fmt: skip
-                    next_save = flights.next_save
-                    if ended is not None:
-                        status, reason = ended
-                        break
-                    continue
-                record = self.step(until)
-                if record is None:
-                    status = Status.TIME_LIMIT
-                    self.final_time = until
-                    break
-                if type(record) is ContactRecord:
-                    if self._fault is not None:
-                        raise self._fault
-                    continue
-                recorder.append(record)
-                n = record.n
-                if on_record is not None:
-                    on_record(n)
-                if progress is not None and n % _PROGRESS_EVERY == 0:
-                    progress(n, collisions)
-                if checkpoint is not None and monotonic() >= next_save:
-                    checkpoint(self.state)
-                    next_save = monotonic() + CHECKPOINT_INTERVAL
-                if self._fault is not None:
-                    raise self._fault
-        except SimulationError as exc:
-            # a ball at rest ends the run complete: a status, not a stop reason
-            status, reason = exc.status, None if exc.status.finished else str(exc)
+            status, reason = self.driver.run(control)
         finally:
-            self._request = self._pause = None
             if progress is not None:
                 report_time(progress, self.final_time)
-                progress(self._impacts, collisions)
+                progress(self.driver.impacts, collisions)
         self.status = status
         return reason
-
-    def _pause_for(
-        self, request: StopRequest, progress: Progress | None, collisions: int
-    ) -> Callable[[float], bool]:
-        """The pause of a long contact phase (every few thousand steps): True stops it
-        (a stop request arrived); progress is reported about ten times a second with
-        the simulated time reached (``tau`` after the phase's start)."""
-        monotonic = time.monotonic
-        last = [monotonic()]
-
-        def pause(tau: float) -> bool:
-            if request.signum:
-                return True
-            if progress is not None and monotonic() - last[0] >= 0.1:
-                last[0] = monotonic()
-                report_time(progress, self._ball.t + tau)
-                progress(self._impacts, collisions)
-            return False
-
-        return pause
-
-    # ------------------------------------------------------------------ the state machine
-    def _run_machine(
-        self,
-        machine: Any,
-        collisions: int,
-        recorder: Any,
-        progress: Progress | None,
-        checkpoint: Callable[[EngineState], None] | None,
-        request: StopRequest,
-        until: float,
-        on_record: Callable[[int], None] | None,
-    ) -> str | None:
-        """:meth:`run` under contact phases on the compiled state machine
-        (:meth:`billiard.engine.kernel_engine.KernelEngine.run_phases`): the engine
-        state goes into its state vector, and back when the run ends."""
-        if self._fault is not None and self._impacts < collisions:
-            # a stop detected before (the next step raises it)
-            fault = self._fault
-            self.status = fault.status
-            return None if fault.status.finished else str(fault)
-        state = self._python_state()
-        machine.restore(state)
-        write_motion(machine.ctx, state)
-        machine.ctx[L.MC_FINAL] = self.final_time
-        # while the machine runs, the engine's state is its (hooks and checkpoints see it)
-        self._kernel = machine
-        try:
-            status, reason = machine.run_phases(
-                collisions, recorder, progress, checkpoint, request, until, on_record,
-                interval=CHECKPOINT_INTERVAL,
-            )  # fmt: skip
-        finally:
-            self._kernel = None
-            state = dataclasses.replace(machine.state(), **self._object_state())
-            fault, final_time = machine.pending_stop(), self.final_time
-            self.restore(state)
-            self._fault, self.final_time = fault, final_time
-            if progress is not None:
-                report_time(progress, self.final_time)
-                progress(self._impacts, collisions)
-        self.status = status
-        return reason
-
-    # ------------------------------------------------------------------ flights on the kernels
-    def _fly(
-        self,
-        flights: Any,
-        collisions: int,
-        recorder: Any,
-        progress: Callable[[int, int], None] | None,
-        checkpoint: Callable[[Any], None] | None,
-        request: StopRequest,
-        until: float,
-        on_record: Callable[[int], None] | None,
-        next_save: float,
-        interval: float,
-    ) -> tuple[Status, str | None] | None:
-        """Fly the ball (in flight, no pending stop) on its kernels ``flights`` (a
-        :class:`billiard.engine.kernel_engine.KernelEngine`) until an impact settles or the run
-        ends; the arguments are :meth:`run`'s. Returns None when the run goes on
-        (the ball landed, or flies on when the wall does not press it), else the run's
-        (status, stop reason). The next checkpoint's time is left in ``flights.next_save``.
-        """
-        flights.restore(self._python_state())
-        ctx = flights.ctx
-        ctx[L.EN_SETTLES] = 0.0
-        # while the kernels fly, the engine's state is theirs (hooks and checkpoints see it)
-        self._kernel = flights
-        impacts = self._impacts
-        try:
-            status, reason = flights.run(
-                collisions, recorder, progress, checkpoint, request, until, on_record,
-                next_save=next_save, interval=interval, final_progress=False,
-            )  # fmt: skip
-        finally:
-            self._kernel = None
-            state = dataclasses.replace(flights.state(), **self._held_state())
-            fault, final_time = flights.pending_stop(), self.final_time
-            self.restore(state)
-            self._fault, self.final_time = fault, final_time
-            if self._impacts > impacts:
-                # the kernels stop after an impact (or a contact without impulse after it)
-                self._last_impact = float(ctx[L.MC_LAST_IMPACT])
-        if ctx[L.EN_SETTLES] != 0.0:
-            ball = self._ball
-            settled = Settled(
-                ball.u1, ball.u2, ball.u3, L.REGIMES[int(ctx[L.EN_LAST_REGIME])],
-                float(ctx[L.EN_LAST_WN]),
-            )  # fmt: skip
-            tail = int(ctx[L.EN_SETTLES]) & 2 != 0  # loop.SETTLES_TAIL: may be summed
-            self._land(
-                int(ctx[L.EN_LAST_J]), float(ctx[L.EN_LAST_S]), ball.theta, settled, ball.t, tail
-            )
-        return None if status is None else (status, reason)

@@ -33,9 +33,16 @@ from billiard.geometry.surfaces import (
 from billiard.geometry.wall_functions import plain_wall_functions
 from billiard.geometry.walls import Wall, nearest_newton
 from billiard.kernels.interpreted import kernel_errors
-from billiard.kernels.interpreted import layout as _L
 from billiard.kernels.interpreted import rest as _rest
 from billiard.kernels.interpreted import stop as _stop
+from billiard.kernels.names import (
+    put_surface_block,
+    put_warm_s,
+    surface_block,
+    surface_ctx,
+    warm_start,
+    write_surface,
+)
 
 __all__ = ["Boundary", "Drive", "NearestPoint"]
 
@@ -347,14 +354,11 @@ class Boundary:
         if any(p != ps[0] for p in ps):
             # the kernels take one parameter array for all walls (a curve's walls share it)
             return [self.offset_height(float(x), warm) for x in xs]
-        surf, stride = _L.SURF, _L.SURF_STRIDE
-        ctx = [0.0] * (surf + len(self.offsets) * stride)
+        ctx = surface_ctx(len(self.offsets))
         for j, offset in enumerate(self.offsets):
             # each surface's own block (its surface 0), as block j
-            base = surf + j * stride
-            ctx[base : base + stride] = offset.ctx[surf : surf + stride]
-            ctx[base + _L.S_WALL] = float(j)
-            ctx[base + _L.S_WS] = warm[j][0]
+            put_surface_block(ctx, j, surface_block(offset.ctx, 0))
+            write_surface(ctx, j, wall=float(j), warm_s=warm[j][0])
         try:
             if _jit.ENABLED:
                 from billiard.geometry.wall_functions import WallFunction, WallTable
@@ -384,7 +388,8 @@ class Boundary:
             if isinstance(offset, OffsetLine):
                 continue
             # where the surface's own calls would have left its warm start
-            warm[j][0] = offset.ctx[surf + _L.S_WS] = ctx[surf + j * stride + _L.S_WS]
+            warm[j][0] = warm_start(ctx, j)[0]
+            put_warm_s(offset.ctx, 0, warm[j][0])
         return heights
 
     # ------------------------------------------------------------------ nearest point

@@ -27,6 +27,14 @@ from billiard.geometry.walls import Wall
 from billiard.kernels.interpreted import layout as _L
 from billiard.kernels.interpreted import stop as _stop
 from billiard.kernels.interpreted import surfaces as _surfaces
+from billiard.kernels.names import (
+    put_warm_s,
+    read_surface,
+    surface_constants,
+    surface_ctx,
+    warm_start,
+    write_surface,
+)
 
 __all__ = [
     "EscapeLevel",
@@ -45,10 +53,7 @@ WarmStart = list
 offset_stretch = _surfaces.offset_stretch
 offset_curvature = _surfaces.offset_curvature
 
-# a surface's own block in its ctx (the kernels' surface 0), and the warm start's slots
-_BASE = _L.SURF
-_WS = _BASE + _L.S_WS
-_WSLOPE = _BASE + _L.S_WSLOPE
+# a surface keeps its block in its own ctx as the kernels' surface 0
 _KernelError = _L.KernelError
 _gap_rate = _surfaces.gap_rate
 _gap_accel = _surfaces.gap_accel
@@ -79,9 +84,8 @@ class Surface:
     _walls: tuple = ((), (), ())
 
     def _new_ctx(self, kind: float) -> list[float]:
-        ctx = [0.0] * (_L.SURF + _L.SURF_STRIDE)
-        ctx[_BASE + _L.S_KIND] = kind
-        ctx[_BASE + _L.S_SLOPE_AT] = math.nan  # no slope memo
+        ctx = surface_ctx(1)
+        write_surface(ctx, 0, kind=kind, slope_at=math.nan)  # no slope memo
         self.ctx = ctx
         return ctx
 
@@ -89,9 +93,7 @@ class Surface:
         """The constants of this surface's block of the kernels' state vector (the
         slots before the warm start), without a slope memo: the memo's value stays in
         this ctx (and a block may be given to another surface's slot)."""
-        values = self.ctx[_BASE:_WS]
-        values[_L.S_SLOPE_AT] = math.nan
-        return values
+        return surface_constants(self.ctx, 0, slope_at=math.nan)
 
     def initial_warm(self) -> WarmStart:
         """A fresh warm start ``[s, slope]`` for this surface."""
@@ -124,7 +126,7 @@ class Surface:
         warm: WarmStart,
     ) -> float:
         ctx = self.ctx
-        ctx[_WSLOPE] = warm[1]
+        write_surface(ctx, 0, warm_slope=warm[1])
         return _max_gap_deceleration(ctx, 0, px, vx, tau, ax, ay_down, ay_up)
 
 
@@ -144,7 +146,7 @@ class OffsetWall(Surface):
         bend_abs_bound: float = 0.0,
     ):  # fmt: skip
         ctx = self._bind(wall, radius, index, _L.CURVED)
-        ctx[_BASE + _L.S_A] = self.r
+        write_surface(ctx, 0, a=self.r)
         self.bend_bound = bend_bound
         self.bend_abs_bound = bend_abs_bound
 
@@ -165,57 +167,55 @@ class OffsetWall(Surface):
     def block(self) -> list[float]:
         # in the locator's state vector, the wall's place in the curve's wall functions
         # (in the surface's own ctx, the only one: 0)
-        values = super().block()
-        values[_L.S_WALL] = float(self.index)
-        return values
+        return surface_constants(self.ctx, 0, slope_at=math.nan, wall=float(self.index))
 
     @property
     def bend_bound(self) -> float:
         """sup of max(F'', 0) over the reachable range (1/m)."""
-        return self.ctx[_BASE + _L.S_B]
+        return read_surface(self.ctx, 0, "b")
 
     @bend_bound.setter
     def bend_bound(self, value: float) -> None:
-        self.ctx[_BASE + _L.S_B] = value
+        write_surface(self.ctx, 0, b=value)
 
     @property
     def bend_abs_bound(self) -> float:
         """sup of |F''| over the reachable range (1/m)."""
-        return self.ctx[_BASE + _L.S_C]
+        return read_surface(self.ctx, 0, "c")
 
     @bend_abs_bound.setter
     def bend_abs_bound(self, value: float) -> None:
-        self.ctx[_BASE + _L.S_C] = value
+        write_surface(self.ctx, 0, c=value)
 
     def foot(self, x: float, s: float) -> float:
         """Abscissa s of the wall point whose offset point has abscissa x (Newton on
         X(s) = x from the start s, dX/ds = 1 - r f''/(1 + f'^2)^(3/2) > 0)."""
         try:
-            return _surfaces.foot(self.ctx, self._p, self._walls, _BASE, x, s, math.nan)
+            return _surfaces.foot(self.ctx, self._p, self._walls, _L.SURF, x, s, math.nan)
         except _KernelError as exc:
             raise _stop(exc, self.ctx) from None
 
     def height(self, x: float, warm: WarmStart) -> float:
         """F(x): height of the ball centre touching this wall at abscissa x (m)."""
         ctx = self.ctx
-        ctx[_WS] = warm[0]
+        put_warm_s(ctx, 0, warm[0])
         try:
             height = _offset_height(ctx, self._p, self._walls, 0, x)
         except _KernelError as exc:
             raise _stop(exc, ctx) from None
-        warm[0] = ctx[_WS]
+        warm[0] = warm_start(ctx, 0)[0]
         return height
 
     def gap_rate(
         self, px: float, py: float, vx: float, vy: float, warm: WarmStart
     ) -> tuple[float, float]:
         ctx = self.ctx
-        ctx[_WS] = warm[0]
+        put_warm_s(ctx, 0, warm[0])
         try:
             gap = _gap_rate(ctx, self._p, self._walls, 0, px, py, vx, vy)
         except _KernelError as exc:
             raise _stop(exc, ctx) from None
-        warm[0], warm[1] = ctx[_WS], ctx[_WSLOPE]
+        warm[0], warm[1] = warm_start(ctx, 0)
         return gap
 
     def curvature_term(self, s: float) -> float:
@@ -226,17 +226,17 @@ class OffsetWall(Surface):
         self, px: float, py: float, vx: float, vy: float, ax: float, ay: float, warm: WarmStart
     ) -> float:
         ctx = self.ctx
-        ctx[_WS] = warm[0]
+        put_warm_s(ctx, 0, warm[0])
         try:
             accel = _gap_accel(ctx, self._p, self._walls, 0, px, py, vx, vy, ax, ay)
         except _KernelError as exc:
             raise _stop(exc, ctx) from None
-        warm[0] = ctx[_WS]
+        warm[0] = warm_start(ctx, 0)[0]
         return accel
 
     def contact(self, px: float, warm: WarmStart) -> tuple[float, float, float]:
         ctx = self.ctx
-        ctx[_WS] = warm[0]
+        put_warm_s(ctx, 0, warm[0])
         try:
             s, z = _contact(ctx, self._p, self._walls, 0, px)
         except _KernelError as exc:
@@ -261,10 +261,7 @@ class OffsetLine(OffsetWall):
         self.shift = self.r * b / root  # foot s = X + shift
         self.z = math.atan(b)
         self.cos_z = math.cos(self.z)
-        ctx[_BASE + _L.S_A] = b
-        ctx[_BASE + _L.S_B] = self.intercept
-        ctx[_BASE + _L.S_C] = self.shift
-        ctx[_BASE + _L.S_D] = self.z
+        write_surface(ctx, 0, a=b, b=self.intercept, c=self.shift, d=self.z)
 
     def initial_warm(self) -> WarmStart:
         return [0.0, self.b]
@@ -304,7 +301,7 @@ class FlatLid(Surface):
         self.label = "lid"
         #: the ``wall`` column of an impact on the lid (walls count from 0)
         self.code = int(_L.LID_LABEL)
-        self._new_ctx(_L.LID)[_BASE + _L.S_A] = self.level
+        write_surface(self._new_ctx(_L.LID), 0, a=self.level)
 
     def contact(self, px: float, warm: WarmStart) -> tuple[float, float, float]:
         # c2 = (0, -1) points down into the container; G' = -v_y is already the normal
@@ -322,4 +319,4 @@ class EscapeLevel(FlatLid):
         self.ceiling = float(height)
         self.level = float(height)
         self.label = "escape"
-        self._new_ctx(_L.ESCAPE)[_BASE + _L.S_A] = self.level
+        write_surface(self._new_ctx(_L.ESCAPE), 0, a=self.level)

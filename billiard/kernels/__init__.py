@@ -5,6 +5,8 @@ One concept per module:
 
 * :mod:`~billiard.kernels.layout`: where each quantity lives in the state vector ``ctx``
   (a float64 array; a list of Python floats when interpreted), the codes;
+* :mod:`~billiard.kernels.names`: the state vector by name, for the wings outside the
+  kernels and the engine;
 * :mod:`~billiard.kernels.ball`: the generated ball equations, under the same decorator;
 * :mod:`~billiard.kernels.flight`: the exact flight and the Dormand-Prince flight;
 * :mod:`~billiard.kernels.surfaces`: gaps, rates and bounds of the offset walls, lid
@@ -22,7 +24,10 @@ One concept per module:
 * :mod:`~billiard.kernels.loop`: one impact, and ``run_chunk`` (up to N impacts into a
   preallocated array; ``run_chunk_fixed`` for method ``rk4``).
 
-:mod:`billiard.engine.kernel_engine` builds the state vector from a scene and runs the chunks.
+:mod:`~billiard.kernels.machine`: the trajectory state machine, the one engine that
+  advances every scene; :mod:`~billiard.kernels.samples`: its trajectory samples.
+
+:mod:`billiard.engine.driver` builds the state vector from a scene and runs the chunks.
 :mod:`billiard.kernels.interpreted` loads these files again as plain Python
 (``billiard.kernels_py``), which the runtime's classes call.
 """

@@ -23,13 +23,14 @@ from __future__ import annotations
 
 import math
 
+from . import drive
 from .contact_forces import at_rest, conditions, n_conditions, n_y, rhs
 from .decorators import borrow, inline, jit
 from .illinois import narrow, secant_point
 from .layout import (
-    AMP,
     E_AT_REST,
     E_PHASE_STEPS,
+    EN_STOP,
     OMEGA,
     PH_CNEW,
     PH_CPREV,
@@ -221,7 +222,7 @@ def begin(ctx, p, walls):
     conditions(ctx, p, walls, 0.0, PH_Y, PH_CPREV)
     ctx[PH_STEPS] = 0.0
     omega = ctx[OMEGA]
-    static = ctx[AMP] == 0.0 or omega == 0.0
+    static = drive.static(ctx)
     # the step is at most 1/20 of the drive period, so that the conditions, which the
     # drive moves, cannot change sign twice unseen within a step
     ctx[PH_HMAX] = math.inf if static else 0.1 * math.pi / abs(omega)
@@ -268,6 +269,7 @@ def step(ctx, p, walls):
             break
         h *= pmax(0.2, 0.9 * err**-0.2)
     if not accepted:
+        ctx[EN_STOP] = E_PHASE_STEPS
         raise KernelError(E_PHASE_STEPS)
     ctx[PH_STEPS] += 1.0
     ctx[PH_H] = h
@@ -325,6 +327,7 @@ def accept(ctx):
         # at rest relative to the boundary, with every condition kept, for a whole drive
         # period (or, on a static boundary, a few steps): the drive is periodic, so this
         # repeats for ever
+        ctx[EN_STOP] = E_AT_REST
         raise KernelError(E_AT_REST)
     if span > 0.0 and steady:
         # the same argument with a time limit: whole drive periods repeat the one just

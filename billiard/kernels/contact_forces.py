@@ -5,14 +5,11 @@ a phase. :mod:`billiard.kernels.contact` integrates them."""
 
 from __future__ import annotations
 
-import math
-
 from .contact_equations import centre_state, roll_rhs, slide_rhs, slip_velocity
 from .decorators import inline
+from .drive import boundary_motion
 from .layout import (
-    AMP,
     CURVED,
-    HORIZ,
     LINE,
     NSURF,
     OMEGA,
@@ -47,17 +44,6 @@ def n_y(ctx):
 
 
 @inline
-def boundary(ctx, theta):
-    """(vb1, vb2, ab1, ab2): the boundary's velocity (m/s) and acceleration (m/s^2) in
-    the lab frame at drive angle theta (as :class:`billiard.geometry.drive.Drive` computes them)."""
-    v = ctx[AMP] * ctx[OMEGA] * math.cos(theta)
-    a = -ctx[AMP] * ctx[OMEGA] * ctx[OMEGA] * math.sin(theta)
-    if ctx[HORIZ] == 1.0:
-        return v, 0.0, a, 0.0
-    return 0.0, v, 0.0, a
-
-
-@inline
 def forces(ctx, p, walls, theta, s, sd):
     """(s_ddot, u3_dot, N, F) of the phase's mode at drive angle theta; u3_dot is that
     of the no-slip spin (0) while rolling."""
@@ -65,7 +51,7 @@ def forces(ctx, p, walls, theta, s, sd):
     fp = walls[1][w](s, p)
     f2 = walls[2][w](s, p)
     f3 = walls[3][w](s, p)
-    vb1, vb2, ab1, ab2 = boundary(ctx, theta)
+    vb1, vb2, ab1, ab2 = boundary_motion(ctx, theta)
     if ctx[PH_MODE] == ROLL:
         sdd, n, f = roll_rhs(sd, fp, f2, f3, ab1, ab2, vb1, vb2, ctx[PH_M], ctx[PH_R],
                              ctx[PH_K], ctx[PH_G], ctx[PH_CLIN], ctx[PH_CQUAD])  # fmt: skip

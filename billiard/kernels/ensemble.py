@@ -5,7 +5,12 @@ measured on the way, with nothing per impact leaving the kernel.
 Each trajectory runs :func:`billiard.kernels.loop.step`, the step under ``billiard
 run``, over its own row of ``ctxs`` and ``params``: the same operations in the same
 order, so a trajectory of the batch makes, bit for bit, the impacts a run of the same
-scene makes (on the CPU). :func:`run_batch` runs a range of trajectories without the
+scene makes (on the CPU). Under ``contact.model = "phases"`` (method ``event``) a
+trajectory runs the state machine under such a run instead
+(:func:`billiard.kernels.machine.run_machine`), called as
+:meth:`billiard.engine.driver.Driver.run` calls it, chunk after
+chunk (:func:`run_batch_phases`), and ends as that run ends: at rest, in contact, at its
+time limit or stopped. :func:`run_batch` runs a range of trajectories without the
 GIL, so that threads on disjoint ranges use all cores (:mod:`billiard.engine.ensemble`;
 numba's ``prange`` cannot take the tuple of first-class wall functions into its
 parallel region, and a range returns control often enough for Ctrl-C); the CUDA twin
@@ -30,8 +35,12 @@ from __future__ import annotations
 
 import math
 
+import numpy as np
+
 from .decorators import borrow, inline, jit
 from .layout import (
+    CCOL,
+    E_AT_REST,
     EN_CLOCK,
     EN_CLOCK_ERR,
     EN_FAULT,
@@ -43,19 +52,29 @@ from .layout import (
     EN_RHEAD,
     EN_STOP,
     EN_T,
+    EN_TARGET,
     EN_THETA,
     EN_U1,
     EN_U2,
     EN_U3,
     EN_ZERO,
+    IN_CONTACT,
     LID_LABEL,
+    MC_CROW,
+    MC_MODE,
+    MC_ROW,
     NCOL,
+    PAUSED,
     S_SLOPE,
     S_SLOPE_AT,
+    SCOL,
+    SM_ROW,
     SURF,
     SURF_STRIDE,
+    TIME_LIMIT,
 )
 from .loop import step
+from .machine import run_machine
 from .surfaces import gap_rate
 
 #: stats slots: how the run ended (RUN_*), the stop's code (a KernelError code, 0 for an
@@ -77,14 +96,21 @@ ST_LID = 10
 #: ... the period (impacts; 0: none) and the sum of its times of flight (s)
 ST_PERIOD = 11
 ST_PERIOD_TIME = 12
-NSTAT = 13
+#: ... the ball's motion state when the run ended (MC_MODE: 0 flight, 1 roll, 2 slide,
+#: 3 held; flight under the impacts model)
+ST_MODE = 13
+NSTAT = 14
 
 #: ST_STATUS: the run reached its impacts, its duration (the next impact comes after
 #: EN_UNTIL), stopped (a kernel stop, an arithmetic fault or an inelastic collapse), or
-#: has not ended (a GPU thread that stopped in a kernel stop leaves this)
+#: has not ended (a GPU thread that stopped in a kernel stop leaves this); under
+#: contact phases also: the ball came to rest relative to the boundary for good
+#: (``Status.AT_REST``), or stayed in contact for the contact span (``IN_CONTACT``)
 RUN_COMPLETE = 0.0
 RUN_TIME_LIMIT = 1.0
 RUN_FAILED = 2.0
+RUN_AT_REST = 3.0
+RUN_IN_CONTACT = 4.0
 RUN_PENDING = -1.0
 
 #: ring columns
@@ -260,6 +286,107 @@ def run_batch(ctxs, params, walls, rows, rings, stats, consts, transient, total,
         measure_guarded(
             ctxs[i], params[i], walls, rows[i], rings[i], stats[i], consts[i], transient, total,
             target,
+        )  # fmt: skip
+
+
+#: impact and contact rows of one call of the state machine: scratch that the
+#: trajectories of a range share, one after another (their rows are measured, then
+#: dropped). Any size gives the same trajectories: a call returns FULL between events.
+MACHINE_ROWS = 64
+MACHINE_CONTACTS = 64
+
+
+@inline
+def machine_call(ctx, p, walls, nears, out, cout, sout):
+    """One call of the state machine up to impact ``ctx[EN_TARGET]``, its impact rows
+    into ``out`` and its contact rows into ``cout`` from their starts (no samples:
+    ``sout`` is never written, the trajectory's ctx stands for the sample flight's):
+    the one place the batch spells :func:`~billiard.kernels.machine.run_machine`'s
+    arguments. Returns its status."""
+    ctx[MC_ROW] = 0.0
+    ctx[MC_CROW] = 0.0
+    ctx[SM_ROW] = 0.0
+    return run_machine(ctx, p, walls, nears, out, out.size // NCOL, cout, cout.size // CCOL,
+                       ctx, sout, 0)  # fmt: skip
+
+
+@jit
+def machine_guarded(ctx, p, walls, nears, out, cout, sout):
+    """:func:`machine_call`, a kernel stop or arithmetic fault caught: -1 (the stop's
+    code in EN_STOP; 0 for an arithmetic fault)."""
+    code = -1
+    try:
+        code = machine_call(ctx, p, walls, nears, out, cout, sout)
+    except Exception:  # noqa: BLE001 - numba catches any exception or none
+        code = -1
+    return code
+
+
+@inline
+def measure_phases(
+    ctx, p, walls, nears, out, cout, sout, ring, stats, consts, transient, total, target
+):
+    """:func:`measure` on the state machine, the loop of
+    :meth:`~billiard.engine.driver.Driver.run` (a collapse detected
+    after an impact stops the run; a paused phase goes on), each impact measured as it
+    comes. A ball at rest for good ends RUN_AT_REST, one in contact for the contact
+    span RUN_IN_CONTACT (neither with a period), another kernel stop RUN_FAILED (its
+    code in ST_CODE); ST_MODE follows the motion state."""
+    if stats[ST_STATUS] != RUN_PENDING:
+        return
+    stop = min(total, target)
+    while ctx[EN_IMPACTS] < stop:
+        if ctx[EN_FAULT] != 0.0:
+            stats[ST_STATUS] = RUN_FAILED
+            return
+        before = int(ctx[EN_IMPACTS])
+        ctx[EN_TARGET] = stop
+        code = machine_guarded(ctx, p, walls, nears, out, cout, sout)
+        # the rows written, a stop's included (a run hands them out before its stop)
+        for r in range(int(ctx[EN_IMPACTS]) - before):
+            n = before + r + 1
+            stats[ST_TOTAL] = n
+            if n > transient:
+                record(out[r * NCOL :], ring, stats)
+        stats[ST_MODE] = ctx[MC_MODE]
+        if code < 0:
+            if ctx[EN_STOP] == E_AT_REST:
+                stats[ST_STATUS] = RUN_AT_REST
+            else:
+                stats[ST_STATUS] = RUN_FAILED
+                stats[ST_CODE] = ctx[EN_STOP]
+            return
+        if code == TIME_LIMIT:
+            find_period(ring, stats, consts)
+            stats[ST_STATUS] = RUN_TIME_LIMIT
+            return
+        if code == IN_CONTACT:
+            stats[ST_STATUS] = RUN_IN_CONTACT
+            return
+        if code != PAUSED and ctx[EN_FAULT] != 0.0:
+            # an inelastic collapse, or contact phases of zero duration piled up
+            stats[ST_STATUS] = RUN_FAILED
+            return
+    if ctx[EN_IMPACTS] >= total:
+        find_period(ring, stats, consts)
+        stats[ST_STATUS] = RUN_COMPLETE
+
+
+@jit
+def run_batch_phases(
+    ctxs, params, walls, nears, rings, stats, consts, transient, total, target, lo, hi
+):
+    """:func:`run_batch` for trajectories of a contact-phases scene, on the state
+    machine (``walls``: the curve's wall functions and their first three derivatives,
+    ``nears`` the walls' nearest-point functions); the rows of each call go through
+    scratch made here, once per range. Compiled without the GIL."""
+    out = np.empty(MACHINE_ROWS * NCOL)
+    cout = np.empty(MACHINE_CONTACTS * CCOL)
+    sout = np.empty(SCOL)
+    for i in range(lo, hi):
+        measure_phases(
+            ctxs[i], params[i], walls, nears, out, cout, sout, rings[i], stats[i], consts[i],
+            transient, total, target,
         )  # fmt: skip
 
 

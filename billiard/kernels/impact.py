@@ -1,6 +1,8 @@
-"""Kane and Levinson's impact law with the low-velocity rule on the generated maps
-(:class:`billiard.models.impact.KaneLevinsonImpact` is this, run interpreted;
-:class:`billiard.models.impact.LowVelocityRule` describes the rule)."""
+"""The impact laws, chosen by their kind (``ctx[IM_KIND]``) in :func:`impact_law`, which
+every kernel calls: Kane and Levinson's law with the low-velocity rule on the generated
+maps (:class:`billiard.models.impact.KaneLevinsonImpact` is this, run interpreted;
+:class:`billiard.models.impact.LowVelocityRule` describes the rule); and the chatter
+series an impact starts."""
 
 from __future__ import annotations
 
@@ -9,16 +11,22 @@ import math
 from .ball import contact_velocity, impact_slip, impact_stick
 from .decorators import inline
 from .layout import (
+    E_KIND,
     ELASTIC,
+    EN_ERR_VALUE,
+    EN_STOP,
     IM_E,
     IM_EB,
     IM_K,
+    IM_KIND,
     IM_M,
     IM_MUK,
     IM_MUS,
     IM_R,
+    KANE_LEVINSON,
     SLIP,
     STICK,
+    KernelError,
 )
 
 #: Relative tolerance of the friction-cone test |Rt| <= mu_s Rn, in units of the
@@ -34,12 +42,28 @@ REGIME_RTOL = 16 * 2.0**-52
 
 
 @inline
+def impact_law(ctx, u1, u2, u3, z, vb1, vb2, pressing):
+    """The impact law of kind ``ctx[IM_KIND]``: post-impact (u1, u2, u3, Rt, Rn, regime
+    code, resting, wt, wn), as :func:`kane_levinson` documents them. Another law is a
+    function with these arguments and results and a branch here (docs/design.md, "How
+    to add a model"); a kind the kernels do not have stops with E_KIND."""
+    kind = ctx[IM_KIND]
+    if kind == KANE_LEVINSON:
+        return kane_levinson(ctx, u1, u2, u3, z, vb1, vb2, pressing)
+    ctx[EN_ERR_VALUE] = kind
+    ctx[EN_STOP] = E_KIND
+    raise KernelError(E_KIND)
+
+
+@inline
 def kane_levinson(ctx, u1, u2, u3, z, vb1, vb2, pressing):
     """Post-impact (u1, u2, u3, Rt, Rn, regime code, resting, wt, wn) for a ball with
     speeds (u1, u2, u3) hitting a boundary with tangent angle z moving at (vb1, vb2);
     ``pressing``: its relative acceleration pushes it into the surface. (wt, wn): the
     contact point's velocity relative to the boundary before the impact (m/s), which
-    the law starts from (the landing test and the record read it too)."""
+    the law starts from (the landing test and the record read it too). The impulse-
+    momentum equations are T. R. Kane and D. A. Levinson, *Dynamics: Theory and
+    Applications* (McGraw-Hill, 1985), derived in ``derivation/ball.py``."""
     m = ctx[IM_M]
     r = ctx[IM_R]
     k = ctx[IM_K]

@@ -32,6 +32,7 @@ __all__ = [
     "contact",
     "contact_equations",
     "contact_forces",
+    "drive",
     "flight",
     "impact",
     "kernel_errors",
@@ -52,6 +53,7 @@ def _load(name: str) -> ModuleType:
 
 
 layout = _load("layout")
+drive = _load("drive")
 ball = _load("ball")
 flight = _load("flight")
 surfaces = _load("surfaces")
@@ -90,6 +92,8 @@ def stop_text(code: int, value: float) -> str:
             f"the flight's step-size control failed (Dormand-Prince, 200 rejected steps "
             f"from tau = {value!r} s)"
         )
+    if code == layout.E_KIND:
+        return f"the kernels have no impact law of kind {value:g}"
     if code == layout.E_INVERSION:
         return f"offset-curve inversion did not converge at x = {value!r} m"
     if code == layout.E_DEPARTURES:
@@ -108,3 +112,9 @@ def stop_text(code: int, value: float) -> str:
 def stop(exc: Exception, ctx: list) -> SimulationError:
     """The :class:`SimulationError` for a ``KernelError`` out of a twin's kernel."""
     return SimulationError(stop_text(exc.args[0], ctx[layout.EN_ERR_VALUE]))
+
+
+def engine_modules() -> tuple[ModuleType, ModuleType, ModuleType]:
+    """The twin's state machine, impact loop and samples (loaded on first use: only a
+    run that asks for the interpreted engine needs them)."""
+    return _load("machine"), _load("loop"), _load("samples")

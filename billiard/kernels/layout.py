@@ -18,7 +18,10 @@ read; :data:`CTX` is the declaration, by which a reader finds a quantity by name
 
 Each model (flight, impact law, locator, contact phase, hold) keeps its coefficients in
 its own block, and the interpreted models keep their own ``ctx`` in this layout; the
-engine's is assembled from theirs (:mod:`billiard.engine.ctx`). ``contact.restitution`` and
+engine's is assembled from theirs (:mod:`billiard.engine.ctx`: each model's ``write``).
+A block's first slot names the model's kind where there is a choice (``LOC_KIND``,
+``FL_KIND``, ``IM_KIND``): the kernels branch on it, so every model with a kind runs
+compiled (:mod:`billiard.models.kinds`). ``contact.restitution`` and
 ``contact.elastic_below`` have one slot each, the impact law's (``IM_E``, ``IM_EB``),
 which the landing test of ``contact.model = "phases"`` reads too. No file stores a slot
 number.
@@ -128,6 +131,31 @@ class Layout:
             )
         return "\n".join(lines)
 
+    def spans(self) -> list[tuple[str, int, int, list[Slot]]]:
+        """(name, start, stop, quantities) of each block and of each quantity declared
+        outside one (named after itself), in order: the layout from start to end."""
+        spans: list[tuple[str, int, int, list[Slot]]] = []
+        blocks = iter(self.blocks)
+        block = next(blocks, None)
+        for s in self.slots:
+            if block is not None and block[1] <= s.index < block[2]:
+                if not spans or spans[-1][0] != block[0]:
+                    spans.append((block[0], block[1], block[2], []))
+                spans[-1][3].append(s)
+                if s.stop == block[2]:
+                    block = next(blocks, None)
+            else:
+                spans.append((s.name, s.index, s.stop, [s]))
+        return spans
+
+    def markdown(self) -> str:
+        """:meth:`describe` as a Markdown table (one row per quantity)."""
+        lines = ["| slots | constant | name | unit | meaning |", "| --- | --- | --- | --- | --- |"]
+        for s in self.slots:
+            cells = (_span(s.index, s.stop), f"`{s.constant}`", f"`{s.name}`", s.unit or "-")
+            lines.append(f"| {' | '.join(cells)} | {s.meaning.replace('|', '&#124;')} |")
+        return "\n".join(lines)
+
     def mismatches(self, namespace: Mapping[str, object]) -> list[str]:
         """The declared constants that ``namespace`` (a module's globals) does not
         bind to their index."""
@@ -145,15 +173,16 @@ SURFACE = Layout("surface")
 _ctx = CTX.add
 _surface = SURFACE.add
 
-# --- drive ------------------------------------------------------------------------
-CTX.begin("drive")
+# --- drive (kernels: drive.py; written by billiard.geometry.drive.Drive.write) ------
+DR = CTX.begin("drive")
 AMP = _ctx("AMP", "amplitude", 1, "m", "drive amplitude")
 OMEGA = _ctx("OMEGA", "omega", 1, "rad/s", "drive angular frequency")
 HORIZ = _ctx("HORIZ", "horizontal", 1, "", "1.0: horizontal drive, 0.0: vertical")
 DRIVE_ACCEL = _ctx("DRIVE_ACCEL", "peak_acceleration", 1, "m/s^2", "A w^2")
 
 # --- locator ----------------------------------------------------------------------
-CTX.begin("locator")
+DR_END = CTX.begin("locator")
+LOC_KIND = _ctx("LOC_KIND", "kind", 1, "", "LOC_EVENT or LOC_RK4: which search the run takes")
 G = _ctx("G", "gravity", 1, "m/s^2", "gravity (the flight's too)")
 H_FIRST = _ctx("H_FIRST", "first_substep", 1, "s", "first substep of a flight")
 H_LONGEST = _ctx("H_LONGEST", "longest_substep", 1, "s", "longest proven-clear substep")
@@ -163,8 +192,11 @@ SPLIT = _ctx("SPLIT", "split", 1, "", "1.0 when a substep had to be split")
 THETA0 = _ctx("THETA0", "theta0", 1, "rad", "drive angle at the start of the flight")
 NSURF = _ctx("NSURF", "surfaces", 1, "", "number of surfaces")
 
+LOC_EVENT = 0.0  # the event locator (method "event"; kernels: locate.py, loop.run_chunk)
+LOC_RK4 = 1.0  # the paper's fixed-step detection (method "rk4"; loop.run_chunk_fixed)
+
 # --- flight -------------------------------------------------------------------------
-CTX.begin("flight")
+FL = CTX.begin("flight")
 FL_KIND = _ctx("FL_KIND", "kind", 1, "", "FLIGHT_EXACT, FLIGHT_ADAPTIVE or FLIGHT_RK4")
 FL_M = _ctx("FL_M", "mass", 1, "kg", "mass")
 FL_CLIN = _ctx("FL_CLIN", "c_lin", 1, "N s/m", "Fowles linear drag")
@@ -179,6 +211,7 @@ FL_YA = _ctx("FL_YA", "ya", 4, "m, m/s", "(q1, q2, u1, u2) at FL_TA")
 FL_YB = _ctx("FL_YB", "yb", 4, "m, m/s", "(q1, q2, u1, u2) at FL_TB")
 FL_KA = _ctx("FL_KA", "ka", 2, "m/s^2", "acceleration at FL_TA")
 FL_KB = _ctx("FL_KB", "kb", 2, "m/s^2", "acceleration at FL_TB")
+FL_END = CTX.end()
 
 FLIGHT_EXACT = 0.0
 FLIGHT_ADAPTIVE = 1.0
@@ -187,7 +220,8 @@ FLIGHT_RK4 = 2.0  # the paper's fixed-step RK4 (method "rk4"; kernels: fixed_ste
 # --- impact law and ball ------------------------------------------------------------
 # contact.restitution and contact.elastic_below: the impact law's, and the landing test's
 # of contact.model = "phases" (loop.settles)
-CTX.begin("impact")
+IM = CTX.begin("impact")
+IM_KIND = _ctx("IM_KIND", "kind", 1, "", "the impact law: KANE_LEVINSON")
 IM_M = _ctx("IM_M", "mass", 1, "kg", "mass")
 IM_R = _ctx("IM_R", "radius", 1, "m", "radius")
 IM_K = _ctx("IM_K", "inertia_factor", 1, "", "inertia factor I / (m r^2)")
@@ -195,6 +229,10 @@ IM_E = _ctx("IM_E", "restitution", 1, "", "Newton's coefficient of restitution")
 IM_MUS = _ctx("IM_MUS", "mu_static", 1, "", "static friction")
 IM_MUK = _ctx("IM_MUK", "mu_kinetic", 1, "", "kinetic friction")
 IM_EB = _ctx("IM_EB", "elastic_below", 1, "m/s", "low-velocity threshold; the landing speed")
+IM_END = CTX.end()
+
+# the kinds (kernels: impact.impact_law; models: billiard.models.kinds)
+KANE_LEVINSON = 0.0  # Kane and Levinson's law with the low-velocity rule (impact.py)
 
 # --- engine state -------------------------------------------------------------------
 CTX.begin("engine")
@@ -418,6 +456,36 @@ MC_FLIGHT_FROM = _ctx("MC_FLIGHT_FROM", "flight_from", 1, "s", "the ball's time 
 # a flight's contact without impulse under contact phases (loop.impact): no row, no
 # impact counted; the ball goes on from it (or lands)
 EN_NO_ROW = _ctx("EN_NO_ROW", "no_row", 1, "", "1.0: the last contact gave no impulse (no row)")
+MC_HOLD_ON = _ctx("MC_HOLD_ON", "hold_on", 1, "", "a hold under way between two calls: 1 on")
+EN_ONE = _ctx("EN_ONE", "one_flight", 1, "", "1.0: run_chunk returns after each flight (FLOWN)")
+CTX.end()
+
+# --- trajectory samples (run --sample; kernels: samples.py, machine.py) --------------
+# Samples at t0 + k dt from the run's start, written as rows of SCOL floats into the
+# machine's sample buffer: from the flight's own closed form or integrator restarted at
+# the flight's start (a second flight state, the sample ctx, ``sctx``), from a phase's
+# dense output, from a hold's spin law. A flight's samples are written when it ends, up
+# to its end; an emission that fills the buffer stays pending (SM_PENDING) and goes on
+# at the next call.
+CTX.begin("samples")
+SM_DT = _ctx("SM_DT", "dt", 1, "s", "sample interval (0: no samples)")
+SM_T0 = _ctx("SM_T0", "t0", 1, "s", "time of sample 0 (the run's start)")
+SM_K = _ctx("SM_K", "count", 1, "", "samples reported so far (engine state)")
+SM_GEN = _ctx("SM_GEN", "next_k", 1, "", "index of the phase's or hold's next sample")
+SM_ROW = _ctx("SM_ROW", "row", 1, "", "sample rows written in this call")
+SM_MARK = _ctx("SM_MARK", "mark", 1, "", "the count at the phase's or chatter's start")
+SM_PENDING = _ctx("SM_PENDING", "pending", 1, "", "an emission under way: SRC_FLIGHT, SRC_CHATTER")
+SM_DONE = _ctx("SM_DONE", "chatter_done", 1, "", "1.0: the chatter's samples are written")
+SM_AFTER = _ctx("SM_AFTER", "after", 1, "", "the flight's status, returned once its samples are")
+SM_FROM = _ctx("SM_FROM", "from", 1, "s", "the emission: from ...")
+SM_TO = _ctx("SM_TO", "to", 1, "s", "... to")
+SM_BALL = _ctx("SM_BALL", "ball", 7, "", "the flight's start: t, theta, q1, q2, u1, u2, u3")
+SM_REACHED = _ctx("SM_REACHED", "reached", 1, "s", "the sample flight's integration reached")
+# the rk4 flight's last step in the sample ctx (RK4Flight keeps them on the object)
+SF_TA = _ctx("SF_TA", "rk4_ta", 1, "s", "sample ctx, rk4: the last step's start ...")
+SF_TB = _ctx("SF_TB", "rk4_tb", 1, "s", "... and end")
+SF_YA = _ctx("SF_YA", "rk4_ya", 4, "m, m/s", "... the state at its start ...")
+SF_YB = _ctx("SF_YB", "rk4_yb", 4, "m, m/s", "... and at its end")
 CTX.end()
 
 SIZE = CTX.size
@@ -426,6 +494,42 @@ SIZE = CTX.size
 def describe() -> str:
     """The state vector's layout and a surface block's, as tables."""
     return f"{CTX.describe()}\n\n{SURFACE.describe()}"
+
+
+def _span(start: int, stop: int) -> str:
+    return str(start) if stop == start + 1 else f"{start}-{stop - 1}"
+
+
+def markdown() -> str:
+    """:func:`describe` in Markdown, the state vector's section of
+    ``docs/compiled-engine.md`` (a test checks that the page holds it): the blocks, then
+    every quantity of ``ctx`` and of a surface's block."""
+    rows = []
+    for name, start, stop, slots in CTX.spans():
+        # a block lists its quantities; a quantity outside one says what it holds
+        held = [s.name.removeprefix(f"{name}.") for s in slots]
+        what = slots[0].meaning if held == [name] else ", ".join(held)
+        rows.append(f"| {name} | {_span(start, stop)} | {what} |")
+    return "\n".join(
+        [
+            f"`ctx` holds {SIZE:,} slots; a surface's block, {SURF_STRIDE} "
+            f"(`SURF` holds {MAX_SURFACES} of them).",
+            "",
+            "| block | slots | quantities |",
+            "| --- | --- | --- |",
+            *rows,
+            "",
+            "<details><summary>Every quantity of <code>ctx</code></summary>",
+            "",
+            CTX.markdown(),
+            "",
+            "</details>",
+            "",
+            "A surface's block (offsets from the block's start, `S_*`):",
+            "",
+            SURFACE.markdown(),
+        ]
+    )
 
 
 # --- rows ---------------------------------------------------------------------------
@@ -447,6 +551,13 @@ LAND = 4  # the last row's impact settles on a wall (EN_LAST_J, EN_LAST_S, EN_LA
 PAUSED = 5  # a long phase paused between two steps (it goes on at the next call)
 IN_CONTACT = 6  # no impact for run.contact_span (MC_FINAL: the time)
 CONTACTS_FULL = 7  # the contact rows are full
+SAMPLES_FULL = 8  # the sample rows are full (an emission may be pending)
+FLOWN = 9  # run_chunk with EN_ONE: one flight done (an impact or a contact without impulse)
+
+# --- trajectory samples -----------------------------------------------------------------
+SCOL = 8  # t, q1, q2, u1, u2, u3, energy, mode (MC_MODE code)
+SRC_FLIGHT = 1.0  # samples of a free flight from SM_BALL
+SRC_CHATTER = 2.0  # samples of a ball landing at the end of a summed chatter series
 
 # --- motion states (MC_MODE) --------------------------------------------------------
 M_FLIGHT = 0.0
@@ -493,6 +604,7 @@ E_DEPARTURES = 11  # rk4: DEPARTURE_LIMIT departures in a row (the step, s, in E
 E_FOOT = 12  # rk4: Newton failed from both starts: the global nearest point at RK_ASK
 E_PHASE_NON_FINITE = 13  # a non-finite state at a phase's end (MC_FINAL: the time)
 E_LEFT = 14  # a phase left the container's range of x (EN_ERR_VALUE: s; MC_FINAL: t)
+E_KIND = 15  # a model kind (IM_KIND) the kernels do not have (EN_ERR_VALUE: the kind)
 
 
 class KernelError(Exception):

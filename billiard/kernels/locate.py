@@ -12,8 +12,8 @@ import math
 from . import flight
 from .decorators import inline
 from .decorators import ulp as _ulp
+from .drive import accel_to_boundary_frame, to_boundary_frame
 from .layout import (
-    AMP,
     DRIVE_ACCEL,
     E_EXTREMUM,
     E_NO_IMPACT,
@@ -98,23 +98,13 @@ def ulp(x):
 @inline
 def relative(ctx, tau, q1, q2, u1, u2):
     """Centre position and velocity relative to the boundary at flight time tau."""
-    theta = ctx[THETA0] + ctx[OMEGA] * tau
-    a = ctx[AMP]
-    d = a * math.sin(theta)
-    v = a * ctx[OMEGA] * math.cos(theta)
-    if ctx[HORIZ] != 0.0:
-        return q1 - d, q2, u1 - v, u2
-    return q1, q2 - d, u1, u2 - v
+    return to_boundary_frame(ctx, ctx[THETA0] + ctx[OMEGA] * tau, q1, q2, u1, u2)
 
 
 @inline
 def relative_acceleration(ctx, tau, u1, u2):
     a1, a2 = flight.acceleration(ctx, u1, u2)
-    # the boundary accelerates by -A w^2 sin(theta) along the drive
-    ab = -ctx[DRIVE_ACCEL] * math.sin(ctx[THETA0] + ctx[OMEGA] * tau)
-    if ctx[HORIZ] != 0.0:
-        return a1 - ab, a2
-    return a1, a2 - ab
+    return accel_to_boundary_frame(ctx, ctx[THETA0] + ctx[OMEGA] * tau, a1, a2)
 
 
 @inline

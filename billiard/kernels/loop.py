@@ -11,9 +11,9 @@ import math
 from . import fixed_step, flight
 from .ball import energy, frame_velocity
 from .decorators import borrow, inline, jit
-from .impact import chatter_tail, kane_levinson, rebound_settles
+from .drive import accel_to_boundary_frame, boundary_velocity, to_boundary_frame
+from .impact import chatter_tail, impact_law, rebound_settles
 from .layout import (
-    AMP,
     COLLAPSE,
     COUNTS,
     DONE,
@@ -33,6 +33,7 @@ from .layout import (
     EN_LAST_S,
     EN_LAST_WN,
     EN_NO_ROW,
+    EN_ONE,
     EN_Q1,
     EN_Q2,
     EN_Q3,
@@ -49,8 +50,8 @@ from .layout import (
     EN_UNTIL,
     EN_ZERO,
     ESCAPE,
+    FLOWN,
     FULL,
-    HORIZ,
     IM_E,
     IM_EB,
     IM_K,
@@ -59,6 +60,8 @@ from .layout import (
     LAND,
     LID,
     LID_LABEL,
+    LOC_KIND,
+    LOC_RK4,
     MC_LAST_IMPACT,
     NCOL,
     OMEGA,
@@ -101,28 +104,12 @@ def pressing(ctx, p, walls, j, theta, q1, q2, u1, u2):
 
 
 @inline
-def boundary_frame(ctx, theta, q1, q2, u1, u2):
-    """(px, py, vx, vy): the centre's position (m) and velocity (m/s) relative to the
-    boundary at drive angle theta (``Drive.to_boundary_frame``)."""
-    a = ctx[AMP]
-    d = a * math.sin(theta)
-    v = a * ctx[OMEGA] * math.cos(theta)
-    if ctx[HORIZ] != 0.0:
-        return q1 - d, q2, u1 - v, u2
-    return q1, q2 - d, u1, u2 - v
-
-
-@inline
 def gap_acceleration(ctx, p, walls, j, theta, q1, q2, u1, u2):
     """d2G/dt2 (m/s^2) of surface j for the ball in free flight: negative when its
     acceleration relative to the boundary pushes it into the surface."""
-    px, py, vx, vy = boundary_frame(ctx, theta, q1, q2, u1, u2)
+    px, py, vx, vy = to_boundary_frame(ctx, theta, q1, q2, u1, u2)
     a1, a2 = flight.acceleration(ctx, u1, u2)
-    ab = -ctx[AMP] * ctx[OMEGA] * ctx[OMEGA] * math.sin(theta)
-    if ctx[HORIZ] != 0.0:
-        ax, ay = a1 - ab, a2
-    else:
-        ax, ay = a1, a2 - ab
+    ax, ay = accel_to_boundary_frame(ctx, theta, a1, a2)
     return gap_accel(ctx, p, walls, j, px, py, vx, vy, ax, ay)
 
 
@@ -173,17 +160,12 @@ def impact(ctx, p, walls, out, row, tau, j, q1, q2, u1, u2, theta, s, z):
         ctx[EN_STOP] = E_ESCAPED
         raise KernelError(E_ESCAPED)
     q3 = ctx[EN_Q3] + u3 * tau
-    v = ctx[AMP] * ctx[OMEGA] * math.cos(theta)
-    if ctx[HORIZ] != 0.0:
-        vb1, vb2 = v, 0.0
-    else:
-        vb1, vb2 = 0.0, v
+    vb1, vb2 = boundary_velocity(ctx, theta)
     accel = -gap_acceleration(ctx, p, walls, j, theta, q1, q2, u1, u2)
     # under contact phases a lying ball lands or reflects: the low-velocity rule's
     # relaunch (which adds energy) is the impacts model's alone
     press = accel > 0.0 and ctx[EN_LAND_ON] == 0.0
-    n1, n2, n3, rt, rn, regime, resting, _, wn = kane_levinson(ctx, u1, u2, u3, z, vb1, vb2,
-                                                               press)  # fmt: skip
+    n1, n2, n3, rt, rn, regime, resting, _, wn = impact_law(ctx, u1, u2, u3, z, vb1, vb2, press)
     u4, un = frame_velocity(n1, n2, z)
     m, r, k = ctx[IM_M], ctx[IM_R], ctx[IM_K]
     e = energy(q2, n1, n2, n3, m, r, k, ctx[G])
@@ -300,7 +282,7 @@ def no_impulse(ctx, t, theta, q1, q2, u1, u2, u3, q3, total, error, tau, j):
 def settles(ctx, j, kind, s, wn, regime, accel):
     """After an impact on surface j at s with the normal velocity wn (m/s) of the
     contact point relative to the boundary before it: does the
-    chattering it starts settle (``ContactPhases._settles``: an inelastic contact with a
+    chattering it starts settle (an inelastic contact with a
     wall whose rebound speed e |wn| is at most the landing speed, or the low-velocity
     rule applied; e and the landing speed are the impact law's IM_E and IM_EB), or may
     its tail be summed (``chatter_tail``, ``accel`` the free flight's acceleration into
@@ -380,4 +362,18 @@ def chunk_ends(ctx):
         return COLLAPSE
     if ctx[EN_SETTLES] != 0.0:
         return LAND
+    if ctx[EN_ONE] != 0.0:
+        # the state machine samples each flight when it ends (machine.run_machine)
+        return FLOWN
     return -1
+
+
+@jit
+def run_flights(ctx, p, walls, nears, out, rows):
+    """The state machine's flights: :func:`run_chunk_fixed` for the paper's fixed-step
+    detection (``ctx[LOC_KIND]`` = LOC_RK4; ``nears``: the walls' nearest-point
+    functions), else :func:`run_chunk` (the locator chosen by its kind, as the flight
+    model is by FL_KIND)."""
+    if ctx[LOC_KIND] == LOC_RK4:
+        return run_chunk_fixed(ctx, p, walls, nears, out, rows)
+    return run_chunk(ctx, p, walls, out, rows)

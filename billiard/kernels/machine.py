@@ -1,16 +1,17 @@
-"""The trajectory state machine of ``contact.model = "phases"``: one compiled loop that
-takes a ball through flight, impact, landing (the chatter series summed), rolling,
-sliding and being held by two walls, lift-off and back to flight, writing a row per
-impact (``out``, the columns of collisions.csv) and a row per finished or cut contact
-phase (``cout``, :data:`~billiard.kernels.layout.CCOL` floats: contacts.csv), and
+"""The engine: one compiled loop, the trajectory state machine, that advances every
+scene. It takes a ball through flight, impact, landing (the chatter series summed),
+rolling, sliding and being held by two walls, lift-off and back to flight, writing a
+row per impact (``out``, the columns of collisions.csv), a row per finished or cut
+contact phase (``cout``, :data:`~billiard.kernels.layout.CCOL` floats: contacts.csv)
+and a row per trajectory sample (``sout``, :mod:`billiard.kernels.samples`), and
 returning to Python only when a buffer is full, the run's impact count or time limit is
 reached, a long phase pauses (every :data:`PAUSE_STEPS` steps, so that a stop request
-is seen), a status ends the run, or a documented stop raises ``KernelError``.
+is seen), a status ends the run, or a documented stop raises ``KernelError``. Under
+``contact.model = "impacts"`` (no landing) it is a loop over the flights alone.
 
-It is the engine's contact-phase logic (:mod:`billiard.engine.contact_phases`, which
-runs it interpreted for trajectory samples and the rk4 method) over the state vector:
-every operation the same, in the same order, so both give the same bits. The flights
-between phases are :func:`billiard.kernels.loop.run_chunk`, a phase
+Python (:mod:`billiard.engine.driver`) configures it and calls it in chunks; the same
+source runs interpreted under ``NUMBA_DISABLE_JIT=1`` or without numba, bit for bit.
+The flights are :func:`billiard.kernels.loop.run_chunk` (or ``run_chunk_fixed``), a phase
 :func:`billiard.kernels.contact.run_phase`, a hold :func:`billiard.kernels.vertex.run_hold`:
 compiled functions of their own, which this loop calls (and numba compiles once).
 
@@ -28,19 +29,21 @@ import math
 from .ball import energy, frame_velocity
 from .contact import pmax, pmin, run_phase
 from .contact_equations import centre_state, roll_spin, s_dot_of_velocity, slip_velocity
-from .contact_forces import boundary, forces
+from .contact_forces import forces
 from .decorators import borrow, inline, jit
+from .drive import boundary_motion as boundary
+from .drive import displacement, to_lab_frame
+from .drive import to_boundary_frame as boundary_frame
 from .impact import (
     CHATTER_TAIL,
     NOT_SUMMED,
     chatter_bounded,
     chatter_period,
     chatter_time,
-    kane_levinson,
+    impact_law,
     rebound_settles,
 )
 from .layout import (
-    AMP,
     CCOL,
     COLLAPSE,
     CONTACTS_FULL,
@@ -61,6 +64,7 @@ from .layout import (
     EN_LAST_REGIME,
     EN_LAST_S,
     EN_LAST_WN,
+    EN_ONE,
     EN_Q1,
     EN_Q2,
     EN_Q3,
@@ -83,6 +87,7 @@ from .layout import (
     END_SLIP,
     END_WALL_END,
     ESCAPE,
+    FLOWN,
     FULL,
     HORIZ,
     IM_E,
@@ -104,6 +109,7 @@ from .layout import (
     MC_FINAL,
     MC_FLIGHT_FROM,
     MC_FLYING,
+    MC_HOLD_ON,
     MC_LAST_IMPACT,
     MC_MODE,
     MC_PHASE_ON,
@@ -132,6 +138,8 @@ from .layout import (
     PH_PAUSE_T,
     PH_R,
     PH_RSINCE,
+    PH_SAMPLE_T,
+    PH_SAMPLE_Y,
     PH_SGN,
     PH_STEPS,
     PH_SURF,
@@ -141,13 +149,26 @@ from .layout import (
     PH_Y,
     PHASE_LIMIT,
     PHASE_PAUSE,
+    PHASE_SAMPLE,
     ROLL,
     S_KIND,
     S_SLOPE,
     S_SLOPE_AT,
     S_WALL,
     S_WS,
+    SAMPLES_FULL,
     SLIDE,
+    SM_AFTER,
+    SM_DONE,
+    SM_DT,
+    SM_FROM,
+    SM_GEN,
+    SM_K,
+    SM_MARK,
+    SM_PENDING,
+    SM_ROW,
+    SM_TO,
+    SRC_CHATTER,
     SURF,
     SURF_STRIDE,
     TIME_LIMIT,
@@ -155,6 +176,8 @@ from .layout import (
     VX_KEEPS,
     VX_LIMIT,
     VX_NEXT,
+    VX_SAMPLE_T,
+    VX_SAMPLE_W,
     VX_THETA0,
     VX_W,
     VX_W_END,
@@ -164,20 +187,27 @@ from .layout import (
     KernelError,
 )
 from .loop import (
-    boundary_frame,
     compensated_add,
     remember_impact,
-    run_chunk,
+    run_flights,
     set_ball,
     write_row,
 )
 from .rules import COLLAPSE_COUNT, ZERO_FLIGHT_LIMIT
+from .samples import (
+    flight_samples,
+    sample_time,
+    save_flight_start,
+    start_flight_samples,
+    write_sample,
+)
 from .surfaces import contact
 from .vertex import forces as hold_forces
 from .vertex import held_spin, run_hold, sign
 
-#: Normal speed (m/s) a ball leaving a wall is given (see
-#: :data:`billiard.engine.contact_phases.LIFT_OFF_SPEED`).
+#: Normal speed (m/s) a ball leaving a wall at lift-off is given, far below any speed
+#: resolved (it moves the ball by 1e-12 m per second of flight): rounding could
+#: otherwise make the flight touch the wall again at once.
 LIFT_OFF_SPEED = 1e-6
 #: accepted steps of a phase between two returns to Python (a stop request is looked
 #: at, progress reported): some milliseconds
@@ -192,14 +222,6 @@ PHASE_CUT = 3.0
 
 
 # ---------------------------------------------------------------------- kinematics
-
-
-@inline
-def displacement(ctx, theta):
-    """The boundary's displacement (m) along the drive's axis at drive angle theta (as
-    :class:`billiard.geometry.drive.Drive` computes it; its velocity:
-    :func:`~billiard.kernels.contact_forces.boundary`)."""
-    return ctx[AMP] * math.sin(theta)
 
 
 @jit
@@ -310,6 +332,81 @@ def to_flight(ctx):
         ctx[MC_CONTACT + i] = 0.0
 
 
+# ---------------------------------------------------------------------- samples
+
+
+@inline
+def sampling(ctx):
+    return ctx[SM_DT] > 0.0
+
+
+@inline
+def next_sample(ctx, t0, until):
+    """The next sample time of a phase or hold that started at t0, as an offset from t0
+    (s; inf: none up to ``until``), from sample SM_GEN on (samples before t0 skipped)."""
+    if not sampling(ctx):
+        return math.inf
+    k = ctx[SM_GEN]
+    while True:
+        ts = sample_time(ctx, k)
+        if ts > until:
+            ctx[SM_GEN] = k
+            return math.inf
+        k += 1.0
+        if ts >= t0:
+            ctx[SM_GEN] = k
+            return ts - t0
+
+
+@inline
+def first_sample(ctx, t0, until):
+    """Where a phase or hold starting at t0 begins its samples: the count at its start
+    (a cut goes back to it) and its first sample time (offset from t0)."""
+    ctx[SM_MARK] = ctx[SM_K]
+    ctx[SM_GEN] = ctx[SM_K]
+    return next_sample(ctx, t0, until)
+
+
+@jit
+def chatter_samples(ctx, p, walls, sout, srows):
+    """The pending samples in [SM_FROM, SM_TO] of a ball that landed at the end of a
+    summed chatter series, before the phase starts: the state at the impact, carried by
+    the boundary, its spin kept (mode flight). True when all are written."""
+    w = wall_of(ctx, int(ctx[MC_CONTACT]))
+    s, sd = ctx[MC_CONTACT + 1], ctx[MC_CONTACT + 2]
+    roll = ctx[MC_MODE] == M_ROLL
+    t, theta, u3 = ctx[EN_T], ctx[EN_THETA], ctx[EN_U3]
+    while True:
+        ts = sample_time(ctx, ctx[SM_K])
+        if ts > ctx[SM_TO]:
+            ctx[SM_PENDING] = 0.0
+            return True
+        if ts < ctx[SM_FROM]:
+            ctx[SM_K] += 1.0
+            continue
+        if int(ctx[SM_ROW]) == srows:
+            return False
+        angle = theta + ctx[OMEGA] * (ts - t)
+        q1, q2, u1, u2, _ = lab_state(ctx, p, walls, w, angle, s, sd, u3, roll)
+        write_sample(ctx, sout, ts, q1, q2, u1, u2, u3, M_FLIGHT)
+
+
+@jit
+def pending_samples(ctx, p, walls, sctx, sout, srows):
+    """Go on with a pending emission: -1 when done and the run goes on, else the status
+    to return (SAMPLES_FULL while the buffer is full, then the flight's own)."""
+    if ctx[SM_PENDING] == SRC_CHATTER:
+        if not chatter_samples(ctx, p, walls, sout, srows):
+            return SAMPLES_FULL
+        ctx[SM_DONE] = 1.0
+        return -1
+    if not flight_samples(ctx, sctx, sout, srows):
+        return SAMPLES_FULL
+    after = int(ctx[SM_AFTER])
+    ctx[SM_AFTER] = -1.0
+    return after
+
+
 # ---------------------------------------------------------------------- landing
 
 
@@ -338,8 +435,11 @@ def summed(ctx, p, walls, w, mode, sgn, theta, s, sd, v, e):
 
 @inline
 def leave_wall(ctx, p, walls, w, s, theta):
-    """``ContactPhases._leave_wall``: a settling impact where the wall does not press
-    the ball leaves at least at LIFT_OFF_SPEED along the wall's normal."""
+    """A settling impact where the wall does not press the ball (N <= 0): it flies on.
+    Leaving at a relative normal speed below LIFT_OFF_SPEED (after an impact with e = 0,
+    or a grazing one), rounding could make the flight touch the wall again at once: an
+    impact of zero duration, again and again at one instant. It leaves at
+    LIFT_OFF_SPEED along the wall's normal, as at a lift-off."""
     fp = walls[1][w](s, p)
     c = 1.0 / math.sqrt(1.0 + fp * fp)
     nx, ny = -fp * c, c
@@ -354,9 +454,21 @@ def leave_wall(ctx, p, walls, w, s, theta):
 
 @jit
 def land(ctx, p, walls, j, s, theta, u1, u2, u3, wn, elastic, tail, t):
-    """``ContactPhases._land`` after an impact at t on surface j at s, the speeds
-    (u1, u2, u3) after it, the normal speed wn before it; ``tail``: the free flight's
-    test of the chatter's tail (1 made and met, 0 made and not met, -1 not made)."""
+    """After an impact at t on surface j at s (the speeds (u1, u2, u3) after it, the
+    normal speed wn before it): enter contact while the wall presses the ball (the
+    contact mode's N > 0) when either
+
+    * the chatter series it starts may be summed (:func:`summed`: it ends within 1e-6
+      of a drive period, and the bound on its end time is within ``CHATTER_TOL`` of a
+      period): the ball enters contact at that time, t + 2 v / (a (1 - e)), v = e |wn|
+      the rebound speed and a = N / m (the phase starts there: :func:`end_chatter`),
+      whatever ``contact.elastic_below`` is;
+    * or the rebound speed e |wn| is at most the landing speed
+      (``contact.elastic_below``, IM_EB): the ball enters contact at this impact, the
+      chattering it skips recorded as the phase's ``t_settle``, t + 2 v / (a (1 - e)).
+
+    ``tail``: the free flight's test of the chatter's tail (1 made and met, 0 made and
+    not met, -1 not made: after a contact phase's impact)."""
     e = ctx[IM_E]
     slow = rebound_settles(e, ctx[IM_EB], wn, elastic)
     if not is_wall(ctx, j) or e >= 1.0 or not (slow or tail != 0):
@@ -384,8 +496,11 @@ def land(ctx, p, walls, j, s, theta, u1, u2, u3, wn, elastic, tail, t):
 
 @jit
 def end_chatter(ctx, p, walls, until):
-    """``ContactPhases._end_chatter`` (no samples): move a ball that landed at the end
-    of a summed chatter series there; False when that is after ``until``."""
+    """A ball that landed at the end of a summed chatter series (its phase starts later
+    than the impact it is at): move it there, at contact abscissa s with tangential
+    speed sd and its spin, all as at the impact (:mod:`billiard.models.chatter`), the
+    boundary moved on (samples in between: :func:`chatter_samples`). False (the state
+    unchanged) when the series ends after ``until``."""
     t_start = ctx[MC_CONTACT + 4]
     if t_start > until:
         return False
@@ -436,8 +551,8 @@ def row_state(cout, o, q1, q2, u1, u2, u3):
 
 @inline
 def deadline(ctx, until):
-    """``ContactPhases._contact_deadline``: when a run without a time limit ends in
-    contact (s)."""
+    """The simulated time (s) at which a run without a time limit (``until`` = inf)
+    ends in contact: ``run.contact_span`` after the last impact; else inf."""
     if math.isfinite(until):
         return math.inf
     return ctx[MC_LAST_IMPACT] + ctx[MC_SPAN]
@@ -445,7 +560,9 @@ def deadline(ctx, until):
 
 @inline
 def end_phase(ctx, mode, t_start, tau, total, error):
-    """``ContactPhases._end_phase``: the clock and tallies at a phase's end."""
+    """The clock and the tallies at the end of a contact phase of ``tau`` seconds (the
+    new time is the compensated sum total + error); zero-length phases in a row are
+    counted like zero flights, a collapse."""
     t = total + error
     ctx[EN_CLOCK] = total
     ctx[EN_CLOCK_ERR] = error
@@ -462,7 +579,7 @@ def end_phase(ctx, mode, t_start, tau, total, error):
 
 @inline
 def enter_hold(ctx, a, b, t, settle, spin):
-    """``ContactPhases._enter_hold``: the ball moves with the boundary, held by walls
+    """Hold the ball: it moves with the boundary, held by walls
     a and b at its present centre, with spin ``spin``
     (:func:`~billiard.kernels.vertex.held_spin`)."""
     theta = ctx[EN_THETA]
@@ -476,9 +593,28 @@ def enter_hold(ctx, a, b, t, settle, spin):
 
 @inline
 def hold_after(ctx, p, walls, index, j, theta, u3, wn, elastic, t, impulse, instant):
-    """``ContactPhases._hold_after``: after a contact with wall j (an impact, or one
-    without ``impulse``; ``instant``: at the start of the phase on wall ``index``) of
-    a ball in contact with wall ``index``, is it held by both (then held)?"""
+    """After a contact with wall j of a ball in contact with wall ``index`` (an
+    impact, or with ``impulse`` False a contact that gave none; ``instant``: the
+    phase on wall ``index`` lasted no time, it met wall j where it began): is it held
+    by both? Yes when both walls press it and
+
+    * the rebound speed is below the landing speed (as for landing on one wall), or
+    * the phase lasted no time: the ball meets one wall and the other at one
+      instant, a series of impacts at that instant that takes its velocity relative
+      to the boundary to zero (e < 1: each impact shrinks its normal component
+      towards one wall by e, and the two normals span the plane), or
+    * the chattering between the two walls would end within ``CHATTER_TAIL`` of a
+      drive period: v = e |wn| (|wn|, the speed at which the ball separates from
+      wall j, after a contact without impulse) with 2 v <= CHATTER_TAIL P a (1 - e),
+      a the smaller wall's normal force per unit mass, the bound of a series of
+      rebounds each turned back by at least a (the time of a single wall's series,
+      :mod:`billiard.models.chatter`; recorded as the phase's ``t_settle``).
+
+    The last two hold whatever ``contact.elastic_below`` is. The chattering this
+    skips would carry the ball's velocity relative to the boundary, at most v, to
+    zero: it is dropped (never energy created), the spin is kept. Without them a
+    ball pressed into a vertex with ``elastic_below = 0`` meets one wall and the
+    other at one instant, again and again, until the collapse stop."""
     if not is_wall(ctx, j):
         return False
     e = ctx[IM_E]
@@ -505,7 +641,7 @@ def hold_after(ctx, p, walls, index, j, theta, u3, wn, elastic, t, impulse, inst
 
 @inline
 def continue_on(ctx, p, walls, j, px, theta, u3, t):
-    """``ContactPhases._continue_on``: released by the other wall, roll or slide on
+    """Released by the other wall, roll or slide on
     wall j from rest relative to the boundary if it presses the ball."""
     s = contact_kept(ctx, p, walls, j, px)[0]
     w = wall_of(ctx, j)
@@ -517,19 +653,35 @@ def continue_on(ctx, p, walls, j, px, theta, u3, t):
 @inline
 def held_lab(ctx, theta, px, py):
     """(q1, q2, u1, u2) of a ball held at (px, py) in the boundary's frame."""
-    d = displacement(ctx, theta)
-    if ctx[HORIZ] == 1.0:
-        q1, q2 = px + d, py
-    else:
-        q1, q2 = px, py + d
+    q1, q2 = to_lab_frame(ctx, theta, px, py)
     u1, u2, _, _ = boundary(ctx, theta)
     return q1, q2, u1, u2
 
 
+@inline
+def hold_cut(ctx, cout, tau, u3):
+    """The row of the hold under way cut tau after its start with the spin u3
+    (``end`` = ``cut``); the engine's state and sample count stay at its start."""
+    a = int(ctx[MC_CONTACT])
+    b = int(ctx[MC_CONTACT + 1])
+    px, py = ctx[MC_CONTACT + 2], ctx[MC_CONTACT + 3]
+    theta0 = ctx[EN_THETA]
+    q1s, q2s, u1s, u2s = held_lab(ctx, theta0, px, py)
+    q1, q2, u1, u2 = held_lab(ctx, theta0 + ctx[OMEGA] * tau, px, py)
+    o = contact_row(ctx, cout, 1.0, ctx[MC_CONTACT + 4], ctx[EN_T] + tau, a, b, M_HELD,
+                    END_CUT, ctx[MC_CONTACT + 5])  # fmt: skip
+    row_state(cout, o + 9, q1s, q2s, u1s, u2s, ctx[EN_U3])
+    row_state(cout, o + 14, q1, q2, u1, u2, u3)
+    ctx[MC_HOLD_ON] = 0.0
+    if sampling(ctx):
+        ctx[SM_K] = ctx[SM_MARK]
+
+
 @jit
-def hold_step(ctx, p, walls, cout, until):
-    """``ContactPhases._hold_step``: the held ball to a release (-1: the run goes on),
-    or the status that ends the run."""
+def hold_step(ctx, p, walls, cout, until, sout, srows):
+    """The held ball to a release (-1: the run goes on),
+    or the status that ends the run (SAMPLES_FULL: the hold goes on at the next call;
+    PAUSED after a cut asked for by MC_PHASE_ON = PHASE_CUT)."""
     a = int(ctx[MC_CONTACT])
     b = int(ctx[MC_CONTACT + 1])
     px, py = ctx[MC_CONTACT + 2], ctx[MC_CONTACT + 3]
@@ -537,26 +689,41 @@ def hold_step(ctx, p, walls, cout, until):
     za = contact_kept(ctx, p, walls, a, px)[1]
     zb = contact_kept(ctx, p, walls, b, px)[1]
     t0, theta0, u3_0 = ctx[EN_T], ctx[EN_THETA], ctx[EN_U3]
-    end_at = deadline(ctx, until)
-    if t0 >= end_at:
-        ctx[MC_FINAL] = t0
-        return IN_CONTACT
-    ctx[VX_ZA] = za
-    ctx[VX_ZB] = zb
-    ctx[VX_THETA0] = theta0
-    ctx[VX_LIMIT] = until - t0
-    ctx[VX_W] = u3_0
-    ctx[VX_NEXT] = math.inf
-    # a new hold (a plain bool, True: a literal would compile run_hold once more)
-    status = run_hold(ctx, ctx[MC_MODE] == M_HELD)
     omega = ctx[OMEGA]
+    # a new hold (a plain bool: a literal would compile run_hold once more)
+    start = ctx[MC_HOLD_ON] == 0.0
+    if not start and ctx[MC_PHASE_ON] == PHASE_CUT:
+        # a stop request in a sampled hold: cut at its last sample
+        ctx[MC_PHASE_ON] = PHASE_OFF
+        hold_cut(ctx, cout, ctx[VX_SAMPLE_T], ctx[VX_SAMPLE_W])
+        return PAUSED
+    if start:
+        end_at = deadline(ctx, until)
+        if t0 >= end_at:
+            ctx[MC_FINAL] = t0
+            return IN_CONTACT
+        ctx[VX_ZA] = za
+        ctx[VX_ZB] = zb
+        ctx[VX_THETA0] = theta0
+        ctx[VX_LIMIT] = until - t0
+        ctx[VX_W] = u3_0
+        ctx[VX_NEXT] = first_sample(ctx, t0, until)
+    while True:
+        status = run_hold(ctx, start)
+        if status != PHASE_SAMPLE:
+            break
+        start = False
+        tau = ctx[VX_SAMPLE_T]
+        q1, q2, u1, u2 = held_lab(ctx, theta0 + omega * tau, px, py)
+        write_sample(ctx, sout, t0 + tau, q1, q2, u1, u2, ctx[VX_SAMPLE_W], M_HELD)
+        ctx[VX_NEXT] = next_sample(ctx, t0, until)
+        if int(ctx[SM_ROW]) == srows:
+            ctx[MC_HOLD_ON] = 1.0
+            return SAMPLES_FULL
+    ctx[MC_HOLD_ON] = 0.0
     q1s, q2s, u1s, u2s = held_lab(ctx, theta0, px, py)
     if status == PHASE_LIMIT:
-        tau = ctx[VX_LIMIT]
-        q1, q2, u1, u2 = held_lab(ctx, theta0 + omega * tau, px, py)
-        o = contact_row(ctx, cout, 1.0, t_start, t0 + tau, a, b, M_HELD, END_CUT, settle)
-        row_state(cout, o + 9, q1s, q2s, u1s, u2s, u3_0)
-        row_state(cout, o + 14, q1, q2, u1, u2, ctx[VX_W_END])
+        hold_cut(ctx, cout, ctx[VX_LIMIT], ctx[VX_W_END])
         return TIME_LIMIT
     tau = ctx[VX_END_T]
     total, error = compensated_add(ctx[EN_CLOCK], ctx[EN_CLOCK_ERR], tau)
@@ -589,7 +756,7 @@ def hold_step(ctx, p, walls, cout, until):
 
 @jit
 def impact_from_contact(ctx, p, walls, out, other, index, t, tau, theta, q3):
-    """``ContactPhases._impact_from_contact``: the ball in contact with wall ``index``
+    """The ball in contact with wall ``index``
     reaches surface ``other`` (numbered without ``index``): an impact, its row written
     (True), or a contact without impulse (False: no row, nothing counted)."""
     j = other if other < index else other + 1
@@ -606,7 +773,7 @@ def impact_from_contact(ctx, p, walls, out, other, index, t, tau, theta, q3):
     vb1, vb2, _, _ = boundary(ctx, theta)
     # a ball that reaches a second wall or the lid lands, is held or reflects: under
     # contact phases the low-velocity rule never relaunches it (that adds energy)
-    n1, n2, n3, rt, rn, regime, _, _, wn = kane_levinson(ctx, u1, u2, u3, z, vb1, vb2, False)
+    n1, n2, n3, rt, rn, regime, _, _, wn = impact_law(ctx, u1, u2, u3, z, vb1, vb2, False)
     elastic = regime == ELASTIC
     if rn == 0.0 and rt == 0.0:
         # no impulse: no impact (billiard.models.corner.is_impact)
@@ -634,11 +801,24 @@ def impact_from_contact(ctx, p, walls, out, other, index, t, tau, theta, q3):
 
 
 @jit
-def start_phase(ctx, p, walls, until):
-    """Set up the phase of the ball in contact (``ContactPhases._contact_step`` up to
-    ``run_phase``): -1, or the status that ends the run first."""
-    if ctx[EN_T] < ctx[MC_CONTACT + 4] and not end_chatter(ctx, p, walls, until):
-        return TIME_LIMIT
+def start_phase(ctx, p, walls, until, sout, srows):
+    """Set up the phase of the ball in contact (up to ``run_phase``): -1, or the status
+    that ends the run first."""
+    if ctx[EN_T] < ctx[MC_CONTACT + 4]:
+        if sampling(ctx) and ctx[SM_DONE] == 0.0:
+            # the samples up to the phase's start (see chatter_samples)
+            ctx[SM_MARK] = ctx[SM_K]
+            ctx[SM_FROM] = ctx[EN_T]
+            ctx[SM_TO] = pmin(ctx[MC_CONTACT + 4], until)
+            ctx[SM_PENDING] = SRC_CHATTER
+            if not chatter_samples(ctx, p, walls, sout, srows):
+                return SAMPLES_FULL
+        ctx[SM_DONE] = 0.0
+        if not end_chatter(ctx, p, walls, until):
+            if sampling(ctx):
+                # as the state, the sample count stays at the impact
+                ctx[SM_K] = ctx[SM_MARK]
+            return TIME_LIMIT
     t0 = ctx[EN_T]
     end_at = deadline(ctx, until)
     if t0 >= end_at:
@@ -658,7 +838,7 @@ def start_phase(ctx, p, walls, until):
     ctx[PH_Y + 1] = ctx[MC_CONTACT + 2]
     ctx[PH_Y + 2] = 0.0 if roll else ctx[EN_U3]
     ctx[PH_SURF] = float(j)
-    ctx[PH_NEXT] = math.inf
+    ctx[PH_NEXT] = first_sample(ctx, t0, until)
     ctx[PH_STEPS] = 0.0
     ctx[PH_PAUSE] = PAUSE_STEPS
     ctx[PH_PAUSE_T] = end_at - t0
@@ -686,6 +866,9 @@ def phase_cut(ctx, p, walls, cout, tau, y):
     q1, q2, u1, u2, u3 = lab_state(ctx, p, walls, w, theta, ctx[y], ctx[y + 1], ctx[y + 2], roll)
     row_state(cout, o + 14, q1, q2, u1, u2, u3)
     ctx[MC_PHASE_ON] = PHASE_OFF
+    if sampling(ctx):
+        # the phase's samples are no part of the state, which stays at its start
+        ctx[SM_K] = ctx[SM_MARK]
     return t_cut
 
 
@@ -715,7 +898,7 @@ def answer_pause(ctx, p, walls, cout, until):
 
 @jit
 def finish_phase(ctx, p, walls, out, cout, until, status):
-    """``ContactPhases._contact_step`` after ``run_phase``: the phase's end, its row,
+    """After ``run_phase``: the phase's end, its row,
     the transition (-1: the run goes on), or the status that ends the run."""
     ctx[MC_PHASE_ON] = PHASE_OFF
     if status == PHASE_LIMIT:
@@ -786,16 +969,29 @@ def finish_phase(ctx, p, walls, out, cout, until, status):
 
 
 @inline
-def contact_step(ctx, p, walls, out, cout, until):
+def phase_sample(ctx, p, walls, sout):
+    """The sample run_phase handed out (PH_SAMPLE_T after the phase's start)."""
+    w = wall_of(ctx, int(ctx[MC_CONTACT]))
+    mode = ctx[MC_MODE]
+    tau = ctx[PH_SAMPLE_T]
+    theta = ctx[PH_THETA0] + ctx[OMEGA] * tau
+    y = PH_SAMPLE_Y
+    q1, q2, u1, u2, u3 = lab_state(ctx, p, walls, w, theta, ctx[y], ctx[y + 1], ctx[y + 2],
+                                   mode == M_ROLL)  # fmt: skip
+    write_sample(ctx, sout, ctx[EN_T] + tau, q1, q2, u1, u2, u3, mode)
+
+
+@inline
+def contact_step(ctx, p, walls, out, cout, until, sout, srows):
     """A phase of the ball in contact with one wall, to its end or a pause: -1 when the
-    run goes on, else the status that ends this call (PAUSED: the phase goes on at the
-    next)."""
+    run goes on, else the status that ends this call (PAUSED, SAMPLES_FULL: the phase
+    goes on at the next)."""
     on = ctx[MC_PHASE_ON]
     if on == PHASE_CUT:
         phase_cut(ctx, p, walls, cout, ctx[PH_TAU], PH_Y)
         return PAUSED
     if on == PHASE_OFF:
-        code = start_phase(ctx, p, walls, until)
+        code = start_phase(ctx, p, walls, until, sout, srows)
         if code >= 0:
             return code
         ctx[MC_PHASE_ON] = PHASE_ON
@@ -804,7 +1000,17 @@ def contact_step(ctx, p, walls, out, cout, until):
         if code >= 0:
             return code
     # one call site, a plain bool (a literal would compile run_phase once more per value)
-    status = run_phase(ctx, p, walls, on == PHASE_OFF)
+    start = on == PHASE_OFF
+    while True:
+        status = run_phase(ctx, p, walls, start)
+        if status != PHASE_SAMPLE:
+            break
+        start = False
+        phase_sample(ctx, p, walls, sout)
+        ctx[PH_NEXT] = next_sample(ctx, ctx[EN_T], until)
+        if int(ctx[SM_ROW]) == srows:
+            # the phase goes on from its sample at the next call
+            return SAMPLES_FULL
     if status == PHASE_PAUSE:
         ctx[MC_PHASE_ON] = PHASE_PAUSED
         return PAUSED
@@ -812,22 +1018,30 @@ def contact_step(ctx, p, walls, out, cout, until):
 
 
 @jit
-def run_machine(ctx, p, walls, out, rows, cout, crows):
-    """Advance the trajectory until impact number ``ctx[EN_TARGET]`` (``rows`` impact
-    rows in ``out``, ``crows`` contact rows in ``cout``, counted in MC_ROW and MC_CROW
-    from zero at each call). ``walls`` = (f, f', f'', f''') of the curve's walls.
+def run_machine(ctx, p, walls, nears, out, rows, cout, crows, sctx, sout, srows):
+    """Advance the trajectory until impact number ``ctx[EN_TARGET]``: ``rows`` impact
+    rows in ``out``, ``crows`` contact rows in ``cout``, ``srows`` sample rows in
+    ``sout``, counted in MC_ROW, MC_CROW and SM_ROW, which the caller sets to zero
+    before a call. ``walls`` = (f, f', f'', f''') of the curve's walls, ``nears`` their
+    nearest-point functions (:func:`~billiard.kernels.loop.run_flights`, method rk4);
+    ``sctx`` is the sample flight's state
+    (:mod:`billiard.kernels.samples`; samples are made when ``ctx[SM_DT]`` > 0).
 
-    Returns a status: DONE, FULL, CONTACTS_FULL, TIME_LIMIT (``ctx[EN_UNTIL]`` comes
-    first), COLLAPSE (``ctx[EN_FAULT]``: 1 impacts piled up, 2 phases of zero duration),
-    IN_CONTACT (no impact for the contact span, at MC_FINAL) or PAUSED (a long phase,
-    or a phase cut by a stop request: MC_PHASE_ON). A documented stop raises
-    KernelError, the rows written so far counted."""
+    Returns a status: DONE, FULL, CONTACTS_FULL, SAMPLES_FULL, TIME_LIMIT
+    (``ctx[EN_UNTIL]`` comes first), COLLAPSE (``ctx[EN_FAULT]``: 1 impacts piled up,
+    2 phases of zero duration, 3 contacts without impulse piled up), IN_CONTACT (no
+    impact for the contact span, at MC_FINAL) or PAUSED (a long phase, or a phase cut
+    by a stop request: MC_PHASE_ON). A documented stop raises KernelError, the rows
+    written so far counted."""
     # the caller owns the arrays throughout: no reference counting inside
     ctx, p, out, cout = borrow(ctx), borrow(p), borrow(out), borrow(cout)
+    sctx, sout = borrow(sctx), borrow(sout)
     flight_walls = (walls[0], walls[1], walls[2])
-    ctx[MC_ROW] = 0.0
-    ctx[MC_CROW] = 0.0
     until = ctx[EN_UNTIL]
+    if ctx[SM_PENDING] != 0.0:
+        code = pending_samples(ctx, p, walls, sctx, sout, srows)
+        if code >= 0:
+            return code
     while ctx[EN_IMPACTS] < ctx[EN_TARGET]:
         row = int(ctx[MC_ROW])
         if row == rows:
@@ -839,7 +1053,12 @@ def run_machine(ctx, p, walls, out, rows, cout, crows):
             ctx[EN_SETTLES] = 0.0
             ctx[MC_FLYING] = 1.0
             ctx[MC_FLIGHT_FROM] = ctx[EN_T]
-            code, written = run_chunk(ctx, p, flight_walls, out[row * NCOL :], rows - row)
+            if sampling(ctx):
+                # one flight a call, sampled when it ends
+                ctx[EN_ONE] = 1.0
+                save_flight_start(ctx, ctx[EN_T], ctx[EN_THETA], ctx[EN_Q1], ctx[EN_Q2],
+                                  ctx[EN_U1], ctx[EN_U2], ctx[EN_U3])  # fmt: skip
+            code, written = run_flights(ctx, p, flight_walls, nears, out[row * NCOL :], rows - row)
             ctx[MC_FLYING] = 0.0
             ctx[MC_ROW] = float(row + written)
             if written > 0 or ctx[EN_T] != ctx[MC_FLIGHT_FROM]:
@@ -853,13 +1072,22 @@ def run_machine(ctx, p, walls, out, rows, cout, crows):
                 land(ctx, p, walls, j, ctx[EN_LAST_S], ctx[EN_THETA], ctx[EN_U1], ctx[EN_U2],
                      ctx[EN_U3], ctx[EN_LAST_WN], ctx[EN_LAST_REGIME] == ELASTIC, tail,
                      ctx[EN_T])  # fmt: skip
+            if sampling(ctx):
+                start_flight_samples(ctx, sctx, until if code == TIME_LIMIT else ctx[EN_T])
+                after = -1 if code == LAND or code == FLOWN else code
+                if not flight_samples(ctx, sctx, sout, srows):
+                    ctx[SM_AFTER] = float(after)
+                    return SAMPLES_FULL
+                if after >= 0:
+                    return after
+                continue
             if code != LAND:
                 return code
             continue
         if mode == M_HELD:
-            code = hold_step(ctx, p, walls, cout, until)
+            code = hold_step(ctx, p, walls, cout, until, sout, srows)
         else:
-            code = contact_step(ctx, p, walls, out, cout, until)
+            code = contact_step(ctx, p, walls, out, cout, until, sout, srows)
         if code >= 0:
             return code
         if ctx[EN_FAULT] != 0.0:

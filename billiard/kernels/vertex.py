@@ -27,14 +27,14 @@ from __future__ import annotations
 
 import math
 
+from . import drive
 from .contact import EVENT_TOL, pmin
-from .contact_forces import boundary
 from .decorators import borrow, inline, jit
 from .illinois import narrow, secant_point
 from .impact import CHATTER_TAIL, chatter_period
 from .layout import (
-    AMP,
     E_AT_REST,
+    EN_STOP,
     OMEGA,
     PH_CLIN,
     PH_CQUAD,
@@ -85,7 +85,7 @@ def forces(ctx, za, zb, theta, sigma):
     """(N_a, N_b): the normal forces (N) of the two walls, tangent angles za and zb (rad)
     at their contact points, at drive angle theta, spin sign sigma; -inf for both when
     the walls are parallel (they cannot hold the ball together)."""
-    vb1, vb2, ab1, ab2 = boundary(ctx, theta)
+    vb1, vb2, ab1, ab2 = drive.boundary_motion(ctx, theta)
     m = ctx[PH_M]
     drag = ctx[PH_CLIN] + ctx[PH_CQUAD] * math.sqrt(vb1 * vb1 + vb2 * vb2)
     # the centre moves with the boundary: m a_b = m g + D + contact forces
@@ -207,7 +207,7 @@ def begin(ctx):
     """Start a hold at tau = 0 (constants, VX_ZA, VX_ZB, VX_THETA0, VX_LIMIT, the spin in
     VX_W and the first sample time VX_NEXT set): its step, sign and rest bookkeeping."""
     omega = ctx[OMEGA]
-    static = ctx[AMP] == 0.0 or omega == 0.0
+    static = drive.static(ctx)
     sigma = sign(ctx[VX_W])
     ctx[VX_SIGMA] = sigma
     ctx[VX_H] = math.inf if static else 2.0 * math.pi / abs(omega) / 64.0
@@ -227,7 +227,7 @@ def step(ctx):
     tau, w, sigma, limit = ctx[VX_TAU], ctx[VX_W], ctx[VX_SIGMA], ctx[VX_LIMIT]
     t_b = pmin(tau + ctx[VX_H], limit)
     stops = math.inf
-    if spin_decays(ctx, sigma) and (ctx[AMP] == 0.0 or ctx[OMEGA] == 0.0):
+    if spin_decays(ctx, sigma) and drive.static(ctx):
         # static boundary: constant forces, the spin stops at a known time
         stops = tau + abs(w / rate(ctx, tau, sigma))
         t_b = pmin(stops, limit)
@@ -325,6 +325,7 @@ def advance(ctx):
             tau, limit = ctx[VX_TAU], ctx[VX_LIMIT]
             since, span = ctx[VX_RSINCE], ctx[VX_RSPAN]
             if math.isinf(limit) and tau - since >= span:
+                ctx[EN_STOP] = E_AT_REST
                 raise KernelError(E_AT_REST)
             if span > 0.0 and tau - since >= span:
                 # at rest through a whole period: the next ones repeat it exactly

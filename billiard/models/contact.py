@@ -116,7 +116,7 @@ class ContactModel:
         self.e = float(scene.contact.restitution)
         self.rtol = float(scene.run.rtol)
         self.drive = drive
-        self.static = drive.amplitude == 0.0 or drive.omega == 0.0
+        self.static = drive.static
         self.steps = 0
         # the kernels' state vector of a phase, and one for single force evaluations
         # (a query between two calls of a phase must not touch the phase's state)
@@ -129,9 +129,7 @@ class ContactModel:
         """A state vector of the kernels (a list) with this scene's drive and contact
         constants set (a phase's, and a hold's in :mod:`billiard.models.hold`)."""
         ctx = [0.0] * _L.SIZE
-        ctx[_L.AMP] = float(self.drive.amplitude)
-        ctx[_L.OMEGA] = float(self.drive.omega)
-        ctx[_L.HORIZ] = 1.0 if self.drive.horizontal else 0.0
+        self.drive.write(ctx)
         constants = (self.m, self.r, self.k, self.g, self.c_lin, self.c_quad, self.mu_s,
                      self.mu_k, self.rtol)  # fmt: skip
         ctx[_L.PH_M : _L.PH_RTOL + 1] = constants

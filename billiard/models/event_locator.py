@@ -53,7 +53,7 @@ The paper's fixed-step scheme is :class:`billiard.models.rk4_locator.FixedStepLo
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Mapping, MutableSequence
 from dataclasses import dataclass
 from typing import Protocol
 
@@ -65,7 +65,7 @@ from billiard.kernels.interpreted import locate as _locate
 from billiard.kernels.interpreted import stop as _stop
 from billiard.models.flight import FlightModel
 
-__all__ = ["Event", "EventLocator", "Locator"]
+__all__ = ["LOCATOR_SLOTS", "Event", "EventLocator", "Locator"]
 
 # The search's own constants are the kernels' (billiard/kernels/locate.py).
 MAX_FLIGHT_TIME = _locate.MAX_FLIGHT_TIME
@@ -82,6 +82,9 @@ _LONGEST_BRACKET = 0.05
 _LONGEST_STEP = 0.2
 # the flight's slots of the state vector: its constants, step proposal and current step
 _FLIGHT_SLOTS = slice(_L.FL_KIND, _L.FL_KB + 2)
+#: what a locator writes into the engine's state vector: the drive block and the
+#: locator's constants (its kind first; THETA0 and later are the search's own)
+LOCATOR_SLOTS = slice(_L.DR, _L.H_BRACKET + 1)
 
 
 @dataclass(slots=True)
@@ -134,6 +137,9 @@ class EventLocator:
             the locator's.
     """
 
+    #: the kernels' code of this search (``LOC_KIND``)
+    kind = _L.LOC_EVENT
+
     def __init__(
         self,
         boundary: Boundary,
@@ -164,10 +170,8 @@ class EventLocator:
         self.h_longest = min(_LONGEST_STEP, flight.max_step)
         self.turn_length = _TURN_FRACTION * boundary.smallest_offset_radius
         ctx = [0.0] * _L.SIZE
-        ctx[_L.AMP] = self.amplitude
-        ctx[_L.OMEGA] = self.omega
-        ctx[_L.HORIZ] = 1.0 if self.horizontal else 0.0
-        ctx[_L.DRIVE_ACCEL] = self.drive_accel
+        drive.write(ctx)
+        ctx[_L.LOC_KIND] = self.kind
         ctx[_L.G] = self.g
         ctx[_L.H_FIRST] = self.h_first
         ctx[_L.H_LONGEST] = self.h_longest
@@ -181,6 +185,11 @@ class EventLocator:
         walls = boundary.walls
         self._p = walls[0].p
         self._walls = plain_wall_functions(walls)
+
+    def write(self, ctx: MutableSequence[float]) -> None:
+        """Write the drive block and the locator's constants (its kind first) into a
+        state vector, as its own ``ctx`` holds them."""
+        ctx[LOCATOR_SLOTS] = self.ctx[LOCATOR_SLOTS]
 
     @property
     def h_bracket(self) -> float:

@@ -26,12 +26,16 @@ Models:
   of ``method = "rk4"``), same right-hand side as the adaptive model; its ``step(y, h)``
   is what the paper's fixed-step locator drives, and inside a step ``state(tau)``
   re-integrates from the step start with a shorter step (Baraff's way).
+
+Each is the kernels' flight (:mod:`billiard.kernels.flight`) of its ``kind``
+(``FL_KIND``), run interpreted; ``write(ctx)`` puts its block into the engine's state
+vector (:mod:`billiard.models.kinds`).
 """
 
 from __future__ import annotations
 
 import math
-from collections.abc import Callable, Mapping
+from collections.abc import Mapping, MutableSequence
 from typing import Any
 
 from billiard.kernels.interpreted import fixed_step as _fixed_step
@@ -57,6 +61,11 @@ class FlightModel:
 
     #: longest step the model wants to take (s); the locator never asks for more.
     max_step: float = math.inf
+
+    @classmethod
+    def from_scene(cls, scene: Any) -> FlightModel:
+        """The model with a scene's coefficients (:data:`FLIGHT_MODELS` builds it so)."""
+        raise NotImplementedError
 
     def begin(self, q1: float, q2: float, u1: float, u2: float, u3: float) -> None:
         raise NotImplementedError
@@ -87,20 +96,28 @@ class FlightModel:
 class _KernelFlight(FlightModel):
     """A flight model whose steps are the kernels' (:mod:`billiard.kernels.flight`, run
     interpreted): its state lives in ``ctx``, a list of floats in the kernels' layout,
-    which the event locator copies in and out around a search."""
+    which the event locator copies in and out around a search. ``kind``: its code in
+    the kernels (``FL_KIND``), which each subclass names."""
+
+    kind: float
 
     def __init__(self, gravity: float):
         self.g = float(gravity)
         self.ctx = [0.0] * _L.SIZE
         self.ctx[_L.G] = self.g
+        self.ctx[_L.FL_KIND] = self.kind
 
-    def _air(self, kind: float, mass: float, c_lin: float, c_quad: float, c_magnus: float) -> None:
-        """A model with air forces: its kind, mass (kg), Fowles drag coefficients (N s/m,
+    def write(self, ctx: MutableSequence[float]) -> None:
+        """Write the model's constants and step proposal (its kind first) into a state
+        vector, as its own ``ctx`` holds them."""
+        ctx[_L.FL_KIND : _L.FL_U3] = self.ctx[_L.FL_KIND : _L.FL_U3]
+
+    def _air(self, mass: float, c_lin: float, c_quad: float, c_magnus: float) -> None:
+        """A model with air forces: its mass (kg), Fowles drag coefficients (N s/m,
         N s^2/m^2) and Magnus coefficient (kg), kept as attributes and in ``ctx``."""
         self.m = float(mass)
         self.c_lin, self.c_quad, self.c_magnus = float(c_lin), float(c_quad), float(c_magnus)
         ctx = self.ctx
-        ctx[_L.FL_KIND] = kind
         ctx[_L.FL_M] = self.m
         ctx[_L.FL_CLIN] = self.c_lin
         ctx[_L.FL_CQUAD] = self.c_quad
@@ -125,9 +142,11 @@ class _KernelFlight(FlightModel):
 class ExactFlight(_KernelFlight):
     """Gravity only: the exact parabola, valid for any tau."""
 
-    def __init__(self, gravity: float):
-        super().__init__(gravity)
-        self.ctx[_L.FL_KIND] = _L.FLIGHT_EXACT
+    kind = _L.FLIGHT_EXACT
+
+    @classmethod
+    def from_scene(cls, scene: Any) -> ExactFlight:
+        return cls(scene.run.gravity)
 
 
 class AdaptiveFlight(_KernelFlight):
@@ -141,6 +160,8 @@ class AdaptiveFlight(_KernelFlight):
     (``step_proposal``) carries over from step to step and from flight to flight.
     """
 
+    kind = _L.FLIGHT_ADAPTIVE
+
     def __init__(
         self,
         gravity: float,
@@ -151,11 +172,23 @@ class AdaptiveFlight(_KernelFlight):
         rtol: float = 1e-10,
     ):
         super().__init__(gravity)
-        self._air(_L.FLIGHT_ADAPTIVE, mass, c_lin, c_quad, c_magnus)
+        self._air(mass, c_lin, c_quad, c_magnus)
         self.rtol = float(rtol)
         ctx = self.ctx
         ctx[_L.FL_RTOL] = self.rtol
         ctx[_L.FL_H] = 1e-3
+
+    @classmethod
+    def from_scene(cls, scene: Any) -> AdaptiveFlight:
+        c_lin, c_quad = scene.air.coefficients
+        return cls(
+            scene.run.gravity,
+            scene.ball.mass,
+            c_lin,
+            c_quad,
+            float(scene.air.magnus),
+            rtol=scene.run.rtol,
+        )
 
     @property
     def step_proposal(self) -> float:
@@ -196,6 +229,8 @@ class RK4Flight(_KernelFlight):
     numerically, as the paper did).
     """
 
+    kind = _L.FLIGHT_RK4
+
     def __init__(
         self,
         gravity: float,
@@ -206,9 +241,21 @@ class RK4Flight(_KernelFlight):
         step: float = 1e-4,
     ):
         super().__init__(gravity)
-        self._air(_L.FLIGHT_RK4, mass, c_lin, c_quad, c_magnus)
+        self._air(mass, c_lin, c_quad, c_magnus)
         self.max_step = float(step)
         self.begin(0.0, 0.0, 0.0, 0.0, 0.0)
+
+    @classmethod
+    def from_scene(cls, scene: Any) -> RK4Flight:
+        c_lin, c_quad = scene.air.coefficients
+        return cls(
+            scene.run.gravity,
+            scene.ball.mass,
+            c_lin,
+            c_quad,
+            float(scene.air.magnus),
+            step=scene.run.step,
+        )
 
     def begin(self, q1: float, q2: float, u1: float, u2: float, u3: float) -> None:
         self.ctx[_L.FL_U3] = u3
@@ -234,39 +281,11 @@ class RK4Flight(_KernelFlight):
         return _fixed_step.rk4_step(self.ctx, *y, h)
 
 
-def _exact(scene: Any) -> FlightModel:
-    return ExactFlight(scene.run.gravity)
-
-
-def _adaptive(scene: Any) -> FlightModel:
-    c_lin, c_quad = scene.air.coefficients
-    return AdaptiveFlight(
-        scene.run.gravity,
-        scene.ball.mass,
-        c_lin,
-        c_quad,
-        float(scene.air.magnus),
-        rtol=scene.run.rtol,
-    )
-
-
-def _rk4(scene: Any) -> FlightModel:
-    c_lin, c_quad = scene.air.coefficients
-    return RK4Flight(
-        scene.run.gravity,
-        scene.ball.mass,
-        c_lin,
-        c_quad,
-        float(scene.air.magnus),
-        step=scene.run.step,
-    )
-
-
-#: Flight models by name, each built from a scene.
-FLIGHT_MODELS: dict[str, Callable[[Any], FlightModel]] = {
-    "exact": _exact,
-    "adaptive": _adaptive,
-    "rk4": _rk4,
+#: Flight models by name: classes built from a scene by their ``from_scene``.
+FLIGHT_MODELS: dict[str, type[FlightModel]] = {
+    "exact": ExactFlight,
+    "adaptive": AdaptiveFlight,
+    "rk4": RK4Flight,
 }
 
 
@@ -283,4 +302,4 @@ def flight_model_name(scene: Any, method: str = "event") -> str:
 
 def flight_model(scene: Any, method: str = "event") -> FlightModel:
     """Build the flight model :func:`flight_model_name` chooses for a scene."""
-    return FLIGHT_MODELS[flight_model_name(scene, method)](scene)
+    return FLIGHT_MODELS[flight_model_name(scene, method)].from_scene(scene)

@@ -2,13 +2,18 @@
 
 An impact law takes the ball's speeds just before the impact and a :class:`Contact`
 (tangent angle and boundary velocity at the contact point) and returns an
-:class:`ImpactResult`. :class:`KaneLevinsonImpact` is the paper's law; another law only
-needs the same ``apply(state, contact)`` method.
+:class:`ImpactResult`. :class:`KaneLevinsonImpact` is the paper's law.
+
+A law runs compiled because the kernels have it: a kernel function chosen by its kind
+(``IM_KIND``, :func:`billiard.kernels.impact.impact_law`), and here a class that names
+that ``kind``, writes its block of the state vector (``write``) and is built from a
+scene (``from_scene``), registered in :data:`IMPACT_LAWS`. A law with an ``apply``
+method alone has no kernel: :func:`billiard.models.kinds.require_kernel` refuses it.
 """
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import MutableSequence
 from dataclasses import dataclass
 from typing import Any, Protocol
 
@@ -136,6 +141,8 @@ class KaneLevinsonImpact:
     """
 
     regimes: tuple[str, ...] = (STICK, SLIP, ELASTIC)
+    #: the kernels' code of this law (``IM_KIND``)
+    kind: float = _L.KANE_LEVINSON
 
     m = _slot(_L.IM_M, "mass (kg)")
     r = _slot(_L.IM_R, "radius (m)")
@@ -155,7 +162,9 @@ class KaneLevinsonImpact:
         mu_kinetic: float,
         elastic_below: float,
     ):
-        self.ctx = [0.0] * (_L.IM_EB + 1)
+        #: the law's block of a state vector (slots up to IM_END; the rest unused)
+        self.ctx = [0.0] * _L.IM_END
+        self.ctx[_L.IM_KIND] = self.kind
         self.m = mass
         self.r = radius
         self.k = inertia_factor
@@ -177,29 +186,33 @@ class KaneLevinsonImpact:
             scene.contact.elastic_below,
         )
 
+    def write(self, ctx: MutableSequence[float]) -> None:
+        """Write the law's block (its kind and coefficients) into a state vector."""
+        ctx[_L.IM : _L.IM_END] = self.ctx[_L.IM : _L.IM_END]
+
     def apply(self, state: Any, contact: Contact) -> ImpactResult:
         """Post-impact speeds for a ball with speeds ``state.u1, state.u2, state.u3``."""
         u1, u2, u3 = state.u1, state.u2, state.u3
         z, vb1, vb2 = contact.z, contact.vb1, contact.vb2
         # with the relative velocity before the impact, which the record reports
-        n1, n2, n3, rt, rn, regime, resting, wt, wn = _impact.kane_levinson(
+        n1, n2, n3, rt, rn, regime, resting, wt, wn = _impact.impact_law(
             self.ctx, u1, u2, u3, z, vb1, vb2, contact.pressing
         )
         return ImpactResult(n1, n2, n3, rt, rn, _L.REGIMES[int(regime)], wt, wn, resting)
 
 
-#: Impact laws by name: each builds the law from a scene.
-IMPACT_LAWS: dict[str, Callable[[Any], ImpactLaw]] = {
-    "kane-levinson": KaneLevinsonImpact.from_scene,
+#: Impact laws by name: classes built from a scene by their ``from_scene``.
+IMPACT_LAWS: dict[str, type] = {
+    "kane-levinson": KaneLevinsonImpact,
 }
 
 
 def impact_law(scene: Any, name: str = "kane-levinson") -> ImpactLaw:
     """The impact law ``name`` (a key of :data:`IMPACT_LAWS`) for a scene."""
     try:
-        make = IMPACT_LAWS[name]
+        law = IMPACT_LAWS[name]
     except KeyError:
         raise ValueError(
             f"unknown impact law {name!r}: choose from {', '.join(IMPACT_LAWS)}"
         ) from None
-    return make(scene)
+    return law.from_scene(scene)

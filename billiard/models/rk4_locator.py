@@ -19,7 +19,7 @@ the spin to 400 rad/s), and the run stops with a message naming a finer step.
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping
+from collections.abc import Mapping, MutableSequence
 
 from billiard.geometry.boundary import Boundary
 from billiard.geometry.surfaces import WarmStart
@@ -27,7 +27,7 @@ from billiard.geometry.wall_functions import plain_wall_functions
 from billiard.kernels.interpreted import fixed_step as _fixed_step
 from billiard.kernels.interpreted import layout as _L
 from billiard.kernels.interpreted import stop as _stop
-from billiard.models.event_locator import Event
+from billiard.models.event_locator import LOCATOR_SLOTS, Event
 from billiard.models.flight import RK4Flight
 
 __all__ = ["DEPARTURE_LIMIT", "FixedStepLocator", "answer_foot", "fixed_step_constants"]
@@ -43,11 +43,7 @@ def fixed_step_constants(ctx: list[float], boundary: Boundary, step: float) -> N
     """Write the fixed-step locator's constants for ``boundary`` into a state vector
     (the drive's and the surfaces' are the event locator's): the step (s), the radius,
     the walls and their intervals, where the lid and the escape level are."""
-    drive = boundary.drive
-    ctx[_L.AMP] = drive.amplitude
-    ctx[_L.OMEGA] = drive.omega
-    ctx[_L.HORIZ] = 1.0 if drive.horizontal else 0.0
-    ctx[_L.DRIVE_ACCEL] = drive.peak_acceleration
+    boundary.drive.write(ctx)
     surfaces = boundary.surfaces
     ctx[_L.NSURF] = float(len(surfaces))
     for j, surface in enumerate(surfaces):
@@ -95,7 +91,14 @@ def answer_foot(ctx: list[float] | object, boundary: Boundary) -> None:
 class FixedStepLocator:
     """The paper's fixed-step detection for ``method = "rk4"`` (module docstring): the
     kernels' search (:func:`billiard.kernels.fixed_step.locate`, run interpreted) over a
-    state vector of its own, which also holds its memory between flights."""
+    state vector of its own, which also holds its memory between flights.
+
+    Raises:
+        ValueError: a flight model other than :class:`RK4Flight`.
+    """
+
+    #: the kernels' code of this search (``LOC_KIND``)
+    kind = _L.LOC_RK4
 
     def __init__(
         self,
@@ -104,11 +107,14 @@ class FixedStepLocator:
         gravity: float = 0.0,
         warm: list[WarmStart] | None = None,
     ):
+        if not isinstance(flight, RK4Flight):
+            raise ValueError("the fixed-step locator drives the RK4 flight model only")
         self.boundary = boundary
         self.surfaces = boundary.surfaces
         self.flight = flight
         self.h = flight.max_step
         ctx = [0.0] * _L.SIZE
+        ctx[_L.LOC_KIND] = self.kind
         ctx[_L.G] = float(gravity)
         fixed_step_constants(ctx, boundary, self.h)
         self.ctx = ctx
@@ -116,6 +122,13 @@ class FixedStepLocator:
         self._p = walls[0].p
         self._walls = plain_wall_functions(walls)
         self._nears = (tuple(w.near for w in walls), tuple(w.dnear for w in walls))
+
+    def write(self, ctx: MutableSequence[float]) -> None:
+        """Write the drive block, the locator's constants (its kind first) and the
+        fixed-step detection's constants and memory into a state vector, as its own
+        ``ctx`` holds them."""
+        ctx[LOCATOR_SLOTS] = self.ctx[LOCATOR_SLOTS]
+        ctx[_L.RK : _L.RK_END] = self.ctx[_L.RK : _L.RK_END]
 
     @property
     def _feet(self) -> list[float]:

@@ -11,7 +11,7 @@ centre's state at both ends) and, with ``--sample DT``, exact states every DT se
   the phase's end state, q and v at ``t_end``), and ends at the next impact or the next
   phase's start. It follows the scene's flight model (:mod:`billiard.plot.flights`). The
   engine gives a ball leaving a wall a normal speed of 1e-6 m/s
-  (:data:`billiard.engine.contact_phases.LIFT_OFF_SPEED`) that the end state does not hold: the
+  (:data:`billiard.kernels.machine.LIFT_OFF_SPEED`) that the end state does not hold: the
   arc drawn differs from the flight by at most 1e-6 m per second of flight.
 * a **contact stretch** is the centre's path over a phase, on the wall's offset curve. With
   samples, it joins the phase's start state, the samples inside the phase and its end

@@ -8,10 +8,15 @@ measurements are the sweep's (:mod:`billiard.sweep.measure`): the class, period 
 impact counts equal the per-point path's, the means and spreads agree to the last bits
 (running sums instead of numpy's pairwise ones).
 
+Scenes under ``contact.model = "phases"`` run on the state machine (on the CPU also
+when the sweep's device is the GPU, whose kernels have the impacts model only); a run
+that ends with the ball on the boundary (at rest, in contact) is classed as the
+per-point path classes it.
+
 Left to the per-point path (:func:`billiard.sweep.measure.measure_point`): points with
-``--lyapunov``, scenes the kernel does not take (contact phases, method rk4), starts
-with one of ``initial.q1``, ``initial.q2`` given and not the other, and points whose run
-stops early (measured again one by one, for the engine's own words of why).
+``--lyapunov``, scenes the kernel does not take (method rk4), starts with one of
+``initial.q1``, ``initial.q2`` given and not the other, and points whose run stops
+early (measured again one by one, for the engine's own words of why).
 """
 
 from __future__ import annotations
@@ -163,15 +168,15 @@ def _measure_group(
         ctxs = ctxs[run]
     width = max(PERIOD_WINDOW, keep, 1)
     stats, rings = EN.advance_setup(
-        setup, ctxs, consts, transient=transient, impacts=impacts, width=width, device=device,
-        threads=1,
+        setup, ctxs, consts, transient=transient, impacts=impacts, width=width,
+        device="cpu" if setup.phases else device, threads=1,
     )  # fmt: skip
     columns = measured_columns(
         stats, np.ones(run.size, dtype=bool), setup.rest_height, settings["rest_band"], scene
     )
-    # a run that stopped early, or one without a measured impact: measured again one by
-    # one, for the engine's words of why
-    ok = (stats[:, E.ST_STATUS] != E.RUN_FAILED) & (stats[:, E.ST_MEASURED] > 0)
+    # a run that stopped early, or one without a measured impact (that did not end on
+    # the boundary): measured again one by one, for the engine's words of why
+    ok = columns["attractor"] != "failed"
     keep_rows = np.nonzero(ok)[0]
     left += [points[rows[run[r]]][0] for r in np.nonzero(~ok)[0]]
     if not keep_rows.size:
@@ -187,7 +192,9 @@ def _measure_group(
         "status": np.full(n, STATUSES.index("ok"), dtype=np.int8),
         "attractor": attractor,
         "run_status": run_status,
-        "final_mode": np.full(n, MODES.index("flight"), dtype=np.int8),
+        "final_mode": np.array(
+            [MODES.index(m) for m in columns["final_mode"][keep_rows]], dtype=np.int8
+        ),
         "period": columns["period"][keep_rows].astype(np.int32),
         "drive_periods": columns["drive_periods"][keep_rows].astype(np.int32),
         "impacts": columns["impacts"][keep_rows].astype(np.int64),

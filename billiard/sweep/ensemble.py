@@ -10,7 +10,10 @@ Every start runs the trajectory ``billiard run`` makes from it (bit for bit on t
 ``transient`` impacts, then ``impacts`` measured ones, as ``billiard sweep`` measures a
 point (:mod:`billiard.sweep.measure`: heights, times of flight, the period of the
 post-impact state with the drive phase, the attractor class). A start that overlaps a
-wall or the lid is ``invalid``; a run that stops early is ``failed``.
+wall or the lid is ``invalid``; a run that stops early is ``failed``. Under
+``contact.model = "phases"`` a run may also end with the ball on the boundary (at rest,
+or in contact for the contact span): its class is then that of the sweep's
+(:func:`billiard.sweep.attractor.contact_class`: resting, rolling, sliding, held).
 """
 
 from __future__ import annotations
@@ -23,7 +26,8 @@ from typing import Any
 import numpy as np
 
 from billiard.kernels import layout as L
-from billiard.sweep.attractor import CLASSES, PERIOD_WINDOW
+from billiard.kernels.names import column
+from billiard.sweep.attractor import CLASSES, CONTACT_CLASSES, PERIOD_WINDOW
 
 __all__ = [
     "DEVICES",
@@ -51,7 +55,29 @@ COLUMN_UNITS = {
     "elastic_share": "1",
     "lid_share": "1",
     "run_status": "",
+    "final_mode": "",
 }
+
+
+def contact_codes(stats: np.ndarray) -> np.ndarray:
+    """The class codes of runs that ended with the ball on the boundary rather than in
+    an impact sequence, -1 elsewhere: :func:`billiard.sweep.attractor.contact_class` of
+    each trajectory's status, motion state at the end and measured impacts."""
+    from billiard.kernels import ensemble as E
+
+    status = stats[:, E.ST_STATUS]
+    mode = stats[:, E.ST_MODE].astype(np.int64)
+    by_mode = np.array(
+        [CLASSES.index(CONTACT_CLASSES[m]) if m in CONTACT_CLASSES else -1 for m in L.MOTION_NAMES]
+    )
+    contact = by_mode[mode]
+    codes = np.full(stats.shape[0], -1, dtype=np.int64)
+    settled = (status == E.RUN_TIME_LIMIT) & (stats[:, E.ST_MEASURED] == 0)
+    codes[settled] = contact[settled]
+    in_contact = status == E.RUN_IN_CONTACT
+    codes[in_contact] = np.where(contact >= 0, contact, CLASSES.index("rolling"))[in_contact]
+    codes[status == E.RUN_AT_REST] = CLASSES.index("resting")
+    return codes
 
 
 def classes_of(
@@ -64,14 +90,16 @@ def classes_of(
 
     n = stats.shape[0]
     measured = stats[:, E.ST_MEASURED]
+    contact = contact_codes(stats)
     failed = (stats[:, E.ST_STATUS] == E.RUN_FAILED) | (stats[:, E.ST_STATUS] == E.RUN_PENDING)
-    failed |= measured == 0
+    failed |= (measured == 0) & (contact < 0)
     with np.errstate(invalid="ignore", divide="ignore"):
         elastic = stats[:, E.ST_ELASTIC] / measured
     rise = stats[:, E.ST_H_MAX] - rest_height
     codes = np.full(n, CLASSES.index("aperiodic"), dtype=np.int8)
     codes[stats[:, E.ST_PERIOD] > 0] = CLASSES.index("periodic")
     codes[(rise <= rest_band) & (elastic >= 0.5)] = CLASSES.index("resting")
+    codes[contact >= 0] = contact[contact >= 0]
     codes[failed] = CLASSES.index("failed")
     codes[~valid] = CLASSES.index("invalid")
     return codes
@@ -180,11 +208,11 @@ def run_ensemble(
     per start. ``tolerance`` (m), ``max_period`` (impacts) and ``rest_band`` (m) are
     the sweep's period test and resting band (docs/sweeps.md). ``device``: ``"cpu"``
     (all cores, or ``threads``) or ``"gpu"`` (an NVIDIA GPU through numba-cuda: the
-    same physics, not the same bits; docs/sweeps.md, "GPU").
+    same physics, not the same bits; docs/sweeps.md, "GPU"; the impacts model only).
 
     Raises:
-        ValueError: a scene the ensemble kernel does not take (contact phases, method
-            rk4), or one that cannot be simulated.
+        ValueError: a scene the ensemble kernel does not take (method rk4; contact
+            phases on the GPU), or one that cannot be simulated.
     """
     import time
 
@@ -219,9 +247,9 @@ def run_ensemble(
     columns = {"q1_start": arrays[0].ravel(), "q2_start": arrays[1].ravel()} | columns
     last_height, last_tof = last_impacts(stats, rings, keep)
     final = {
-        name: ctxs[:, slot].reshape(shape)
-        for name, slot in (("t", L.EN_T), ("q1", L.EN_Q1), ("q2", L.EN_Q2))
-        + (("v1", L.EN_U1), ("v2", L.EN_U2), ("omega", L.EN_U3))
+        name: column(ctxs, quantity).reshape(shape)
+        for name, quantity in (("t", "engine.t"), ("q1", "engine.q1"), ("q2", "engine.q2"))
+        + (("v1", "engine.u1"), ("v2", "engine.u2"), ("omega", "engine.u3"))
     }
     return EnsembleResult(
         scene=scene,
@@ -272,7 +300,8 @@ def measured_columns(
         lid = stats[:, E.ST_LID] / measured
     codes = classes_of(stats, valid, rest_height, rest_band)
     ok = (codes != CLASSES.index("failed")) & (codes != CLASSES.index("invalid"))
-    period = np.where(ok, stats[:, E.ST_PERIOD], 0).astype(np.int64)
+    # a run that ended on the boundary is classed by that, without a period
+    period = np.where(ok & (contact_codes(stats) < 0), stats[:, E.ST_PERIOD], 0).astype(np.int64)
     frequency = scene.drive.frequency
     drive_periods = np.zeros_like(period)
     if frequency > 0.0:
@@ -282,9 +311,15 @@ def measured_columns(
         drive_periods = np.where(period > 0, cycles, 0).astype(np.int64)
     nan = np.where(has & ok, 1.0, math.nan)
     status = stats[:, E.ST_STATUS]
-    run_status = np.where(
-        status == E.RUN_COMPLETE, "complete", np.where(status == E.RUN_TIME_LIMIT, "time_limit", "")
-    )
+    # the run's Status, lower case, as a run reports it ("": stopped)
+    run_status = np.full(status.shape, "", dtype=object)
+    names = ((E.RUN_COMPLETE, "complete"), (E.RUN_TIME_LIMIT, "time_limit"))
+    names += ((E.RUN_AT_REST, "at_rest"), (E.RUN_IN_CONTACT, "in_contact"))
+    for code, name in names:
+        run_status[status == code] = name
+    ran = (run_status != "") & valid
+    mode = stats[:, E.ST_MODE].astype(np.int64)
+    final_mode = np.where(ran, np.asarray(L.MOTION_NAMES, dtype=object)[mode], "")
     return {
         "attractor": np.asarray(CLASSES, dtype=object)[codes],
         "period": period,
@@ -299,6 +334,7 @@ def measured_columns(
         "elastic_share": elastic * nan,
         "lid_share": lid * nan,
         "run_status": run_status,
+        "final_mode": final_mode,
     }
 
 

@@ -59,8 +59,8 @@ REFUSED = {
 }
 #: the ball as :func:`billiard.kernels.ensemble.start` takes it (t, theta, q1, q2, u1,
 #: u2, u3), and the slots a continuation carries besides: what is kept between values
-_BALL = ("EN_T", "EN_THETA", "EN_Q1", "EN_Q2", "EN_U1", "EN_U2", "EN_U3")
-_CARRIED = ("EN_Q3", "EN_CLOCK", "EN_CLOCK_ERR", "FL_H")
+_BALL = tuple(f"engine.{name}" for name in ("t", "theta", "q1", "q2", "u1", "u2", "u3"))
+_CARRIED = ("engine.q3", "engine.clock", "engine.clock_error", "flight.step")
 _STATE = _BALL + _CARRIED
 #: trajectories per call of the kernel: bounds the memory of the state vectors (about
 #: 9 kB each) and rings (about 14 kB each); between values only _STATE is kept
@@ -108,12 +108,6 @@ class HysteresisResult:
     seconds: float = 0.0
 
 
-def _slots(names: Sequence[str]) -> list[int]:
-    from billiard.kernels import layout as L
-
-    return [getattr(L, name) for name in names]
-
-
 def continue_states(setup: Any, ctxs: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """State vectors of ``setup``'s parameter set holding the balls of ``ctxs`` (one row
     per trajectory, after its last impact): time, drive angle, position, velocity and
@@ -124,15 +118,17 @@ def continue_states(setup: Any, ctxs: np.ndarray) -> tuple[np.ndarray, np.ndarra
         (ctxs, ok) as :func:`billiard.engine.ensemble.start` returns them (ok False: the
         ball overlaps a wall or the lid of the new set-up, or is above its escape height).
     """
-    return _resume(setup, ctxs[:, _slots(_STATE)])
+    from billiard.kernels.names import columns
+
+    return _resume(setup, columns(ctxs, _STATE))
 
 
 def _resume(setup: Any, state: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """:func:`continue_states` from the carried slots alone (``_STATE``, one row per
     trajectory): what an up/down sweep keeps between two values."""
     from billiard.engine.ensemble import _OVERLAP
-    from billiard.kernels import layout as L
     from billiard.kernels.ensemble import start_batch
+    from billiard.kernels.names import set_columns
 
     n = state.shape[0]
     balls = np.ascontiguousarray(state[:, : len(_BALL)])
@@ -147,8 +143,8 @@ def _resume(setup: Any, state: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     params = np.tile(setup.params, (n, 1))  # writable, C-contiguous
     if n:
         start_batch(out, params, setup.walls, setup.template, balls, px, py, setup.offsets, gaps)
-    out[:, _slots(_CARRIED)] = state[:, len(_BALL) :]
-    out[:, L.EN_UNTIL] = math.inf
+    set_columns(out, _CARRIED, state[:, len(_BALL) :])
+    set_columns(out, ("engine.until",), math.inf)
     with np.errstate(invalid="ignore"):
         ok = (py <= setup.lid_level + _OVERLAP) & (py < setup.escape_level)
         ok &= gaps >= -_OVERLAP  # NaN (no gap computed: a row not carried) is refused
@@ -158,10 +154,10 @@ def _resume(setup: Any, state: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 def drive_phases(ctxs: np.ndarray, frequency: float) -> np.ndarray:
     """Per trajectory the drive phase (rad, in [0, 2 pi)) that makes omega t + phase the
     drive angle the ball sees from its state on (frequency in Hz): theta - omega t."""
-    from billiard.kernels import layout as L
+    from billiard.kernels.names import column
 
     omega = 2.0 * math.pi * frequency
-    return np.mod(ctxs[:, L.EN_THETA] - omega * ctxs[:, L.EN_T], 2.0 * math.pi)
+    return np.mod(column(ctxs, "engine.theta") - omega * column(ctxs, "engine.t"), 2.0 * math.pi)
 
 
 def start_grid(scene: Any, setup: Any, count: int) -> tuple[np.ndarray, np.ndarray]:
@@ -175,15 +171,15 @@ def start_grid(scene: Any, setup: Any, count: int) -> tuple[np.ndarray, np.ndarr
     of the grid's starts the set-up accepts, ``count`` are taken evenly spread in grid
     order (row by row, from the bottom), the grid refined until there are enough.
     """
-    from billiard.kernels import layout as L
+    from billiard.kernels.names import read
     from billiard.sweep.container import wall_outline
 
     if count < 1:
         raise ValueError(f"starts must be >= 1, got {count}")
     initial = scene.initial
     if count == 1:
-        q1 = setup.template[L.EN_Q1] if initial.q1 is None else initial.q1
-        q2 = setup.template[L.EN_Q2] if initial.q2 is None else initial.q2
+        q1 = read(setup.template, "engine.q1") if initial.q1 is None else initial.q1
+        q2 = read(setup.template, "engine.q2") if initial.q2 is None else initial.q2
         return np.array([float(q1)]), np.array([float(q2)])
     rest = setup.rest_height
     radius = scene.ball.radius
@@ -272,13 +268,15 @@ def run_hysteresis(
     Raises:
         ValueError: fewer than 2 values, a value that is not a number, a key of the
             ball's start or one of :data:`REFUSED`, impacts < 1 or transient < 0, or a
-            scene the ensemble kernel does not take (contact phases, method rk4) or
+            scene the ensemble kernel does not take (method rk4), one under contact
+            phases (the state carried between values is the ball's in flight), or
             that cannot be simulated.
         OutputSizeError: (a ``SceneError``) the sweep would take more than 1 GB of
             memory or of CSV file and ``allow_large`` is False; checked first.
     """
     from billiard.engine import ensemble as EN
     from billiard.kernels import ensemble as E
+    from billiard.kernels.names import columns as read_columns
     from billiard.scene.scene import with_values
     from billiard.sweep.attractor import PERIOD_WINDOW
     from billiard.sweep.ensemble import as_scene, measured_columns
@@ -303,6 +301,9 @@ def run_hysteresis(
     if impacts < 1 or transient < 0:
         raise ValueError("impacts must be >= 1 and transient >= 0")
     why = EN.supports(scene)
+    if getattr(scene.contact, "model", "impacts") == "phases":
+        # the state carried from one value to the next is the ball's in flight
+        why = "contact.model = 'phases' (an up/down sweep carries the flight state only)"
     if why is not None:
         raise ValueError(f"the ensemble kernel does not take this scene: {why}")
     values = np.sort(np.asarray(values, dtype=np.float64))
@@ -322,7 +323,6 @@ def run_hysteresis(
     alive = np.ones(n, dtype=bool)  # still continued
     invalid = np.zeros(n, dtype=bool)  # refused by a set-up (the first, or a later one)
     state = np.full((n, len(_STATE)), np.nan)
-    slots = _slots(_STATE)
     shape = (len(DIRECTIONS), count, n)
     columns: dict[str, np.ndarray] = {
         "attractor": np.full(shape, "invalid", dtype=object),
@@ -365,7 +365,7 @@ def run_hysteresis(
                 columns[name][direction, i, part] = measured[name]
             # a run that stopped is not continued
             alive[part] &= stats[:, E.ST_STATUS] == E.RUN_COMPLETE
-            state[part] = ctxs[:, slots]
+            state[part] = read_columns(ctxs, _STATE)
     return HysteresisResult(
         scene=scene,
         key=key,

@@ -324,7 +324,7 @@ def run_uncertainty(
             raise AssertionError("a start checked valid was refused")
         stats, rings = EN.advance(
             ctxs, setup.params, setup.walls, consts, transient=transient, impacts=impacts,
-            width=window, threads=threads,
+            width=window, threads=threads, nears=setup.nears,
         )  # fmt: skip
         cols = measured_columns(stats, ok, setup.rest_height, rest_band, scene)
         records += [

@@ -27,9 +27,12 @@ def test_the_committed_pages_are_the_generator_s(tmp_path):
     doc.write_text(page.render(results, COMMAND))
     saved = json.loads(sweep_bench.saved_results(DOCS).read_text())
     write_section(doc, sweep_bench.render(saved), sweep_bench.BEGIN, sweep_bench.END)
+    # the ensemble bench's part of the page: a sweep point under contact phases
+    saved = json.loads(ensemble_bench.saved_results(DOCS).read_text())
+    begin, end = ensemble_bench.PHASES_BEGIN, ensemble_bench.PHASES_END
+    write_section(doc, ensemble_bench.render_phases(saved), begin, end)
     assert doc.read_text() == (DOCS / "performance.md").read_text()
     # the ensemble section of sweeps.md is the generator's too
-    saved = json.loads(ensemble_bench.saved_results(DOCS).read_text())
     assert ensemble_bench.render(saved) in (DOCS / "sweeps.md").read_text()
     tables = report.render_tables(results, COMMAND)
     assert tables == (DOCS / page.TABLES).read_text()

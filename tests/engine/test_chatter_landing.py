@@ -1,4 +1,4 @@
-"""Landing under contact phases (billiard/engine/contact_phases.py ``_land``): a chatter
+"""Landing under contact phases (billiard/kernels/machine.py ``land``): a chatter
 series is summed whatever ``contact.elastic_below`` is, the same on the kernels'
 flights as on the one-event step, and a slow impact is never relaunched (the impacts
 model's low-velocity rule adds energy; under phases the ball lands or reflects)."""

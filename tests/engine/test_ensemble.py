@@ -72,7 +72,8 @@ def test_trajectories_are_the_runs_bit_for_bit(name: str, monkeypatch) -> None:
     total, transient = 150, 20
     consts = EN.constants(scene, 1e-5, 64, 256)
     stats, rings = EN.advance(
-        ctxs, setup.params, setup.walls, consts, transient=transient, impacts=total - transient,
+        ctxs, setup.params, setup.walls, consts, nears=setup.nears,
+        transient=transient, impacts=total - transient,
         width=total, threads=2,
     )  # fmt: skip
     for i in range(q1.size):
@@ -99,7 +100,8 @@ def test_measurements_match_the_sweeps_statistics() -> None:
         transient, impacts = 300, 300
         consts = EN.constants(scene, 1e-5, 64, 256)
         stats, _ = EN.advance(
-            ctxs, setup.params, setup.walls, consts, transient=transient, impacts=impacts,
+            ctxs, setup.params, setup.walls, consts, nears=setup.nears,
+        transient=transient, impacts=impacts,
             width=256,
         )  # fmt: skip
         for i in range(q1.size):
@@ -129,7 +131,14 @@ def test_a_duration_ends_trajectories_as_a_run_ends() -> None:
     assert ok.all()
     consts = EN.constants(scene, 1e-5, 64, 256)
     stats, _ = EN.advance(
-        ctxs, setup.params, setup.walls, consts, transient=0, impacts=10**6, width=8
+        ctxs,
+        setup.params,
+        setup.walls,
+        consts,
+        nears=setup.nears,
+        transient=0,
+        impacts=10**6,
+        width=8,
     )
     point = with_values(scene, {"initial.q1": 0.01, "initial.q2": 0.08})
     run = simulate(point, collisions=10**6, duration=0.5)
@@ -147,3 +156,173 @@ def test_a_start_at_rest_is_the_runs_state_vector() -> None:
     for ctx in ctxs:
         same = (ref == ctx) | (np.isnan(ref) & np.isnan(ctx))
         assert same.all(), np.nonzero(~same)[0]
+
+
+# ---------------------------------------------------------------------- contact phases
+
+
+def _phases(name: str, **changes) -> object:
+    return with_values(load_scene(name), {"contact.model": "phases", **changes})
+
+
+def _gentle(**changes) -> object:
+    """The paper's parabola shaken gently under contact phases: a ball on the bottom
+    rolls there and never flies (see tests/engine/test_run_ends.py)."""
+    return _phases("parabola-5.4hz", **{"drive.amplitude": 0.005, **changes})
+
+
+def _batched(scene, q1, q2, total, *, duration=None, threads=1):
+    """(stats, rings, ctxs) of trajectories of ``scene`` from (q1, q2) (None: at rest on
+    the bottom) to ``total`` impacts, every impact kept in the ring."""
+    setup = EN.prepare(scene)
+    if q1 is None:
+        ctxs = EN.start_at_rest(setup, 1, duration=duration)
+    else:
+        ctxs, ok = EN.start(setup, q1, q2, t=scene.initial.t, duration=duration)
+        assert ok.all()
+    consts = EN.constants(scene, 1e-5, 64, 256)
+    stats, rings = EN.advance(
+        ctxs, setup.params, setup.walls, consts, nears=setup.nears,
+        transient=0, impacts=total, width=total,
+        threads=threads,
+    )  # fmt: skip
+    return stats, rings, ctxs
+
+
+def _same_run(stats, ring, ctx, result) -> None:
+    """A batched trajectory against the run: every impact and the final ball, bit for
+    bit, the impacts counted, the motion state it ended in."""
+    columns = result.columns
+    n = len(columns["n"])
+    assert stats[E.ST_TOTAL] == stats[E.ST_MEASURED] == n
+    for name, col in RING:
+        np.testing.assert_array_equal(ring[:n, col], np.asarray(columns[name], float))
+    assert L.MOTION_NAMES[int(stats[E.ST_MODE])] == result.final_mode
+    if n:
+        assert ctx[L.MC_LAST_IMPACT] == columns["t"][-1]
+
+
+@pytest.mark.parametrize("name", ["wedge-6.6hz", "parabola-5.4hz"])
+def test_phases_trajectories_are_the_runs_bit_for_bit(name: str, monkeypatch) -> None:
+    """Under contact.model = "phases" (landings, rolling, sliding, held phases) every
+    impact of every trajectory, in rounds of 23 impacts on slices of 2 trajectories
+    over 2 threads, equals the run's record; so do the counts and final modes."""
+    monkeypatch.setattr(EN, "ROUND_IMPACTS", 23)
+    monkeypatch.setattr(EN, "SLICE", 2)
+    scene = _phases(name)
+    setup = EN.prepare(scene)
+    q1, q2 = _starts(4, 20)
+    _, ok = EN.start(setup, q1, q2)
+    q1, q2 = q1[ok][:5], q2[ok][:5]
+    total = 120
+    stats, rings, ctxs = _batched(scene, q1, q2, total, threads=2)
+    for i in range(q1.size):
+        point = with_values(scene, {"initial.q1": float(q1[i]), "initial.q2": float(q2[i])})
+        result = simulate(point, collisions=total)
+        assert result.status.name == "COMPLETE" and stats[i, E.ST_STATUS] == E.RUN_COMPLETE
+        _same_run(stats[i], rings[i], ctxs[i], result)
+        assert ctxs[i, L.EN_Q1] == result.columns["q1"][-1]
+
+
+def test_a_phases_start_lying_on_the_bottom_starts_in_contact() -> None:
+    """A start placed where the ball rests (on the wall, pressed) starts in contact
+    (sliding: the shaken bottom moves under it), as a run's set-up starts it, and runs
+    as the run does; so does one at rest on the bottom with a velocity (no initial
+    position)."""
+    scene = _phases("parabola-5.4hz")
+    setup = EN.prepare(scene)
+    q1, q2 = setup.at_rest[L.EN_Q1], setup.at_rest[L.EN_Q2]
+    ctxs, ok = EN.start(setup, [q1], [q2])
+    assert ok.all() and ctxs[0, L.MC_MODE] == setup.at_rest[L.MC_MODE] != L.M_FLIGHT
+    np.testing.assert_array_equal(ctxs[0, L.MC_CONTACT : L.MC_CONTACT + 6],
+                                  setup.at_rest[L.MC_CONTACT : L.MC_CONTACT + 6])  # fmt: skip
+    stats, rings, ctxs = _batched(scene, [q1], [q2], 40)
+    point = with_values(scene, {"initial.q1": float(q1), "initial.q2": float(q2)})
+    _same_run(stats[0], rings[0], ctxs[0], simulate(point, collisions=40))
+    kicked = with_values(scene, {"initial.v1": 0.3, "initial.omega": -5.0})
+    setup = EN.prepare(kicked)
+    ctxs = EN.start_at_rest(setup, 1, v1=0.3, omega=-5.0)
+    consts = EN.constants(kicked, 1e-5, 64, 256)
+    stats, rings = EN.advance(
+        ctxs,
+        setup.params,
+        setup.walls,
+        consts,
+        nears=setup.nears,
+        transient=0,
+        impacts=40,
+        width=40,
+        threads=1,
+    )
+    _same_run(stats[0], rings[0], ctxs[0], simulate(kicked, collisions=40))
+
+
+def test_phases_statuses_are_the_runs() -> None:
+    """How a run under contact phases ends, batched as the run ends it: at rest on a
+    still boundary, in contact for the contact span after some impacts, at a time
+    limit while rolling, and stopped by a collapse (a ball pressed against the lid)."""
+    from tests.engine.test_run_ends import PRESSED_ON_THE_LID
+
+    cases = [
+        (_gentle(**{"drive.amplitude": 0.0}), None, None, E.RUN_AT_REST, "AT_REST"),
+        (_gentle(**{"run.contact_span": 1.0}), 0.0, 0.03, E.RUN_IN_CONTACT, "IN_CONTACT"),
+        (_gentle(**{"run.duration": 3.0}), None, None, E.RUN_TIME_LIMIT, "TIME_LIMIT"),
+        (load_scene("hyperbola-5.8hz", PRESSED_ON_THE_LID), "scene", None, E.RUN_FAILED,
+         "COLLAPSE"),
+    ]  # fmt: skip
+    for scene, q1, q2, status, name in cases:
+        if q1 == "scene":
+            q1, q2 = scene.initial.q1, scene.initial.q2
+        if q1 is not None:
+            scene = with_values(scene, {"initial.q1": q1, "initial.q2": q2})
+        result = simulate(scene, collisions=100_000)
+        assert result.status.name == name
+        stats, rings, ctxs = _batched(
+            scene, None if q1 is None else [q1], None if q2 is None else [q2], 100_000,
+            duration=scene.run.duration,
+        )  # fmt: skip
+        assert stats[0, E.ST_STATUS] == status, name
+        _same_run(stats[0], rings[0], ctxs[0], result)
+
+
+def test_phases_start_is_the_vector_a_run_hands_the_state_machine(monkeypatch) -> None:
+    """The state vector of a start, slot for slot, is the one a run's first call of
+    the state machine gets (but the call's target and row counters): in flight, lying
+    on the bottom, and at rest on the bottom with a velocity."""
+    from billiard.kernels import machine
+    from billiard.runfile.record import MemoryRecorder
+
+    seen = []
+    real = machine.run_machine
+
+    def spy(ctx, *args):
+        seen.append(np.array(ctx))
+        return real(ctx, *args)
+
+    monkeypatch.setattr(machine, "run_machine", spy)
+    per_call = [L.EN_TARGET, L.MC_ROW, L.MC_CROW]
+
+    def first_call(point) -> np.ndarray:
+        seen.clear()
+        Simulation(point).run(1, MemoryRecorder())
+        vector = seen[0]
+        vector[per_call] = 0.0
+        return vector
+
+    scene = _phases("wedge-6.6hz", **{"run.duration": 5.0, "initial.t": 0.1})
+    setup = EN.prepare(scene)
+    q1, q2 = _starts(5, 6)
+    q1 = np.append(q1, setup.at_rest[L.EN_Q1])
+    q2 = np.append(q2, setup.at_rest[L.EN_Q2])
+    ctxs, ok = EN.start(setup, q1, q2, v1=0.2, t=0.1, duration=5.0)
+    assert ok.sum() > 2 and ok[-1]
+    for i in np.nonzero(ok)[0]:
+        point = with_values(
+            scene, {"initial.q1": float(q1[i]), "initial.q2": float(q2[i]), "initial.v1": 0.2}
+        )
+        ctxs[i, per_call] = 0.0
+        np.testing.assert_array_equal(ctxs[i], first_call(point))
+    kicked = with_values(scene, {"initial.v1": 0.3, "initial.omega": -5.0})
+    ctx = EN.start_at_rest(EN.prepare(kicked), 1, v1=0.3, omega=-5.0, duration=5.0)[0]
+    ctx[per_call] = 0.0
+    np.testing.assert_array_equal(ctx, first_call(kicked))

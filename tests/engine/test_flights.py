@@ -1,7 +1,7 @@
-"""Contact phases on the compiled state machine (:mod:`billiard.kernels.machine`,
-:meth:`billiard.engine.simulation.Simulation._run_machine`): the same records, phases,
-cut phases, times, final time and engine state as the one-event step on the classes,
-interpreted as compiled, and interrupted runs that resume to the same bytes."""
+"""Contact phases on the one engine, the state machine (:mod:`billiard.kernels.machine`):
+compiled, the same records, phases, cut phases, times, final time and engine state as
+the same source interpreted (``sim.driver.interpreted``), and interrupted runs that
+resume to the same bytes."""
 
 from __future__ import annotations
 
@@ -22,9 +22,8 @@ def phases(name: str, drag: str = "fowles"):
 def run(scene, impacts: int, *, kernels: bool, checkpoints: list | None = None):
     """(impact rows, contact records, mode times, final state, status) of a run."""
     sim = Simulation(scene)
-    assert sim._flights is not None
     if not kernels:
-        sim._flights = None  # the one-event step on the classes throughout
+        sim.driver.interpreted = True  # the same source as plain Python
     contacts = []
     sim.on_contact = contacts.append
     records: list = []
@@ -37,7 +36,7 @@ def run_ends(scene, impacts: int, *, kernels: bool) -> dict:
     """Everything a run reports, its cut phases and how it ended included."""
     sim = Simulation(scene)
     if not kernels:
-        sim._flights = None
+        sim.driver.interpreted = True
     contacts: list = []
     cuts: list = []
     sim.on_contact = contacts.append
@@ -200,7 +199,7 @@ def test_the_interpreted_state_machine_writes_the_compiled_bytes(tmp_path):
         ("parabola-5.4hz", "none"),
     ],
 )
-def test_flights_on_the_kernels_are_the_one_event_step(name, drag):
+def test_flights_compiled_are_the_interpreted_engine(name, drag):
     scene = phases(name, drag)
     on_kernels = run(scene, 2500, kernels=True)
     on_classes = run(scene, 2500, kernels=False)

@@ -22,8 +22,6 @@ from tests.csv_pins import PINS, pinned_cases, require_pinned_platform
 
 IMPACTS = PINS["impacts"]
 
-compiled = pytest.mark.skipif(not jit.ENABLED, reason=f"numba unavailable: {jit.numba_problem()}")
-
 _INTERPRETED = """
 import sys
 from billiard import jit
@@ -90,16 +88,3 @@ def test_interpreted_and_compiled_kernels_write_the_pinned_bytes(both_runs):
     key, a, b = both_runs
     assert hashlib.sha256(a).hexdigest() == PINS["sha256"][key]
     assert hashlib.sha256(b).hexdigest() == PINS["sha256"][key]
-
-
-@compiled
-def test_simulate_compiled_is_the_engine(tmp_path):
-    from billiard.run.compiled import simulate_compiled
-
-    scene = load_scene("hyperbola-4.5hz")
-    run = simulate_compiled(scene, 500, out_dir=tmp_path / "alias")
-    assert run.impacts == 500 and run.compiled
-    simulate(scene, collisions=500, out_dir=tmp_path / "engine")
-    assert (tmp_path / "alias" / "collisions.csv").read_bytes() == (
-        tmp_path / "engine" / "collisions.csv"
-    ).read_bytes()

@@ -1,9 +1,9 @@
-"""The paper's fixed-step detection (method ``rk4``) on the kernels
-(:mod:`billiard.kernels.fixed_step`, ``run_chunk_fixed``): the bytes the runtime's classes
-wrote before it ran there (``tests/data/rk4_sha256.json``, checked where the pins were
-made: :data:`csv_pins.PINNED_ON`), the same records as the
-one-event step on the classes, global nearest points answered along the way, and
-checkpoints that continue bit for bit.
+"""The paper's fixed-step detection (method ``rk4``) on the one engine
+(:mod:`billiard.kernels.fixed_step`, ``run_chunk_fixed`` under the state machine): the
+bytes the runtime's classes wrote before it ran there (``tests/data/rk4_sha256.json``,
+checked where the pins were made: :data:`csv_pins.PINNED_ON`), the same records compiled
+as interpreted, global nearest points answered along the way, and checkpoints that
+continue bit for bit.
 """
 
 from __future__ import annotations
@@ -15,7 +15,7 @@ from pathlib import Path
 import pytest
 
 from billiard import jit
-from billiard.engine import kernel_engine as engine_kernels
+from billiard.engine import driver as engine_kernels
 from billiard.engine import simulation as engine
 from billiard.run.simulate import Simulation, simulate
 from billiard.scene.scene import load_scene, with_values
@@ -63,9 +63,8 @@ def answers(monkeypatch) -> list:
 
 def run(scene, impacts: int, *, kernels: bool, start=None, checkpoints=None):
     sim = Simulation(scene)
-    assert sim._kernel is not None
     if not kernels:
-        sim._kernel = None  # the one-event step on the classes throughout
+        sim.driver.interpreted = True  # the same source as plain Python
     records: list = []
     sim.run(impacts, records, start=start, checkpoint=checkpoints)
     return [repr(tuple(r)) for r in records], sim.state, sim.status
@@ -74,7 +73,7 @@ def run(scene, impacts: int, *, kernels: bool, start=None, checkpoints=None):
 @pytest.mark.parametrize(
     ("name", "drag"), [("hyperbola-5.8hz", "none"), ("parabola-5.4hz", "fowles")]
 )
-def test_rk4_on_the_kernels_is_the_one_event_step(name, drag, answers):
+def test_rk4_compiled_is_the_interpreted_engine(name, drag, answers):
     scene = rk4(name, drag)
     on_kernels = run(scene, 400, kernels=True)
     assert answers, "no global nearest point asked for: the test covers less than it says"

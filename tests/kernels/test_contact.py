@@ -1,16 +1,16 @@
-"""The contact phases as kernels (``billiard.kernels.contact``): the interpreted twin
-that :class:`billiard.models.contact.ContactModel` runs is the kernel file itself
-(``tests/kernels/test_interpreted.py``), and the compiled kernels continue every phase of real
-runs, sample by sample, to the same bits.
+"""The contact phases as kernels (``billiard.kernels.contact``): the interpreted twin is
+the kernel file itself (``tests/kernels/test_interpreted.py``), and the compiled kernels
+continue every phase of real runs, sample by sample, to the same bits.
 
-The phases are captured where the engine begins them (the twin's ``begin``: the state
-vector, the parameters and the wall functions then), and run again from there, once
+The phases are captured where the engine, run interpreted, begins them (the twin's
+``begin``: the state vector, the parameters and the wall functions then), and run again
+from there, once
 through the twin and once compiled, with sample times every ``SAMPLE_DT`` seconds so
 that the resumable path runs too; after every return the whole state vector must be the
 same bytes, and a stop the same code.
 
-The holds by two walls (``billiard.kernels.vertex``, which
-:class:`billiard.models.hold.VertexHold` runs) are captured and replayed the same way."""
+The holds by two walls (``billiard.kernels.vertex``) are captured and replayed the same
+way."""
 
 from __future__ import annotations
 
@@ -22,7 +22,6 @@ import pytest
 from billiard import jit
 from billiard.errors import BallAtRest
 from billiard.kernels import interpreted as twin
-from billiard.models import contact as contact_phase
 from billiard.run.simulate import Simulation
 from billiard.scene.scene import load_scene, with_values
 
@@ -54,8 +53,8 @@ def _capture(
         return begin(ctx, *args)
 
     monkeypatch.setattr(module, "begin", capture)
-    monkeypatch.setattr(contact_phase, "COMPILED", False)  # phases and holds through the twin
     sim = Simulation(scene)
+    sim.driver.interpreted = True  # the engine's phases and holds through the twin
     if until is None:
         until = scene.run.duration or math.inf
     if sample is not None:
@@ -139,7 +138,9 @@ def test_phases_are_the_same_interpreted_and_compiled(monkeypatch):
     for scene, impacts, most, sample, dt in _cases():
         for ctx, p, walls in _capture(monkeypatch, scene, impacts, most, sample):
             expected = _replay(twin.contact, L, list(ctx), (p, walls), dt)
-            typed = tuple(tuple(WallFunction(fn) for fn in row) for row in walls)
+            typed = walls  # the engine's own table, compiled functions
+            if getattr(walls, "numba_type", None) is None:
+                typed = tuple(tuple(WallFunction(fn) for fn in row) for row in walls)
             values = np.asarray(ctx, dtype=np.float64)
             got = _replay(kernel, layout, values, (np.asarray(p, dtype=np.float64), typed), dt)
             assert got == expected
@@ -150,22 +151,13 @@ def test_phases_are_the_same_interpreted_and_compiled(monkeypatch):
 @compiled
 @pytest.mark.parametrize("case", [0, 1, 3])
 def test_the_engine_runs_phases_compiled_to_the_same_records(case, monkeypatch):
-    """ContactModel runs its phases through the compiled entry (run_phase) when the
-    kernels are compiled: the engine's impacts, finished phases and samples are those of
-    the twin's phases, to the last bit."""
+    """The engine compiled and the same source interpreted: its impacts, finished phases
+    and samples, stepped one event at a time, to the last bit."""
     scene, impacts, _, sample, _ = _cases()[case]
 
     def run(compiled: bool):
-        monkeypatch.setattr(contact_phase, "COMPILED", compiled)
-        calls = []
-        entry = contact_phase.ContactModel._compiled_entry
-
-        def counted(self, *args):
-            calls.append(1)
-            return entry(self, *args)
-
-        monkeypatch.setattr(contact_phase.ContactModel, "_compiled_entry", counted)
         sim = Simulation(scene)
+        sim.driver.interpreted = not compiled
         out = {"records": [], "contacts": [], "samples": []}
         sim.on_contact = out["contacts"].append
         if sample is not None:
@@ -177,12 +169,10 @@ def test_the_engine_runs_phases_compiled_to_the_same_records(case, monkeypatch):
             if record is None:
                 break
             out["records"].append(record)
-        monkeypatch.undo()
-        return out, len(calls)
+        return out
 
-    twin_run, twin_calls = run(False)
-    compiled_run, compiled_calls = run(True)
-    assert twin_calls == 0 and compiled_calls > 0
+    twin_run = run(False)
+    compiled_run = run(True)
     assert compiled_run["contacts"] or compiled_run["samples"]  # phases made something
     for key in ("records", "contacts", "samples"):
         # repr: every float to the last bit, and a numpy scalar would show as one
@@ -293,32 +283,24 @@ def test_holds_are_the_same_interpreted_and_compiled(monkeypatch):
 
 
 @compiled
-def test_runs_with_holds_are_the_same_with_compiled_and_twin_holds(monkeypatch):
-    """Whole runs through the holds' compiled entry (``VertexHold._run_compiled``) and
-    through the twin: the same impacts, contact phases and samples, bit for bit."""
-    from billiard.models import hold as vertex
-    from billiard.run.simulate import simulate
+def test_sampled_runs_with_holds_are_the_same_compiled_and_interpreted():
+    """Whole sampled runs through holds on the engine compiled and on the same source
+    interpreted: the same impacts, contact phases and samples, bit for bit."""
+    from billiard.runfile.record import MemoryRecorder
 
-    calls = []
-    compiled_run = vertex.VertexHold._run_compiled
-
-    def counted(self, *args):
-        calls.append(1)
-        return compiled_run(self, *args)
-
-    def outputs(scene, until, impacts, sample):
-        result = simulate(scene, collisions=impacts, duration=until, sample=sample)
-        tables = (result.columns, result.contacts, result.trajectory or {})
-        return [{k: np.asarray(v).tobytes() for k, v in t.items()} for t in tables]
+    def outputs(scene, until, impacts, sample, interpreted):
+        sim = Simulation(scene)
+        sim.driver.interpreted = interpreted
+        contacts, samples = [], []
+        sim.on_contact = contacts.append
+        sim.sample_dt, sim.on_sample = sample, lambda *row: samples.append(row)
+        recorder = MemoryRecorder()
+        sim.run(impacts, recorder, until=until)
+        rows = {k: np.asarray(v).tobytes() for k, v in recorder.columns().items()}
+        return rows, [repr(tuple(c)) for c in contacts], [repr(r) for r in samples]
 
     for scene, until, impacts, _, sample, _ in _hold_cases()[-2:]:
-        # sampled: a run without samples holds the ball on the state machine
-        # (billiard.kernels.machine; tests/engine/test_flights.py)
         sample = 0.004 if sample is None else sample
-        monkeypatch.setattr(vertex.VertexHold, "_run_compiled", counted)
-        fast = outputs(scene, until, impacts, sample)
-        assert calls, "no hold ran compiled"
-        monkeypatch.setattr(contact_phase, "COMPILED", False)
-        assert outputs(scene, until, impacts, sample) == fast
-        monkeypatch.undo()
-        calls.clear()
+        compiled_run = outputs(scene, until, impacts, sample, False)
+        assert any("'held'" in c for c in compiled_run[1]) and compiled_run[2]
+        assert outputs(scene, until, impacts, sample, True) == compiled_run

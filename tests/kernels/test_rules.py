@@ -11,7 +11,7 @@ import re
 import pytest
 
 from billiard import jit
-from billiard.engine import contact_phases, ctx, event_step, simulation
+from billiard.engine import ctx, driver, simulation
 from billiard.kernels import loop, rules
 from billiard.kernels.rules import (
     COLLAPSE_COUNT,
@@ -86,19 +86,18 @@ def test_the_compiled_clock_gives_the_same_bits():
 
 def test_the_engines_use_the_one_set_of_limits():
     # one source: the compiled loop and both interpreted steppers read these objects
-    for module in (loop, contact_phases, event_step, simulation):
+    for module in (loop, driver, simulation):
         assert module.COLLAPSE_COUNT == COLLAPSE_COUNT, module.__name__
         assert module.COLLAPSE_SPAN == COLLAPSE_SPAN, module.__name__
         assert module.ZERO_FLIGHT_LIMIT == ZERO_FLIGHT_LIMIT, module.__name__
-    assert contact_phases.compensated_add is rules.compensated_add
-    assert event_step.compensated_add is rules.compensated_add
+    assert loop._compensated_add is rules.compensated_add
     # the collapse window holds the COLLAPSE_COUNT impact times before the latest one
     assert loop.RING == ctx.RING == COLLAPSE_COUNT + 1
 
 
 def test_the_documented_limits_are_the_constants():
     # the collapse stop's documentation states the numbers: they must be these
-    doc = event_step.EventStep._collapse.__doc__
+    doc = rules.__doc__
     count = re.search(r"COLLAPSE_COUNT \(([\d,]+)\)", doc)
     span = re.search(r"COLLAPSE_SPAN \(([\d.e+-]+) s\)", doc)
     zero = re.search(r"ZERO_FLIGHT_LIMIT \(([\d,]+)\)", doc)

@@ -24,6 +24,7 @@ from billiard.runfile.tables import read_collisions
 from billiard.scene.scene import load_scene
 
 engine = importlib.import_module("billiard.engine.simulation")
+driver = importlib.import_module("billiard.engine.driver")
 persist = importlib.import_module("billiard.run.persist")
 stream = importlib.import_module("billiard.runfile.stream")
 
@@ -56,7 +57,7 @@ def frequent_checkpoints(monkeypatch):
     """A wall clock that advances 0.25 s per reading: a flush and checkpoint every few
     impacts, the same ones in every run."""
     ticks = iter(range(10**9))
-    monkeypatch.setattr(engine, "time", types.SimpleNamespace(monotonic=lambda: next(ticks) / 4))
+    monkeypatch.setattr(driver, "time", types.SimpleNamespace(monotonic=lambda: next(ticks) / 4))
 
 
 @pytest.fixture(scope="module")

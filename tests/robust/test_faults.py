@@ -130,22 +130,22 @@ from billiard.run.simulate import Simulation
 walls = importlib.import_module("billiard.geometry.wall_functions")
 loop = importlib.import_module("billiard.kernels.loop")
 from billiard.kernels.layout import EN_IMPACTS
-boxed, step = walls.wall_functions, loop.step
+boxed, step = walls.phase_wall_functions, loop.step
 broken = [False]
 
-def wall_functions(sim):
-    f, df, d2f = boxed(sim)
+def phase_wall_functions(sim):
+    f, df, d2f, d3f = boxed(sim)
     bad = tuple(
         (lambda s, p, good=good: math.nan if broken[0] else good(s, p)) for good in df
     )
-    return f, bad, d2f
+    return f, bad, d2f, d3f
 
 def counting(ctx, *args):
     # the slope turns bad once impact 100 is done
     broken[0] = broken[0] or ctx[EN_IMPACTS] >= 100
     return step(ctx, *args)
 
-patch("billiard.geometry.wall_functions", "wall_functions", wall_functions)
+patch("billiard.geometry.wall_functions", "phase_wall_functions", phase_wall_functions)
 patch("billiard.kernels.loop", "step", counting)
 
 recorder = MemoryRecorder()

@@ -40,8 +40,8 @@ def held_scene():
     )
 
 
-# (store, sampling interval): without samples the compiled state machine writes the
-# phases, with them the engine's classes (billiard/engine/contact_phases.py)
+# (store, sampling interval): the state machine writes the phases, with samples and
+# without
 CASES = [("csv", None), ("csv", 0.01), ("npy", None), ("npy", 0.01)]
 
 

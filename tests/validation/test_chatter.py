@@ -28,8 +28,8 @@ import math
 import pytest
 from scipy.optimize import brentq
 
-from billiard.engine.contact_phases import LIFT_OFF_SPEED
 from billiard.engine.simulation import Simulation
+from billiard.kernels.machine import LIFT_OFF_SPEED
 from billiard.runfile.record import ContactRecord, ImpactRecord
 from billiard.scene.scene import scene_from_dict
 
