@@ -19,6 +19,7 @@ import numpy as np
 import pytest
 
 from billiard import jit, load_scene
+from billiard.kernels import layout as L
 from billiard.kernels import loop
 
 pytestmark = pytest.mark.skipif(not jit.ENABLED, reason=f"numba unavailable: {jit.numba_problem()}")
@@ -50,10 +51,13 @@ def _fresh_ir(dispatcher, args: tuple) -> str:
 
 
 def test_run_chunk_counts_no_references_on_its_arrays():
-    from billiard.run.compiled import prepare
+    from billiard.engine.simulation import Simulation
+    from billiard.geometry.wall_functions import wall_functions
 
-    run = prepare(load_scene("wedge-6.6hz"), 10, chunk=10)
-    args = (run.ctx, run.params, run.walls, run.buffer, np.int64(run.chunk))
+    sim = Simulation(load_scene("wedge-6.6hz"))
+    ctx = np.array(sim.ctx, dtype=np.float64)
+    params = np.array(sim.boundary.walls[0].p, dtype=np.float64)
+    args = (ctx, params, wall_functions(sim), np.empty(10 * L.NCOL), np.int64(10))
     counts = _refops(_fresh_ir(loop.run_chunk, args), "run_chunk")
     assert counts, "no compiled run_chunk in the IR"
     total = sum(counts.values())
