@@ -46,20 +46,34 @@ def interpreted(name: str, drag: str, impacts: int, repeats: int) -> float:
 
 
 def kernel(name: str, drag: str, impacts: int, repeats: int) -> tuple[float, float]:
-    """Median CPU seconds per impact of run_chunk alone (one chunk of all impacts), and
-    of simulate_compiled (records in memory, the rows turned into records)."""
+    """Median CPU seconds per impact of run_chunk alone (one chunk of all impacts, on a
+    copy of a fresh simulation's state vector), and of Simulation.run (the state
+    machine in chunks, records in memory)."""
+    import numpy as np
+
+    from billiard.engine.simulation import Simulation
+    from billiard.geometry.wall_functions import wall_functions
+    from billiard.kernels import layout as L
     from billiard.kernels.loop import run_chunk
-    from billiard.run.compiled import prepare, simulate_compiled
+    from billiard.runfile.record import MemoryRecorder
 
     scene = _scene(name, drag)
     bare, whole = [], []
     for _ in range(repeats):
-        run = prepare(scene, impacts, chunk=impacts)
+        sim = Simulation(scene)
+        ctx = np.array(sim.ctx, dtype=np.float64)
+        ctx[L.EN_TARGET] = float(impacts)
+        params = np.array(sim.boundary.walls[0].p, dtype=np.float64)
+        buffer = np.empty(impacts * L.NCOL)
+        walls = wall_functions(sim)
         start = time.process_time()
-        code, rows = run_chunk(run.ctx, run.params, run.walls, run.buffer, run.chunk)
+        code, rows = run_chunk(ctx, params, walls, buffer, impacts)
         bare.append((time.process_time() - start) / rows)
-        result = simulate_compiled(scene, impacts)
-        whole.append(result.cpu_time / result.impacts)
+        sim = Simulation(scene)
+        recorder = MemoryRecorder()
+        start = time.process_time()
+        sim.run(impacts, recorder)
+        whole.append((time.process_time() - start) / len(recorder))
     return statistics.median(bare), statistics.median(whole)
 
 
