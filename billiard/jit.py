@@ -63,11 +63,13 @@ __all__ = [
 
 _PACKAGE = Path(__file__).resolve().parent
 _KERNELS = _PACKAGE / "kernels"
-#: The modules compiled into the kernels besides billiard.kernels.*
+#: The modules compiled into the kernels besides billiard.kernels.* (the wall table's
+#: numba type: how a kernel reads a wall function from its row)
 KERNEL_SOURCES = (
     "billiard.jit",
     "billiard.generated.ball",
     "billiard.generated.contact",
+    "billiard.geometry.wall_functions",
 )
 #: the stamp of the kernels' cache: the :func:`kernel_source_hash` (hex) their cache
 #: was last invalidated for, in the kernels' ``__pycache__``

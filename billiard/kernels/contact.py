@@ -25,7 +25,7 @@ import math
 
 from . import drive
 from .contact_forces import at_rest, conditions, n_conditions, n_y, rhs
-from .decorators import inline, jit
+from .decorators import borrow, inline, jit
 from .illinois import narrow, secant_point
 from .layout import (
     E_AT_REST,
@@ -395,6 +395,8 @@ def run_phase(ctx, p, walls, start):
     """:func:`begin` (when ``start``) and :func:`advance` as one compiled function: the
     entry :class:`billiard.models.contact.ContactModel` calls, once per phase and once
     per sample, when the kernels are compiled."""
+    # the caller owns the arrays throughout: no reference counting inside
+    ctx, p = borrow(ctx), borrow(p)
     if start:
         begin(ctx, p, walls)
     return advance(ctx, p, walls)

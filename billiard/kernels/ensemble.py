@@ -37,7 +37,7 @@ import math
 
 import numpy as np
 
-from .decorators import inline, jit
+from .decorators import borrow, inline, jit
 from .layout import (
     CCOL,
     E_AT_REST,
@@ -266,6 +266,9 @@ def measure(ctx, p, walls, row, ring, stats, consts, transient, total, target):
 def measure_guarded(ctx, p, walls, row, ring, stats, consts, transient, total, target):
     """:func:`measure`, a kernel stop or arithmetic fault caught: ST_STATUS RUN_FAILED,
     ST_CODE the stop's code (0 for an arithmetic fault)."""
+    # the caller owns the arrays throughout: no reference counting inside
+    ctx, p, row, ring, stats = borrow(ctx), borrow(p), borrow(row), borrow(ring), borrow(stats)
+    consts = borrow(consts)
     try:
         measure(ctx, p, walls, row, ring, stats, consts, transient, total, target)
     except Exception:  # noqa: BLE001 - numba catches any exception or none
@@ -393,6 +396,8 @@ def run_rows(ctx, p, walls, out, total):
     ``out`` (``total * NCOL`` floats), the loop of :func:`measure` without the
     measurements: the records a run makes. Returns the rows written; a kernel stop
     raises."""
+    # the caller owns the arrays throughout: no reference counting inside
+    ctx, p, out = borrow(ctx), borrow(p), borrow(out)
     row = 0
     while ctx[EN_IMPACTS] < total:
         if not step(ctx, p, walls, out[row * NCOL :], 0):

@@ -10,7 +10,7 @@ import math
 
 from . import fixed_step, flight
 from .ball import energy, frame_velocity
-from .decorators import inline, jit
+from .decorators import borrow, inline, jit
 from .drive import accel_to_boundary_frame, boundary_velocity, to_boundary_frame
 from .impact import chatter_tail, impact_law, rebound_settles
 from .layout import (
@@ -310,6 +310,8 @@ def run_chunk(ctx, p, walls, out, rows):
     TIME_LIMIT, COLLAPSE (after the row that detected it) or LAND (after the row of an
     impact that settles, when ``ctx[EN_LAND_ON]``); a documented stop inside
     raises KernelError, with ``ctx`` as after the last row written."""
+    # the caller owns the arrays throughout: no reference counting inside
+    ctx, p, out = borrow(ctx), borrow(p), borrow(out)
     row = 0
     quiet = 0
     while ctx[EN_IMPACTS] < ctx[EN_TARGET]:
@@ -334,6 +336,7 @@ def run_chunk_fixed(ctx, p, walls, nears, out, rows):
     ``nears`` are the walls' nearest-point functions (:mod:`billiard.kernels.fixed_step`).
     A search that needs the curve's global nearest point raises KernelError(E_FOOT),
     ``ctx`` as after the last row written: answered, the next call goes on."""
+    ctx, p, out = borrow(ctx), borrow(p), borrow(out)
     row = 0
     quiet = 0
     while ctx[EN_IMPACTS] < ctx[EN_TARGET]:

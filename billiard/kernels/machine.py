@@ -30,7 +30,7 @@ from .ball import energy, frame_velocity
 from .contact import pmax, pmin, run_phase
 from .contact_equations import centre_state, roll_spin, s_dot_of_velocity, slip_velocity
 from .contact_forces import forces
-from .decorators import inline, jit
+from .decorators import borrow, inline, jit
 from .drive import boundary_motion as boundary
 from .drive import displacement, to_lab_frame
 from .drive import to_boundary_frame as boundary_frame
@@ -1033,6 +1033,9 @@ def run_machine(ctx, p, walls, nears, out, rows, cout, crows, sctx, sout, srows)
     impact for the contact span, at MC_FINAL) or PAUSED (a long phase, or a phase cut
     by a stop request: MC_PHASE_ON). A documented stop raises KernelError, the rows
     written so far counted."""
+    # the caller owns the arrays throughout: no reference counting inside
+    ctx, p, out, cout = borrow(ctx), borrow(p), borrow(out), borrow(cout)
+    sctx, sout = borrow(sctx), borrow(sout)
     flight_walls = (walls[0], walls[1], walls[2])
     until = ctx[EN_UNTIL]
     if ctx[SM_PENDING] != 0.0:

@@ -10,7 +10,7 @@ of 5-25 ms of interpreted Newton steps, once per simulation built.
 
 from __future__ import annotations
 
-from .decorators import jit
+from .decorators import borrow, jit
 from .surfaces import offset_height
 
 
@@ -18,6 +18,8 @@ from .surfaces import offset_height
 def offset_heights(ctx, p, walls, n, xs, out):
     """out[k] = max over surfaces j < n of F_j(xs[k]) (m), for k in order; Python's
     ``max``: the first of equal or unordered values is kept."""
+    # the caller owns the arrays throughout: no reference counting inside
+    ctx, p, xs, out = borrow(ctx), borrow(p), borrow(xs), borrow(out)
     for k in range(len(xs)):
         x = xs[k]
         height = offset_height(ctx, p, walls, 0, x)

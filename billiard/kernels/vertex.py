@@ -29,7 +29,7 @@ import math
 
 from . import drive
 from .contact import EVENT_TOL, pmin
-from .decorators import inline, jit
+from .decorators import borrow, inline, jit
 from .illinois import narrow, secant_point
 from .impact import CHATTER_TAIL, chatter_period
 from .layout import (
@@ -345,6 +345,8 @@ def run_hold(ctx, start):
     """:func:`begin` (when ``start``) and :func:`advance` as one compiled function: the
     entry :class:`billiard.models.hold.VertexHold` calls, once per hold and once per sample,
     when the kernels are compiled."""
+    # the caller owns the arrays throughout: no reference counting inside
+    ctx = borrow(ctx)
     if start:
         begin(ctx)
     return advance(ctx)

@@ -2,7 +2,8 @@
 ``ulp`` (``billiard/kernels/decorators.py``, for the event locator's tolerances) and the
 bits that the CSV formatter reads (``_float_bits``, ``billiard/kernels/ryu.py``). The
 references are ``math.ulp`` and the float's own bits (a numpy view), on every binade's
-edges, the subnormals and a million random bit patterns."""
+edges, the subnormals and a million random bit patterns. Also ``borrow``, an array
+without its reference count: the same array to the kernel that reads it."""
 
 from __future__ import annotations
 
@@ -120,3 +121,29 @@ def test_interpreted_float_bits_are_the_floats_bits():
     assert np.array_equal(got, values.view(np.uint64))
     assert int(twin._float_bits(-math.inf)) == 0xFFF0000000000000
     assert _nan_bits_ok(int(twin._float_bits(-math.nan)), True)
+
+
+@compiled
+def test_a_borrowed_array_is_the_array_itself():
+    """``borrow`` drops the reference count, nothing else: a compiled kernel reads and
+    writes the caller's array through it, every element and the length."""
+    import numba
+
+    from billiard.kernels.decorators import borrow
+
+    @numba.njit
+    def double_in_place(values):
+        view = borrow(values)
+        for i in range(len(view)):
+            view[i] = 2.0 * view[i]
+        return len(view)
+
+    values = np.arange(7.0)
+    assert double_in_place(values) == 7
+    assert values.tolist() == [2.0 * i for i in range(7)]
+
+
+def test_borrow_is_the_identity_interpreted():
+    values = [1.0, 2.0]
+    twin = importlib.import_module(f"{kernels_python.PACKAGE}.decorators")
+    assert twin.borrow(values) is values
