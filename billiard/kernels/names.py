@@ -5,8 +5,11 @@ never subscript it with a slot (a test scans the package for that), so that a ch
 of the layout is made in the layout alone.
 
 ``ctx`` is one vector (a list of floats or a float64 array), ``ctxs`` an array of them,
-one row per trajectory; ``write`` and the columns take quantities of one slot. A
-surface's block is addressed by the surface's number ``j`` and a quantity of
+one row per trajectory; ``write`` and the columns take quantities of one slot,
+``read_slots`` and ``write_slots`` quantities of several. A model sets its block's
+quantities with ``write_block(ctx, "phase", mass=m, radius=r)`` and hands its block on
+with ``copy(to, ctx, "impact")`` (a block, or the slots from one name through another).
+A surface's block is addressed by the surface's number ``j`` and a quantity of
 :data:`~billiard.kernels.layout.SURFACE` (``"kind"``, ``"a"`` .. ``"e"``, ``"warm_s"``, ...).
 """
 
@@ -15,14 +18,17 @@ from __future__ import annotations
 from collections.abc import MutableSequence, Sequence
 from typing import Any
 
-from billiard.kernels.layout import CTX, S_WS, S_WSLOPE, SURF, SURF_STRIDE, SURFACE
+from billiard.kernels.layout import CTX, S_WS, S_WSLOPE, SIZE, SURF, SURF_STRIDE, SURFACE
 
 __all__ = [
     "column",
     "columns",
+    "copy",
+    "new_ctx",
     "put_surface_block",
     "put_warm_s",
     "read",
+    "read_slots",
     "read_surface",
     "set_columns",
     "surface_block",
@@ -30,6 +36,8 @@ __all__ = [
     "surface_ctx",
     "warm_start",
     "write",
+    "write_block",
+    "write_slots",
     "write_surface",
 ]
 
@@ -61,6 +69,65 @@ read = CTX.read
 def write(ctx: MutableSequence[float], name: str, value: float) -> None:
     """Set ``ctx``'s quantity ``name`` to ``value``."""
     ctx[_index(name)] = value
+
+
+def read_slots(ctx: Sequence[float], name: str, count: int | None = None) -> tuple[float, ...]:
+    """The values of the slots of ``ctx``'s quantity ``name``: its first ``count`` (all
+    by default)."""
+    slot = CTX.slot(name)
+    if count is None:
+        count = slot.size
+    elif not 0 <= count <= slot.size:
+        raise ValueError(f"{name} has {slot.size} slots, not {count}")
+    return tuple(float(x) for x in ctx[slot.index : slot.index + count])
+
+
+def write_slots(
+    ctx: MutableSequence[float], name: str, values: Sequence[float], at: int = 0
+) -> None:
+    """Set the slots of ``ctx``'s quantity ``name`` from its ``at``-th (its first by
+    default) to ``values``, one each; the slots after them keep their values."""
+    slot = CTX.slot(name)
+    start, stop = slot.index + at, slot.index + at + len(values)
+    if at < 0 or stop > slot.stop:
+        raise ValueError(f"{name} has {slot.size} slots: {len(values)} from slot {at} do not fit")
+    ctx[start:stop] = values
+
+
+def write_block(ctx: MutableSequence[float], block: str, **values: float) -> None:
+    """Set the one-slot quantities of ``block`` named by the keywords
+    (``write_block(ctx, "hold", za=0.1, zb=-0.1)``)."""
+    for name, value in values.items():
+        ctx[_index(f"{block}.{name}")] = value
+
+
+# a block's slots, by its name
+_BLOCKS = {name: (start, stop) for name, start, stop in CTX.blocks}
+
+
+def _span(name: str) -> tuple[int, int]:
+    """The slots (start, stop) of the block or the quantity ``name``."""
+    if name in _BLOCKS:
+        return _BLOCKS[name]
+    slot = CTX.slot(name)
+    return slot.index, slot.stop
+
+
+def copy(to: MutableSequence[float], source: Sequence[float], first: str, last: str = "") -> None:
+    """Copy the slots of ``source`` from the block or quantity ``first`` through the
+    block or quantity ``last`` (default ``first``) into the same slots of ``to``
+    (``copy(ctx, flight_ctx, "flight.kind", "flight.step")``: the flight's constants and
+    step proposal)."""
+    start, stop = _span(first)[0], _span(last or first)[1]
+    if stop <= start:
+        raise ValueError(f"{last} comes before {first} in the state vector")
+    to[start:stop] = source[start:stop]
+
+
+def new_ctx(through: str = "") -> list[float]:
+    """A state vector of zeros: every slot, or the slots through the block ``through``
+    alone (the vector of a model that keeps nothing after its block)."""
+    return [0.0] * (_BLOCKS[through][1] if through else SIZE)
 
 
 def column(ctxs: Any, name: str) -> Any:

@@ -46,6 +46,17 @@ from billiard.kernels.interpreted import contact_forces as _f
 from billiard.kernels.interpreted import kernel_errors
 from billiard.kernels.interpreted import layout as _L
 from billiard.kernels.interpreted import stop as _stop
+from billiard.kernels.names import (
+    new_ctx,
+    put_surface_block,
+    put_warm_s,
+    read,
+    read_slots,
+    read_surface,
+    write,
+    write_block,
+    write_slots,
+)
 from billiard.status import Status
 
 __all__ = ["CONTACT_MODES", "ContactModel", "PhaseEnd", "Watched"]
@@ -128,12 +139,23 @@ class ContactModel:
     def new_ctx(self) -> list[float]:
         """A state vector of the kernels (a list) with this scene's drive and contact
         constants set (a phase's, and a hold's in :mod:`billiard.models.hold`)."""
-        ctx = [0.0] * _L.SIZE
+        ctx = new_ctx()
         self.drive.write(ctx)
-        constants = (self.m, self.r, self.k, self.g, self.c_lin, self.c_quad, self.mu_s,
-                     self.mu_k, self.rtol)  # fmt: skip
-        ctx[_L.PH_M : _L.PH_RTOL + 1] = constants
-        ctx[_L.PH_PAUSE] = ctx[_L.PH_PAUSE_T] = math.inf
+        write_block(
+            ctx,
+            "phase",
+            mass=self.m,
+            radius=self.r,
+            inertia_factor=self.k,
+            gravity=self.g,
+            c_lin=self.c_lin,
+            c_quad=self.c_quad,
+            mu_static=self.mu_s,
+            mu_kinetic=self.mu_k,
+            rtol=self.rtol,
+            pause_steps=math.inf,
+            pause_t=math.inf,
+        )
         return ctx
 
     def wall_functions(self, wall: Any, others: Sequence[Watched] = ()) -> tuple:
@@ -174,9 +196,13 @@ class ContactModel:
     def forces(self, wall: Any, mode: str, sgn: float, theta: float, y: Vec) -> tuple:
         """(s_ddot, u3_dot, N, F): u3_dot is that of the no-slip spin while rolling."""
         ctx = self._query
-        ctx[_L.PH_WALL] = float(wall.index)
-        ctx[_L.PH_MODE] = _L.ROLL if mode == "roll" else _L.SLIDE
-        ctx[_L.PH_SGN] = sgn
+        write_block(
+            ctx,
+            "phase",
+            wall=float(wall.index),
+            mode=_L.ROLL if mode == "roll" else _L.SLIDE,
+            slip_sign=sgn,
+        )
         return _f.forces(ctx, wall.p, self.wall_functions(wall), theta, y[0], y[1])
 
     def spin(self, wall: Any, y: Vec, mode: str) -> float:
@@ -264,28 +290,33 @@ class ContactModel:
         walls = self.wall_functions(wall, others)
         roll = mode == "roll"
         n_y = 2 if roll else 3
-        ctx[_L.PH_WALL] = float(wall.index)
-        ctx[_L.PH_LO], ctx[_L.PH_HI] = (wall.lo, wall.hi) if interval is None else interval
-        ctx[_L.PH_MODE] = _L.ROLL if roll else _L.SLIDE
-        ctx[_L.PH_SGN] = sgn
-        ctx[_L.PH_THETA0] = theta0
-        ctx[_L.PH_LIMIT] = limit
-        ctx[_L.PH_Y : _L.PH_Y + 3] = (y0[0], y0[1], 0.0 if roll else y0[2])
+        lo, hi = (wall.lo, wall.hi) if interval is None else interval
+        samples = iter(samples)
         # the phase's own wall is surface 0 (not watched), the others follow in order
-        ctx[_L.PH_SURF] = 0.0
-        ctx[_L.NSURF] = float(1 + len(others))
+        write_block(
+            ctx,
+            "phase",
+            wall=float(wall.index),
+            lo=lo,
+            hi=hi,
+            mode=_L.ROLL if roll else _L.SLIDE,
+            slip_sign=sgn,
+            theta0=theta0,
+            limit=limit,
+            surface=0.0,
+            next_sample=next(samples, math.inf) if on_sample is not None else math.inf,
+            steps=0.0,
+            pause_steps=PAUSE_STEPS if pause is not None else math.inf,
+            pause_t=stop_at,
+        )
+        write_slots(ctx, "phase.y", (y0[0], y0[1], 0.0 if roll else y0[2]))
+        write(ctx, "locator.surfaces", float(1 + len(others)))
         curved = []
         for j, (surface, warm) in enumerate(others, 1):
-            base = _L.SURF + j * _L.SURF_STRIDE
-            ctx[base : base + _L.S_WS] = surface.block()
-            if ctx[base + _L.S_KIND] == _L.CURVED:
-                ctx[base + _L.S_WS] = warm[0]
-                curved.append((base, warm))
-        samples = iter(samples)
-        ctx[_L.PH_NEXT] = next(samples, math.inf) if on_sample is not None else math.inf
-        ctx[_L.PH_STEPS] = 0.0
-        ctx[_L.PH_PAUSE] = PAUSE_STEPS if pause is not None else math.inf
-        ctx[_L.PH_PAUSE_T] = stop_at
+            put_surface_block(ctx, j, surface.block())
+            if read_surface(ctx, j, "kind") == _L.CURVED:
+                put_warm_s(ctx, j, warm[0])
+                curved.append((j, warm))
         p = wall.p
         cut = False
         try:
@@ -303,24 +334,24 @@ class ContactModel:
                 status = call(True)
                 while status == _L.PHASE_SAMPLE or status == _L.PHASE_PAUSE:
                     if status == _L.PHASE_SAMPLE:
-                        y = tuple(float(v) for v in state[_L.PH_SAMPLE_Y : _L.PH_SAMPLE_Y + n_y])
-                        on_sample(float(state[_L.PH_SAMPLE_T]), y)  # type: ignore[misc]
-                        state[_L.PH_NEXT] = next(samples, math.inf)
+                        y = read_slots(state, "phase.sample_y", n_y)
+                        on_sample(read(state, "phase.sample_t"), y)  # type: ignore[misc]
+                        write(state, "phase.next_sample", next(samples, math.inf))
                     else:
-                        tau = float(state[_L.PH_TAU])
+                        tau = read(state, "phase.tau")
                         if pause is not None and pause(tau):
                             cut = True
                             break
+                        steps = read(state, "phase.steps")
                         if tau < stop_at:
-                            state[_L.PH_PAUSE] = state[_L.PH_STEPS] + PAUSE_STEPS
-                        elif state[_L.PH_RSINCE] == math.inf:
+                            write(state, "phase.pause_steps", steps + PAUSE_STEPS)
+                        elif read(state, "phase.rest_since") == math.inf:
                             cut = True  # moving at stop_at
                             break
                         else:
                             # at rest relative to the boundary: on to the kernel's at-rest
                             # stop (within a drive period), looked at after every step
-                            state[_L.PH_PAUSE_T] = math.inf
-                            state[_L.PH_PAUSE] = state[_L.PH_STEPS] + 1.0
+                            write_block(state, "phase", pause_t=math.inf, pause_steps=steps + 1.0)
                     status = call(False)
             finally:
                 if state is not ctx:
@@ -328,22 +359,22 @@ class ContactModel:
         except _KERNEL_ERRORS as exc:
             raise self._stop(exc) from None
         finally:
-            for base, warm in curved:
-                warm[0] = ctx[base + _L.S_WS]
-            self.steps += int(ctx[_L.PH_STEPS])
+            for j, warm in curved:
+                warm[0] = read_surface(ctx, j, "warm_s")
+            self.steps += int(read(ctx, "phase.steps"))
         if cut:
-            return PhaseEnd(ctx[_L.PH_TAU], None, tuple(ctx[_L.PH_Y : _L.PH_Y + n_y]), cut=True)
+            return PhaseEnd(read(ctx, "phase.tau"), None, read_slots(ctx, "phase.y", n_y), cut=True)
         if status == _L.PHASE_LIMIT:
-            return PhaseEnd(limit, None, tuple(ctx[_L.PH_Y : _L.PH_Y + n_y]))
-        i = int(ctx[_L.PH_END_I])
+            return PhaseEnd(limit, None, read_slots(ctx, "phase.y", n_y))
+        i = int(read(ctx, "phase.end_condition"))
         if i < 3:
             reason = _REASONS[i]
         elif i == 3:
             reason = "slip" if roll else "roll"
         else:
             reason = "impact"
-        end_y = tuple(ctx[_L.PH_END_Y : _L.PH_END_Y + n_y])
-        return PhaseEnd(ctx[_L.PH_END_T], reason, end_y, i - 4 if i >= 4 else -1)
+        end_y = read_slots(ctx, "phase.end_y", n_y)
+        return PhaseEnd(read(ctx, "phase.end_t"), reason, end_y, i - 4 if i >= 4 else -1)
 
     def _compiled_entry(
         self, wall: Any, others: Sequence[Watched]
@@ -389,7 +420,7 @@ class ContactModel:
         """The error a kernel's stop stands for, worded as before."""
         code = exc.args[0]
         if code == _L.E_AT_REST:
-            return BallAtRest(self.ctx[_L.PH_RSINCE])
+            return BallAtRest(read(self.ctx, "phase.rest_since"))
         if code == _L.E_PHASE_STEPS:
             return SimulationError(
                 "the contact phase's step-size control failed (60 rejected steps)",

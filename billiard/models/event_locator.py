@@ -63,9 +63,18 @@ from billiard.geometry.wall_functions import plain_wall_functions
 from billiard.kernels.interpreted import layout as _L
 from billiard.kernels.interpreted import locate as _locate
 from billiard.kernels.interpreted import stop as _stop
+from billiard.kernels.names import (
+    copy,
+    new_ctx,
+    put_surface_block,
+    read,
+    warm_start,
+    write_block,
+    write_surface,
+)
 from billiard.models.flight import FlightModel
 
-__all__ = ["LOCATOR_SLOTS", "Event", "EventLocator", "Locator"]
+__all__ = ["LOCATOR", "Event", "EventLocator", "Locator"]
 
 # The search's own constants are the kernels' (billiard/kernels/locate.py).
 MAX_FLIGHT_TIME = _locate.MAX_FLIGHT_TIME
@@ -80,11 +89,10 @@ _TURN_FRACTION = 0.5
 _LONGEST_BRACKET = 0.05
 # Proven-clear substeps grow up to this length (s).
 _LONGEST_STEP = 0.2
-# the flight's slots of the state vector: its constants, step proposal and current step
-_FLIGHT_SLOTS = slice(_L.FL_KIND, _L.FL_KB + 2)
-#: what a locator writes into the engine's state vector: the drive block and the
-#: locator's constants (its kind first; THETA0 and later are the search's own)
-LOCATOR_SLOTS = slice(_L.DR, _L.H_BRACKET + 1)
+#: what a locator writes into the engine's state vector (the first and the last name of
+#: :func:`billiard.kernels.names.copy`): the drive block and the locator's constants (its
+#: kind first; its theta0 and later are the search's own)
+LOCATOR = ("drive", "locator.longest_bracket")
 
 
 @dataclass(slots=True)
@@ -164,23 +172,27 @@ class EventLocator:
                 f"the event locator takes the kernels' flight models and at most "
                 f"{_L.MAX_SURFACES} surfaces, not {type(flight).__name__}"
             )
-        if flight_ctx[_L.G] != self.g:
-            raise ValueError(f"a flight model with gravity {flight_ctx[_L.G]!r}, not {self.g!r}")
+        flight_g = read(flight_ctx, "locator.gravity")
+        if flight_g != self.g:
+            raise ValueError(f"a flight model with gravity {flight_g!r}, not {self.g!r}")
         self.h_first = min(_LONGEST_BRACKET, _DRIVE_FRACTION * drive.period, flight.max_step)
         self.h_longest = min(_LONGEST_STEP, flight.max_step)
         self.turn_length = _TURN_FRACTION * boundary.smallest_offset_radius
-        ctx = [0.0] * _L.SIZE
+        ctx = new_ctx()
         drive.write(ctx)
-        ctx[_L.LOC_KIND] = self.kind
-        ctx[_L.G] = self.g
-        ctx[_L.H_FIRST] = self.h_first
-        ctx[_L.H_LONGEST] = self.h_longest
-        ctx[_L.TURN] = self.turn_length
-        ctx[_L.H_BRACKET] = self.h_first
-        ctx[_L.NSURF] = float(len(self.surfaces))
+        write_block(
+            ctx,
+            "locator",
+            kind=self.kind,
+            gravity=self.g,
+            first_substep=self.h_first,
+            longest_substep=self.h_longest,
+            turn=self.turn_length,
+            longest_bracket=self.h_first,
+            surfaces=float(len(self.surfaces)),
+        )
         for j, surface in enumerate(self.surfaces):
-            base = _L.SURF + j * _L.SURF_STRIDE
-            ctx[base : base + _L.S_WS] = surface.block()
+            put_surface_block(ctx, j, surface.block())
         self.ctx = ctx
         walls = boundary.walls
         self._p = walls[0].p
@@ -189,17 +201,17 @@ class EventLocator:
     def write(self, ctx: MutableSequence[float]) -> None:
         """Write the drive block and the locator's constants (its kind first) into a
         state vector, as its own ``ctx`` holds them."""
-        ctx[LOCATOR_SLOTS] = self.ctx[LOCATOR_SLOTS]
+        copy(ctx, self.ctx, *LOCATOR)
 
     @property
     def h_bracket(self) -> float:
         """The longest root bracket of the latest substep (s)."""
-        return self.ctx[_L.H_BRACKET]
+        return read(self.ctx, "locator.longest_bracket")
 
     @property
     def theta0(self) -> float:
         """The drive angle at the start of the latest flight (rad)."""
-        return self.ctx[_L.THETA0]
+        return read(self.ctx, "locator.theta0")
 
     def memory(self) -> dict[str, list[float]]:
         """What the locator carries from one flight to the next, for a checkpoint: nothing
@@ -216,11 +228,9 @@ class EventLocator:
         ctx = self.ctx
         flight_ctx = self.flight.ctx
         warm = self.warm
-        ctx[_FLIGHT_SLOTS] = flight_ctx[_FLIGHT_SLOTS]
+        copy(ctx, flight_ctx, "flight")
         for i, w in enumerate(warm):
-            base = _L.SURF + i * _L.SURF_STRIDE
-            ctx[base + _L.S_WS] = w[0]
-            ctx[base + _L.S_WSLOPE] = w[1]
+            write_surface(ctx, i, warm_s=w[0], warm_slope=w[1])
         try:
             tau, j, q1, q2, u1, u2, theta, s, z = _locate.locate(
                 ctx, self._p, self._walls, theta0, q1, q2, u1, u2, u3
@@ -229,9 +239,7 @@ class EventLocator:
             raise _stop(exc, ctx) from None
         finally:
             # what the search left: the flight's current step and the warm starts
-            flight_ctx[_FLIGHT_SLOTS] = ctx[_FLIGHT_SLOTS]
+            copy(flight_ctx, ctx, "flight")
             for i, w in enumerate(warm):
-                base = _L.SURF + i * _L.SURF_STRIDE
-                w[0] = ctx[base + _L.S_WS]
-                w[1] = ctx[base + _L.S_WSLOPE]
+                w[0], w[1] = warm_start(ctx, i)
         return Event(tau, self.surfaces[j], q1, q2, u1, u2, theta, s, z, j)

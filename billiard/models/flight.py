@@ -42,6 +42,7 @@ from billiard.kernels.interpreted import fixed_step as _fixed_step
 from billiard.kernels.interpreted import flight as _flight
 from billiard.kernels.interpreted import layout as _L
 from billiard.kernels.interpreted import stop as _stop
+from billiard.kernels.names import copy, new_ctx, read, write, write_block
 
 __all__ = [
     "FLIGHT_MODELS",
@@ -103,25 +104,28 @@ class _KernelFlight(FlightModel):
 
     def __init__(self, gravity: float):
         self.g = float(gravity)
-        self.ctx = [0.0] * _L.SIZE
-        self.ctx[_L.G] = self.g
-        self.ctx[_L.FL_KIND] = self.kind
+        self.ctx = new_ctx()
+        write(self.ctx, "locator.gravity", self.g)
+        write(self.ctx, "flight.kind", self.kind)
 
     def write(self, ctx: MutableSequence[float]) -> None:
         """Write the model's constants and step proposal (its kind first) into a state
         vector, as its own ``ctx`` holds them."""
-        ctx[_L.FL_KIND : _L.FL_U3] = self.ctx[_L.FL_KIND : _L.FL_U3]
+        copy(ctx, self.ctx, "flight.kind", "flight.step")
 
     def _air(self, mass: float, c_lin: float, c_quad: float, c_magnus: float) -> None:
         """A model with air forces: its mass (kg), Fowles drag coefficients (N s/m,
         N s^2/m^2) and Magnus coefficient (kg), kept as attributes and in ``ctx``."""
         self.m = float(mass)
         self.c_lin, self.c_quad, self.c_magnus = float(c_lin), float(c_quad), float(c_magnus)
-        ctx = self.ctx
-        ctx[_L.FL_M] = self.m
-        ctx[_L.FL_CLIN] = self.c_lin
-        ctx[_L.FL_CQUAD] = self.c_quad
-        ctx[_L.FL_CMAG] = self.c_magnus
+        write_block(
+            self.ctx,
+            "flight",
+            mass=self.m,
+            c_lin=self.c_lin,
+            c_quad=self.c_quad,
+            c_magnus=self.c_magnus,
+        )
 
     def begin(self, q1: float, q2: float, u1: float, u2: float, u3: float) -> None:
         _flight.begin(self.ctx, q1, q2, u1, u2, u3)
@@ -174,9 +178,7 @@ class AdaptiveFlight(_KernelFlight):
         super().__init__(gravity)
         self._air(mass, c_lin, c_quad, c_magnus)
         self.rtol = float(rtol)
-        ctx = self.ctx
-        ctx[_L.FL_RTOL] = self.rtol
-        ctx[_L.FL_H] = 1e-3
+        write_block(self.ctx, "flight", rtol=self.rtol, step=1e-3)
 
     @classmethod
     def from_scene(cls, scene: Any) -> AdaptiveFlight:
@@ -193,11 +195,11 @@ class AdaptiveFlight(_KernelFlight):
     @property
     def step_proposal(self) -> float:
         """The step the next Dormand-Prince step tries (s)."""
-        return self.ctx[_L.FL_H]
+        return read(self.ctx, "flight.step")
 
     @step_proposal.setter
     def step_proposal(self, value: float) -> None:
-        self.ctx[_L.FL_H] = value
+        write(self.ctx, "flight.step", value)
 
     def memory(self) -> dict[str, float]:
         # the step proposal outlives a flight: the next flight starts with it
@@ -211,7 +213,7 @@ class AdaptiveFlight(_KernelFlight):
 
     def advance(self, tau_a: float, tau_target: float) -> float:
         ctx = self.ctx
-        if tau_a != ctx[_L.FL_TB]:
+        if tau_a != read(ctx, "flight.tb"):
             raise ValueError("AdaptiveFlight.advance must continue from the last step end")
         try:
             return _flight.advance(ctx, tau_a, tau_target)
@@ -258,7 +260,7 @@ class RK4Flight(_KernelFlight):
         )
 
     def begin(self, q1: float, q2: float, u1: float, u2: float, u3: float) -> None:
-        self.ctx[_L.FL_U3] = u3
+        write(self.ctx, "flight.u3", u3)
         self._ta = self._tb = 0.0
         self._ya = self._yb = (q1, q2, u1, u2)
 

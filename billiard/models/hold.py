@@ -43,6 +43,7 @@ from billiard import jit as _jit
 from billiard.errors import BallAtRest
 from billiard.kernels.interpreted import layout as _L
 from billiard.kernels.interpreted import vertex as _k
+from billiard.kernels.names import read, write, write_block
 from billiard.models import contact as _phase
 from billiard.models.contact import _KERNEL_ERRORS, ContactModel
 
@@ -130,12 +131,11 @@ class VertexHold:
                 drive period (or at all, on a static boundary).
         """
         ctx = self.ctx
-        ctx[_L.VX_ZA], ctx[_L.VX_ZB] = za, zb
-        ctx[_L.VX_THETA0] = theta0
-        ctx[_L.VX_LIMIT] = limit
-        ctx[_L.VX_W] = u3
         samples = iter(samples)
-        ctx[_L.VX_NEXT] = next(samples, math.inf) if on_sample is not None else math.inf
+        first = next(samples, math.inf) if on_sample is not None else math.inf
+        write_block(
+            ctx, "hold", za=za, zb=zb, theta0=theta0, limit=limit, spin=u3, next_sample=first
+        )
         try:
             if _phase.COMPILED:  # compiled as the phases are
                 status = self._run_compiled(samples, on_sample, pause)
@@ -143,20 +143,22 @@ class VertexHold:
                 _k.begin(ctx)
                 status = _k.advance(ctx)
                 while status == _L.PHASE_SAMPLE:
-                    on_sample(ctx[_L.VX_SAMPLE_T], ctx[_L.VX_SAMPLE_W])  # type: ignore[misc]
-                    if pause is not None and pause(ctx[_L.VX_SAMPLE_T]):
+                    tau = read(ctx, "hold.sample_t")
+                    on_sample(tau, read(ctx, "hold.sample_spin"))  # type: ignore[misc]
+                    if pause is not None and pause(tau):
                         break
-                    ctx[_L.VX_NEXT] = next(samples, math.inf)
+                    write(ctx, "hold.next_sample", next(samples, math.inf))
                     status = _k.advance(ctx)
         except _KERNEL_ERRORS as exc:
             if exc.args[0] == _L.E_AT_REST:
-                raise BallAtRest(ctx[_L.VX_RSINCE]) from None
+                raise BallAtRest(read(ctx, "hold.rest_since")) from None
             raise
         if status == _L.PHASE_SAMPLE:  # paused at the sample
-            return HoldEnd(ctx[_L.VX_SAMPLE_T], None, ctx[_L.VX_SAMPLE_W])
+            return HoldEnd(read(ctx, "hold.sample_t"), None, read(ctx, "hold.sample_spin"))
+        end_spin = read(ctx, "hold.end_spin")
         if status == _L.PHASE_LIMIT:
-            return HoldEnd(limit, None, ctx[_L.VX_W_END])
-        return HoldEnd(ctx[_L.VX_END_T], "release", ctx[_L.VX_W_END], int(ctx[_L.VX_KEEPS]))
+            return HoldEnd(limit, None, end_spin)
+        return HoldEnd(read(ctx, "hold.end_t"), "release", end_spin, int(read(ctx, "hold.keeps")))
 
     def _run_compiled(
         self,
@@ -180,10 +182,11 @@ class VertexHold:
                 with _jit.compiling(run_hold):
                     status = run_hold(state, True)
             while status == _L.PHASE_SAMPLE:
-                on_sample(float(state[_L.VX_SAMPLE_T]), float(state[_L.VX_SAMPLE_W]))  # type: ignore[misc]
-                if pause is not None and pause(float(state[_L.VX_SAMPLE_T])):
+                tau = read(state, "hold.sample_t")
+                on_sample(tau, read(state, "hold.sample_spin"))  # type: ignore[misc]
+                if pause is not None and pause(tau):
                     break
-                state[_L.VX_NEXT] = next(samples, math.inf)
+                write(state, "hold.next_sample", next(samples, math.inf))
                 status = run_hold(state, False)
         finally:
             ctx[:] = state.tolist()

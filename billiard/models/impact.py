@@ -19,6 +19,7 @@ from typing import Any, Protocol
 
 from billiard.kernels.interpreted import impact as _impact
 from billiard.kernels.interpreted import layout as _L
+from billiard.kernels.names import copy, new_ctx, read, write
 
 __all__ = [
     "IMPACT_LAWS",
@@ -110,14 +111,14 @@ class LowVelocityRule:
         self.threshold = float(threshold)
 
 
-def _slot(index: int, doc: str) -> property:
-    """An attribute of the law kept in its state vector's slot ``index``."""
+def _slot(name: str, doc: str) -> property:
+    """An attribute of the law kept in its state vector's quantity ``name``."""
 
     def get(self: KaneLevinsonImpact) -> float:
-        return self.ctx[index]
+        return read(self.ctx, name)
 
     def set(self: KaneLevinsonImpact, value: float) -> None:
-        self.ctx[index] = float(value)
+        write(self.ctx, name, float(value))
 
     return property(get, set, doc=doc)
 
@@ -144,13 +145,13 @@ class KaneLevinsonImpact:
     #: the kernels' code of this law (``IM_KIND``)
     kind: float = _L.KANE_LEVINSON
 
-    m = _slot(_L.IM_M, "mass (kg)")
-    r = _slot(_L.IM_R, "radius (m)")
-    k = _slot(_L.IM_K, "inertia factor I / (m r^2)")
-    e = _slot(_L.IM_E, "restitution")
-    mu_s = _slot(_L.IM_MUS, "static friction")
-    mu_k = _slot(_L.IM_MUK, "kinetic friction")
-    elastic_below = _slot(_L.IM_EB, "threshold of the low-velocity rule (m/s)")
+    m = _slot("impact.mass", "mass (kg)")
+    r = _slot("impact.radius", "radius (m)")
+    k = _slot("impact.inertia_factor", "inertia factor I / (m r^2)")
+    e = _slot("impact.restitution", "restitution")
+    mu_s = _slot("impact.mu_static", "static friction")
+    mu_k = _slot("impact.mu_kinetic", "kinetic friction")
+    elastic_below = _slot("impact.elastic_below", "threshold of the low-velocity rule (m/s)")
 
     def __init__(
         self,
@@ -162,9 +163,9 @@ class KaneLevinsonImpact:
         mu_kinetic: float,
         elastic_below: float,
     ):
-        #: the law's block of a state vector (slots up to IM_END; the rest unused)
-        self.ctx = [0.0] * _L.IM_END
-        self.ctx[_L.IM_KIND] = self.kind
+        #: the law's block of a state vector (slots up to the block's end; the rest unused)
+        self.ctx = new_ctx("impact")
+        write(self.ctx, "impact.kind", self.kind)
         self.m = mass
         self.r = radius
         self.k = inertia_factor
@@ -188,7 +189,7 @@ class KaneLevinsonImpact:
 
     def write(self, ctx: MutableSequence[float]) -> None:
         """Write the law's block (its kind and coefficients) into a state vector."""
-        ctx[_L.IM : _L.IM_END] = self.ctx[_L.IM : _L.IM_END]
+        copy(ctx, self.ctx, "impact")
 
     def apply(self, state: Any, contact: Contact) -> ImpactResult:
         """Post-impact speeds for a ball with speeds ``state.u1, state.u2, state.u3``."""

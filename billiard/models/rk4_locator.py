@@ -27,7 +27,17 @@ from billiard.geometry.wall_functions import plain_wall_functions
 from billiard.kernels.interpreted import fixed_step as _fixed_step
 from billiard.kernels.interpreted import layout as _L
 from billiard.kernels.interpreted import stop as _stop
-from billiard.models.event_locator import LOCATOR_SLOTS, Event
+from billiard.kernels.names import (
+    copy,
+    new_ctx,
+    put_surface_block,
+    read,
+    read_slots,
+    write,
+    write_block,
+    write_slots,
+)
+from billiard.models.event_locator import LOCATOR, Event
 from billiard.models.flight import RK4Flight
 
 __all__ = ["DEPARTURE_LIMIT", "FixedStepLocator", "answer_foot", "fixed_step_constants"]
@@ -45,24 +55,26 @@ def fixed_step_constants(ctx: list[float], boundary: Boundary, step: float) -> N
     the walls and their intervals, where the lid and the escape level are."""
     boundary.drive.write(ctx)
     surfaces = boundary.surfaces
-    ctx[_L.NSURF] = float(len(surfaces))
+    write(ctx, "locator.surfaces", float(len(surfaces)))
     for j, surface in enumerate(surfaces):
-        base = _L.SURF + j * _L.SURF_STRIDE
-        ctx[base : base + _L.S_WS] = surface.block()
-    ctx[_L.RK_H] = float(step)
-    ctx[_L.RK_R] = boundary.radius
+        put_surface_block(ctx, j, surface.block())
     walls = boundary.walls
-    ctx[_L.RK_NWALLS] = float(len(walls))
-    for i, wall in enumerate(walls):
-        ctx[_L.RK_LO + i] = wall.lo
-        ctx[_L.RK_HI + i] = wall.hi
     lid, escape = boundary.lid, boundary.escape
-    ctx[_L.RK_LID] = float(surfaces.index(lid)) if lid is not None else -1.0
-    ctx[_L.RK_ESCAPE] = float(surfaces.index(escape)) if escape is not None else -1.0
-    ctx[_L.RK_ANSWERS] = 0.0
+    write_block(
+        ctx,
+        "rk4",
+        step=float(step),
+        radius=boundary.radius,
+        walls=float(len(walls)),
+        lid=float(surfaces.index(lid)) if lid is not None else -1.0,
+        escape=float(surfaces.index(escape)) if escape is not None else -1.0,
+        answers=0.0,
+    )
+    write_slots(ctx, "rk4.lo", [wall.lo for wall in walls])
+    write_slots(ctx, "rk4.hi", [wall.hi for wall in walls])
 
 
-def answer_foot(ctx: list[float] | object, boundary: Boundary) -> None:
+def answer_foot(ctx: MutableSequence[float], boundary: Boundary) -> None:
     """Answer the search's question (``E_FOOT``): the foot on wall ``RK_ASK[2]`` of the
     curve's global nearest point of (px, py) (``Boundary.nearest_point``, polynomial
     roots), or the vertical projection when that point is on another wall.
@@ -72,20 +84,18 @@ def answer_foot(ctx: list[float] | object, boundary: Boundary) -> None:
     """
     from billiard.errors import SimulationError
 
-    n = int(ctx[_L.RK_ANSWERS])  # type: ignore[index]
+    n = int(read(ctx, "rk4.answers"))
     if n >= _L.RK_MAX_ANSWERS:
         raise SimulationError(
             f"the fixed-step search needed the global nearest point more than "
             f"{_L.RK_MAX_ANSWERS} times in one flight"
         )
-    px, py, i = (float(ctx[_L.RK_ASK + k]) for k in range(3))  # type: ignore[index]
+    px, py, i = read_slots(ctx, "rk4.ask")
     wall = boundary.walls[int(i)]
     near = boundary.nearest_point(px, py)
     s = near.s if near.wall == int(i) else min(max(px, wall.lo), wall.hi)
-    base = _L.RK_ANSWER + 4 * n
-    for k, value in enumerate((px, py, i, s)):
-        ctx[base + k] = value  # type: ignore[index]
-    ctx[_L.RK_ANSWERS] = float(n + 1)  # type: ignore[index]
+    write_slots(ctx, "rk4.answer", (px, py, i, s), at=4 * n)
+    write(ctx, "rk4.answers", float(n + 1))
 
 
 class FixedStepLocator:
@@ -113,9 +123,8 @@ class FixedStepLocator:
         self.surfaces = boundary.surfaces
         self.flight = flight
         self.h = flight.max_step
-        ctx = [0.0] * _L.SIZE
-        ctx[_L.LOC_KIND] = self.kind
-        ctx[_L.G] = float(gravity)
+        ctx = new_ctx()
+        write_block(ctx, "locator", kind=self.kind, gravity=float(gravity))
         fixed_step_constants(ctx, boundary, self.h)
         self.ctx = ctx
         walls = boundary.walls
@@ -127,22 +136,21 @@ class FixedStepLocator:
         """Write the drive block, the locator's constants (its kind first) and the
         fixed-step detection's constants and memory into a state vector, as its own
         ``ctx`` holds them."""
-        ctx[LOCATOR_SLOTS] = self.ctx[LOCATOR_SLOTS]
-        ctx[_L.RK : _L.RK_END] = self.ctx[_L.RK : _L.RK_END]
+        copy(ctx, self.ctx, *LOCATOR)
+        copy(ctx, self.ctx, "rk4")
 
     @property
     def _feet(self) -> list[float]:
-        n = len(self.boundary.walls)
-        return self.ctx[_L.RK_FEET : _L.RK_FEET + n]
+        return list(read_slots(self.ctx, "rk4.feet", len(self.boundary.walls)))
 
     @property
     def _departures(self) -> int:
-        return int(self.ctx[_L.RK_DEPARTURES])
+        return int(read(self.ctx, "rk4.departures"))
 
     @property
     def theta0(self) -> float:
         """The drive angle at the start of the latest flight (rad)."""
-        return self.ctx[_L.THETA0]
+        return read(self.ctx, "locator.theta0")
 
     def memory(self) -> dict[str, list[float]]:
         """What the locator carries from one flight to the next, for a checkpoint: the
@@ -168,14 +176,13 @@ class FixedStepLocator:
                 "FixedStepLocator memory must be {'feet': [s, ...], 'departures': [n]}, "
                 f"got {memory!r}"
             )
-        self.ctx[_L.RK_FEET : _L.RK_FEET + len(feet)] = feet
-        self.ctx[_L.RK_DEPARTURES] = float(int(count[0]))
+        write_slots(self.ctx, "rk4.feet", feet)
+        write(self.ctx, "rk4.departures", float(int(count[0])))
 
     def locate(self, theta0: float, q1: float, q2: float, u1: float, u2: float, u3: float) -> Event:
         ctx = self.ctx
         self.flight.begin(q1, q2, u1, u2, u3)
-        flight_slots = slice(_L.FL_KIND, _L.FL_U3)
-        ctx[flight_slots] = self.flight.ctx[flight_slots]
+        copy(ctx, self.flight.ctx, "flight.kind", "flight.step")
         while True:
             try:
                 tau, j, q1, q2, u1, u2, theta, s, z = _fixed_step.locate(

@@ -90,10 +90,8 @@ def test_the_import_contract_fails_on_an_upward_import(tmp_path):
 # --- the state vector by name ---------------------------------------------------------
 # Outside the kernels and the engine, a wing reads and writes the state vector ``ctx``
 # through billiard.kernels.names, never by subscripting it with layout.py's slots.
-#: the wings that may subscript it: the kernels and the engine, whose code it is, and
-#: (temporary, until the models write their blocks through named writers) the models
-SUBSCRIPTING = ("kernels", "engine", "models")
-_TEMPORARY = ("models",)
+#: the wings that may subscript it: the kernels and the engine, whose code it is
+SUBSCRIPTING = ("kernels", "engine")
 
 
 def _slot_names() -> frozenset[str]:
@@ -101,7 +99,8 @@ def _slot_names() -> frozenset[str]:
     a surface block's stride."""
     from billiard.kernels import layout as L
 
-    bounds = ("PH", "PH_END", "VX", "VX_END", "RK", "RK_END", "SURF_STRIDE", "SIZE")
+    blocks = ("DR", "FL", "IM", "PH", "VX", "RK")
+    bounds = (*blocks, *(f"{b}_END" for b in blocks), "SURF_STRIDE", "SIZE")
     return frozenset(s.constant for s in (*L.CTX.slots, *L.SURFACE.slots)) | set(bounds)
 
 
@@ -200,8 +199,7 @@ codes[LID_LABEL], rows[L.NCOL], other.G[0], ctx[self.EN_T]
 
 def test_no_wing_outside_the_kernels_and_engine_subscripts_the_state_vector():
     """The wings read and write ``ctx`` by name (billiard.kernels.names); the allowed
-    wings are the kernels and the engine, and for now the models, which the allowance
-    must still need."""
+    wings are the kernels and the engine."""
     found: dict[str, list[str]] = {}
     for path in sorted((ROOT / "billiard").rglob("*.py")):
         wing = path.relative_to(ROOT / "billiard").parts[0]
@@ -210,5 +208,3 @@ def test_no_wing_outside_the_kernels_and_engine_subscripts_the_state_vector():
             found.setdefault(wing, []).append(f"{path.relative_to(ROOT)}: lines {lines}")
     outside = [hit for wing, hits in found.items() if wing not in SUBSCRIPTING for hit in hits]
     assert outside == [], "subscripts ctx with slots; use billiard.kernels.names"
-    # a temporary allowance ends once the wing reads and writes by name
-    assert [wing for wing in _TEMPORARY if wing not in found] == []

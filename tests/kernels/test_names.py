@@ -74,3 +74,58 @@ def test_a_surfaces_block_is_read_and_written_at_its_slots():
     assert constants[: L.S_SLOPE_AT] == ctx[base : base + L.S_SLOPE_AT]
     N.put_surface_block(ctx, 0, block)
     assert ctx[L.SURF : L.SURF + L.SURF_STRIDE] == block
+
+
+def _changed(before, after) -> dict[int, float]:
+    return {i: after[i] for i in range(len(after)) if after[i] != before[i]}
+
+
+def test_a_blocks_quantities_are_written_at_their_slots():
+    ctx = list(_numbered(L.SIZE))
+    before = list(ctx)
+    N.write_block(ctx, "phase", mass=-1.0, rtol=-2.0)
+    N.write_slots(ctx, "phase.y", (-3.0, -4.0, -5.0))
+    N.write_slots(ctx, "rk4.lo", [-6.0, -7.0])  # the first slots of a longer quantity
+    N.write_slots(ctx, "rk4.answer", (-8.0, -9.0), at=4)
+    assert _changed(before, ctx) == {
+        L.PH_M: -1.0, L.PH_RTOL: -2.0, L.PH_Y: -3.0, L.PH_Y + 1: -4.0, L.PH_Y + 2: -5.0,
+        L.RK_LO: -6.0, L.RK_LO + 1: -7.0, L.RK_ANSWER + 4: -8.0, L.RK_ANSWER + 5: -9.0,
+    }  # fmt: skip
+    assert len(ctx) == L.SIZE
+    assert N.read_slots(ctx, "phase.y") == (-3.0, -4.0, -5.0)
+    assert N.read_slots(ctx, "rk4.lo", 2) == (-6.0, -7.0)
+    assert N.read_slots(np.array(ctx), "phase.y", 2) == (-3.0, -4.0)
+
+
+def test_slots_beyond_a_quantity_are_refused():
+    ctx = list(_numbered(L.SIZE))
+    with pytest.raises(ValueError, match="phase.y has 3 slots: 4 from slot 0 do not fit"):
+        N.write_slots(ctx, "phase.y", (1.0, 2.0, 3.0, 4.0))
+    with pytest.raises(ValueError, match="phase.y has 3 slots: 2 from slot 2 do not fit"):
+        N.write_slots(ctx, "phase.y", (1.0, 2.0), at=2)
+    with pytest.raises(ValueError, match="phase.y has 3 slots, not 4"):
+        N.read_slots(ctx, "phase.y", 4)
+    with pytest.raises(KeyError, match="no quantity 'phase.nothing'"):
+        N.write_block(ctx, "phase", nothing=1.0)
+    with pytest.raises(ValueError, match="phase.y has 3 slots, not one"):
+        N.write_block(ctx, "phase", y=1.0)
+    assert ctx == list(_numbered(L.SIZE))
+
+
+def test_copy_takes_a_block_or_the_slots_from_one_name_through_another():
+    source = _numbered(L.SIZE)
+    to = N.new_ctx()
+    assert to == [0.0] * L.SIZE
+    N.copy(to, source, "impact")
+    N.copy(to, source, "drive", "locator.longest_bracket")
+    N.copy(to, source, "flight.kind", "flight.step")
+    copied = [*range(L.IM, L.IM_END), *range(L.DR, L.H_BRACKET + 1), *range(L.FL_KIND, L.FL_U3)]
+    assert sorted(_changed(N.new_ctx(), to)) == sorted(copied)
+    assert all(to[i] == source[i] for i in copied)
+    # a model's own vector that ends with its block
+    short = N.new_ctx("impact")
+    assert len(short) == L.IM_END
+    N.copy(short, source, "impact")
+    assert short[L.IM :] == list(source[L.IM : L.IM_END])
+    with pytest.raises(ValueError, match="flight.kind comes before flight.step"):
+        N.copy(to, source, "flight.step", "flight.kind")
