@@ -4,10 +4,10 @@
 >>> result = simulate(load_scene("parabola-5.4hz"), collisions=200)
 >>> result.columns["q2"][:3]  # doctest: +SKIP
 
-The pieces live in their own modules: the engine and its one-event step
-(:mod:`billiard.engine.simulation`), the state it carries (:mod:`billiard.engine.state`),
-streamed runs and resuming them (:mod:`billiard.run.persist`), interruption
-(:mod:`billiard.engine.interrupt`) and the
+The pieces live in their own modules: the engine and its one-event step on the
+compiled state machine (:mod:`billiard.engine.simulation`), the state it carries
+(:mod:`billiard.engine.state`), streamed runs and resuming them
+(:mod:`billiard.run.persist`), interruption (:mod:`billiard.engine.interrupt`) and the
 result container (:mod:`billiard.run.result`). Their public names are re-exported here.
 """
 
