@@ -57,6 +57,13 @@ __all__ = [
 State = tuple[float, float, float, float]
 
 
+def _air_of(scene: Any) -> tuple[float, float, float, float, float]:
+    """(g (m/s^2), mass (kg), Fowles c_lin (N s/m), c_quad (N s^2/m^2), Magnus (kg)):
+    the arguments a flight model with air forces is built from."""
+    c_lin, c_quad = scene.air.coefficients
+    return scene.run.gravity, scene.ball.mass, c_lin, c_quad, float(scene.air.magnus)
+
+
 class FlightModel:
     """Common interface (see the module docstring)."""
 
@@ -182,15 +189,7 @@ class AdaptiveFlight(_KernelFlight):
 
     @classmethod
     def from_scene(cls, scene: Any) -> AdaptiveFlight:
-        c_lin, c_quad = scene.air.coefficients
-        return cls(
-            scene.run.gravity,
-            scene.ball.mass,
-            c_lin,
-            c_quad,
-            float(scene.air.magnus),
-            rtol=scene.run.rtol,
-        )
+        return cls(*_air_of(scene), rtol=scene.run.rtol)
 
     @property
     def step_proposal(self) -> float:
@@ -249,15 +248,7 @@ class RK4Flight(_KernelFlight):
 
     @classmethod
     def from_scene(cls, scene: Any) -> RK4Flight:
-        c_lin, c_quad = scene.air.coefficients
-        return cls(
-            scene.run.gravity,
-            scene.ball.mass,
-            c_lin,
-            c_quad,
-            float(scene.air.magnus),
-            step=scene.run.step,
-        )
+        return cls(*_air_of(scene), step=scene.run.step)
 
     def begin(self, q1: float, q2: float, u1: float, u2: float, u3: float) -> None:
         write(self.ctx, "flight.u3", u3)
