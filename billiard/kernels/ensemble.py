@@ -257,6 +257,12 @@ def measure(ctx, p, walls, row, ring, stats, consts, transient, total, target):
             # an inelastic collapse: the engine stops the run after this impact
             stats[ST_STATUS] = RUN_FAILED
             return
+    finish(ctx, ring, stats, consts, total)
+
+
+@inline
+def finish(ctx, ring, stats, consts, total):
+    """A trajectory that made its ``total`` impacts: its period found, complete."""
     if ctx[EN_IMPACTS] >= total:
         find_period(ring, stats, consts)
         stats[ST_STATUS] = RUN_COMPLETE
@@ -367,9 +373,7 @@ def measure_phases(
             # an inelastic collapse, or contact phases of zero duration piled up
             stats[ST_STATUS] = RUN_FAILED
             return
-    if ctx[EN_IMPACTS] >= total:
-        find_period(ring, stats, consts)
-        stats[ST_STATUS] = RUN_COMPLETE
+    finish(ctx, ring, stats, consts, total)
 
 
 @jit

@@ -195,7 +195,10 @@ from .loop import (
 )
 from .rules import COLLAPSE_COUNT, ZERO_FLIGHT_LIMIT
 from .samples import (
+    EMIT,
+    EMITTED,
     flight_samples,
+    next_emitted,
     sample_time,
     save_flight_start,
     start_flight_samples,
@@ -377,15 +380,9 @@ def chatter_samples(ctx, p, walls, sout, srows):
     roll = ctx[MC_MODE] == M_ROLL
     t, theta, u3 = ctx[EN_T], ctx[EN_THETA], ctx[EN_U3]
     while True:
-        ts = sample_time(ctx, ctx[SM_K])
-        if ts > ctx[SM_TO]:
-            ctx[SM_PENDING] = 0.0
-            return True
-        if ts < ctx[SM_FROM]:
-            ctx[SM_K] += 1.0
-            continue
-        if int(ctx[SM_ROW]) == srows:
-            return False
+        status, ts = next_emitted(ctx, srows)
+        if status != EMIT:
+            return status == EMITTED
         angle = theta + ctx[OMEGA] * (ts - t)
         q1, q2, u1, u2, _ = lab_state(ctx, p, walls, w, angle, s, sd, u3, roll)
         write_sample(ctx, sout, ts, q1, q2, u1, u2, u3, M_FLIGHT)

@@ -148,21 +148,36 @@ def start_flight_samples(ctx, sctx, t_to):
     ctx[SM_PENDING] = SRC_FLIGHT
 
 
+#: :func:`next_emitted`: a sample to write, the emission done, the buffer full
+EMIT = 0
+EMITTED = 1
+BUFFER_FULL = 2
+
+
+@inline
+def next_emitted(ctx, srows):
+    """(EMIT, its time in s) for the pending emission's next sample in [SM_FROM, SM_TO]
+    (those before SM_FROM skipped, counted); (EMITTED, t) when none is left (nothing
+    pending then); (BUFFER_FULL, t) when the buffer has no room for it."""
+    while True:
+        ts = sample_time(ctx, ctx[SM_K])
+        if ts > ctx[SM_TO]:
+            ctx[SM_PENDING] = 0.0
+            return EMITTED, ts
+        if ts >= ctx[SM_FROM]:
+            return (BUFFER_FULL if int(ctx[SM_ROW]) == srows else EMIT), ts
+        ctx[SM_K] += 1.0
+
+
 @jit
 def flight_samples(ctx, sctx, sout, srows):
     """Write the pending flight samples in [SM_FROM, SM_TO] while the buffer has room:
     True when all are written (nothing pending), False when the buffer is full."""
     t_start, u3 = ctx[SM_BALL], ctx[SM_BALL + 6]
     while True:
-        ts = sample_time(ctx, ctx[SM_K])
-        if ts > ctx[SM_TO]:
-            ctx[SM_PENDING] = 0.0
-            return True
-        if ts < ctx[SM_FROM]:
-            ctx[SM_K] += 1.0
-            continue
-        if int(ctx[SM_ROW]) == srows:
-            return False
+        status, ts = next_emitted(ctx, srows)
+        if status != EMIT:
+            return status == EMITTED
         tau = ts - t_start
         if tau < 0.0:
             tau = 0.0
