@@ -681,6 +681,18 @@ def contact_targets(c: dict) -> list[list[str]]:
                 ),
             ]
         )
+    if "sampled" in c:
+        m = c["sampled"]
+        out.append(
+            [
+                f"a sampled run's engine <= {m['target']:g}x the run without samples "
+                f"({m['scene']} under phases, {m['impacts']:,} impacts, a sample every "
+                f"{m['dt']:g} s: {m['samples']:,} samples)",
+                f"{m['ratio']:.2f}x: {m['per_sample_us']:.2f} us a sample; handing each "
+                f"to Python {m['handout_us']:.2f} us more",
+                "met" if m["ratio"] <= m["target"] else "not met",
+            ]
+        )
     return out
 
 
