@@ -538,7 +538,10 @@ def _deadline(seconds: float | None) -> Iterator[None]:
         yield
         return
 
+    expired = [False]
+
     def expire(signum: int, frame: object) -> None:
+        expired[0] = True
         raise _Deadline
 
     previous = signal.signal(signal.SIGALRM, expire)
@@ -548,6 +551,10 @@ def _deadline(seconds: float | None) -> Iterator[None]:
     finally:
         signal.setitimer(signal.ITIMER_REAL, 0.0)
         signal.signal(signal.SIGALRM, previous)
+    if expired[0]:
+        # the signal came where Python drops an exception (a garbage collector's
+        # callback, a __del__): the block went on to its end, past its time all the same
+        raise _Deadline
 
 
 def derive_user_curve(

@@ -275,6 +275,22 @@ def test_a_fractional_power_sympy_cannot_clear_is_refused_at_once(capsys, tmp_pa
     assert list(tmp_path.iterdir()) == []
 
 
+def test_a_deadline_whose_exception_was_dropped_still_stops_the_derivation():
+    # the timer's exception can land where Python ignores exceptions (a garbage
+    # collector's callback): the block then runs to its end, and is stopped there
+    import time
+
+    from billiard.derivation import build
+
+    with pytest.raises(build._Deadline), build._deadline(0.001):
+        end = time.monotonic() + 0.05
+        while time.monotonic() < end:
+            try:
+                time.sleep(0.005)
+            except build._Deadline:
+                pass  # dropped, as an exception raised in a gc callback is
+
+
 def test_a_derivation_past_its_time_is_stopped_in_one_line(capsys, tmp_path):
     import signal
 
