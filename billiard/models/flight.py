@@ -41,6 +41,7 @@ from typing import Any
 from billiard.kernels.interpreted import fixed_step as _fixed_step
 from billiard.kernels.interpreted import flight as _flight
 from billiard.kernels.interpreted import layout as _L
+from billiard.kernels.interpreted import samples as _samples
 from billiard.kernels.interpreted import stop as _stop
 from billiard.kernels.names import copy, new_ctx, read, write, write_block
 
@@ -244,30 +245,25 @@ class RK4Flight(_KernelFlight):
         super().__init__(gravity)
         self._air(mass, c_lin, c_quad, c_magnus)
         self.max_step = float(step)
+        write(self.ctx, "rk4.step", self.max_step)
         self.begin(0.0, 0.0, 0.0, 0.0, 0.0)
 
     @classmethod
     def from_scene(cls, scene: Any) -> RK4Flight:
         return cls(*_air_of(scene), step=scene.run.step)
 
+    # the steps are the sample flight's (billiard.kernels.samples), which keeps the last
+    # step in its SF_* slots: one copy of the fixed step's sequencing
     def begin(self, q1: float, q2: float, u1: float, u2: float, u3: float) -> None:
-        write(self.ctx, "flight.u3", u3)
-        self._ta = self._tb = 0.0
-        self._ya = self._yb = (q1, q2, u1, u2)
+        _samples.flight_begin(self.ctx, q1, q2, u1, u2, u3)
 
     def advance(self, tau_a: float, tau_target: float) -> float:
-        if tau_a != self._tb:
+        if tau_a != read(self.ctx, "samples.rk4_tb"):
             raise ValueError("RK4Flight.advance must continue from the last step end")
-        h = min(self.max_step, tau_target - tau_a)
-        self._ta, self._ya = tau_a, self._yb
-        self._tb = tau_target if h == tau_target - tau_a else tau_a + h
-        self._yb = self.step(self._ya, h)
-        return self._tb
+        return _samples.flight_advance(self.ctx, tau_a, tau_target)
 
     def state(self, tau: float) -> State:
-        if tau == self._tb:
-            return self._yb
-        return self.step(self._ya, tau - self._ta)
+        return _samples.flight_state(self.ctx, tau)
 
     def step(self, y: State, h: float) -> State:
         """One classical RK4 step of length h from y = (q1, q2, u1, u2)."""
