@@ -29,6 +29,8 @@ __all__ = [
     "RING",
     "constants_vector",
     "engine_state",
+    "read_ball",
+    "put_motion",
     "read_motion",
     "state_vector",
     "write_ball",
@@ -157,11 +159,16 @@ def write_state(ctx: Any, state: EngineState) -> None:
         ctx[L.FL_H] = state.flight["step"]
 
 
+def read_ball(ctx: Any) -> BallState:
+    """The ball in ``ctx`` (EN_T .. EN_Q3)."""
+    return BallState(*(float(ctx[slot]) for slot in _BALL))
+
+
 def engine_state(ctx: Any, regimes: Sequence[str], walls: int) -> EngineState:
     """The :class:`EngineState` held by ``ctx`` (flight mode: the impacts model):
     ``regimes`` name the counters (then ``resting``), ``walls`` is how many surfaces
     carry a warm start (the offset walls, which come first)."""
-    ball = BallState(*(float(ctx[slot]) for slot in _BALL))
+    ball = read_ball(ctx)
     head, count = int(ctx[L.EN_RHEAD]), int(ctx[L.EN_RCOUNT])
     recent = tuple(float(ctx[L.RECENT + (head + i) % RING]) for i in range(count))
     counts = {key: int(ctx[L.COUNTS + COUNT_KEYS.index(key)]) for key in (*regimes, "resting")}
@@ -189,13 +196,20 @@ def write_motion(ctx: Any, state: EngineState) -> None:
     """Put the motion state of ``state`` (contact phases: the mode, the contact, the
     time in finished phases, the last impact) into ``ctx``'s machine slots, no phase
     under way (:mod:`billiard.kernels.machine`)."""
-    ctx[L.MC_MODE] = float(L.MOTION_NAMES.index(state.mode))
-    contact = tuple(state.contact) + (0.0,) * (6 - len(state.contact))
+    last = state.ball.t if state.last_impact is None else state.last_impact
+    put_motion(ctx, state.mode, state.contact, state.phase_time, last)
+
+
+def put_motion(
+    ctx: Any, mode: str, contact: Sequence[float], phase_time: dict[str, float], last: float
+) -> None:
+    """:func:`write_motion` of its parts (the last impact's time ``last``, s)."""
+    ctx[L.MC_MODE] = float(L.MOTION_NAMES.index(mode))
+    contact = tuple(contact) + (0.0,) * (6 - len(contact))
     for i, value in enumerate(contact):
         ctx[L.MC_CONTACT + i] = float(value)
     for i, key in enumerate(L.MOTION_NAMES[1:]):
-        ctx[L.MC_PHASE_TIME + i] = float(state.phase_time.get(key, 0.0))
-    last = state.ball.t if state.last_impact is None else state.last_impact
+        ctx[L.MC_PHASE_TIME + i] = float(phase_time.get(key, 0.0))
     ctx[L.MC_LAST_IMPACT] = float(last)
     ctx[L.MC_PHASE_ON] = 0.0
     ctx[L.MC_HOLD_ON] = 0.0

@@ -29,6 +29,8 @@ from billiard.engine.ctx import (
     COUNT_KEYS,
     constants_vector,
     engine_state,
+    put_motion,
+    read_ball,
     read_motion,
     write_ball,
     write_motion,
@@ -191,7 +193,7 @@ class Simulation:
         ball = self.initial if ball is None else ball
         ctx = self.ctx
         write_ball(ctx, ball)
-        write_motion(ctx, EngineState(ball, 0, ball.t, 0.0, 0, (), {}, (), {}, {}))
+        put_motion(ctx, "flight", (), {}, ball.t)
         ctx[L.SM_K] = 0.0
         ctx[L.SM_PENDING] = 0.0
         ctx[L.MC_FINAL] = self.final_time
@@ -213,7 +215,7 @@ class Simulation:
     @property
     def ball(self) -> BallState:
         """The ball after the last event (a copy)."""
-        return engine_state(self.ctx, self.impact.regimes, 0).ball
+        return read_ball(self.ctx)
 
     @property
     def mode(self) -> str:
