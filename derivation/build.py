@@ -273,7 +273,7 @@ def curve_from_text(name: str, text: str, parameters: dict[str, str]) -> curve.C
 
 
 #: Version of the generated curve modules' layout; the runtime refuses other layouts.
-CURVE_FORMAT = 6
+CURVE_FORMAT = 7
 #: Name of the parameter-array argument of every generated wall function (parameter
 #: names start with a letter, so it cannot clash with one).
 PARAMETER_ARRAY = "_p"
@@ -390,6 +390,11 @@ def curve_module(cd: curve.CurveDerivation) -> str:
         '    """x positions of the kinks (m)."""',
         *reads,
         f"    return ({bps}{',' if len(cd.breakpoints) == 1 else ''})",
+        "",
+        "",
+        "# per breakpoint, the class of the join there: 'C2' (f, f' and f'' continuous),",
+        "# 'C1' (f and f' continuous, f'' jumps) or 'kink' (the slope jumps up: a valley)",
+        f"JOINS = {tuple(cd.joins)!r}",
         "",
     ]
     body = "\n".join(lines)

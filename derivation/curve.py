@@ -11,17 +11,22 @@ its derivative dg/ds for Newton's method, and, where g becomes a polynomial in s
 clearing denominators and square roots, that polynomial: its real roots are the
 candidate nearest points (a cubic for the parabola, a quartic for the hyperbola).
 
-Curves with kinks, written with abs(), are split at the zeros of the arguments of abs
-into walls; each wall is a smooth function valid on an interval and extended smoothly
-beyond it. A zero where the curve is C^2 (``abs(x)**3`` at 0) is no kink: the curve stays
-one wall there, whose functions keep abs(). Only convex kinks (slope jumping up) are
-accepted: then the curve is the maximum of its walls, the inside of the container is the
-intersection of the regions above them, and a ball can never touch the kink itself.
+Curves written with abs(), or as ``Piecewise((expr, condition), ...)`` (conditions
+comparing x with numbers and parameters), are an ordered chain of pieces: split at the
+zeros of the arguments of abs and at the bounds of the conditions into walls; each wall
+is a smooth function valid on an interval and extended smoothly beyond it. A zero where
+the curve is C^2 (``abs(x)**3`` at 0) is no kink: the curve stays one wall there, whose
+functions keep abs(). Only convex kinks (slope jumping up) are accepted.
+
+Each join between two walls is classified exactly (:func:`classify_joins`): ``C2`` (height,
+slope and f'' continuous), ``C1`` (height and slope continuous, f'' jumps) or ``kink`` (the
+slope jumps up: a convex corner, a valley); a height that jumps (a Piecewise whose pieces
+do not meet) or a slope that jumps down (a ridge) is refused with a one-line reason.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import sympy as sm
 from sympy.solvers.solvers import unrad
@@ -59,10 +64,38 @@ class CurveDerivation:
     parameter_symbols: list[sm.Symbol]
     breakpoints: list[sm.Basic]
     walls: list[Wall]
+    #: per breakpoint: "C2", "C1" or "kink" (:func:`classify_joins`)
+    joins: list[str] = field(default_factory=list)
+    #: per breakpoint: whether its class holds for every value of the parameters (else it
+    #: was decided at the defaults, and the runtime checks it for the scene's values)
+    joins_exact: list[bool] = field(default_factory=list)
 
 
 def _abs_arguments(expr: sm.Basic) -> list[sm.Basic]:
     return sorted({a.args[0] for a in expr.atoms(sm.Abs)}, key=sm.default_sort_key)
+
+
+def _condition_bounds(expr: sm.Basic) -> list[sm.Basic]:
+    """The bounds that a Piecewise's conditions compare x with (free of x)."""
+    bounds = set()
+    for rel in expr.atoms(sm.core.relational.Relational):
+        for side in (rel.lhs, rel.rhs):
+            if not side.has(x):
+                bounds.add(side)
+    return sorted(bounds, key=sm.default_sort_key)
+
+
+def _branch(expr: sm.Piecewise, defaults: dict, at: float) -> sm.Basic:
+    """The piece of a Piecewise that holds at x = at (parameters at their defaults)."""
+    point = sm.nsimplify(at, rational=True)
+    for value, condition in expr.args:
+        held = condition.subs(defaults).subs(x, point)
+        if held == sm.true:
+            return value
+    raise CurveDerivationError(
+        f"no piece of the Piecewise holds at x = {at:g} m: the conditions must cover every x "
+        "(end with a piece whose condition is True)"
+    )
 
 
 def split_walls(expr: sm.Basic, defaults: dict) -> tuple[list[sm.Basic], list[tuple]]:
@@ -77,10 +110,24 @@ def split_walls(expr: sm.Basic, defaults: dict) -> tuple[list[sm.Basic], list[tu
     meet the other wall, and the engine would count an impact (with the low-velocity
     rule's relaunch) where the curve has no corner.
     """
-    args = _abs_arguments(expr)
-    if not args:
+    if isinstance(expr, sm.Piecewise) and len(expr.args) == 1:
+        if expr.args[0][1] != sm.true:
+            raise CurveDerivationError("the Piecewise does not hold at every x")
+        expr = expr.args[0][0]  # one piece, for every x
+    piecewise = isinstance(expr, sm.Piecewise)
+    if not piecewise and expr.has(sm.Piecewise):
+        raise CurveDerivationError("Piecewise must be the whole expression")
+    args = sorted(
+        {a for branch in _branches(expr) for a in _abs_arguments(branch)}, key=sm.default_sort_key
+    )
+    if not args and not piecewise:
         return [], [(-sm.oo, sm.oo, expr)]
     points = []
+    for bound in _condition_bounds(expr) if piecewise else []:
+        value = bound.subs(defaults)
+        if not value.is_real:
+            raise CurveDerivationError(f"the Piecewise bound {bound} is not a real number")
+        points.append((float(value), bound))
     for a in args:
         if a.has(sm.Abs):
             raise CurveDerivationError("nested abs() is not supported")
@@ -109,11 +156,15 @@ def split_walls(expr: sm.Basic, defaults: dict) -> tuple[list[sm.Basic], list[tu
         else:
             mid = 0.5 * (lo + hi)
         repl = {}
+        if piecewise:
+            repl[expr] = _branch(expr, defaults, mid)
         for a in args:
             sign = sm.sign(a.subs(defaults).subs(x, mid))
             repl[sm.Abs(a)] = a if sign >= 0 else -a
         signs.append(repl)
-        pieces.append((edges[i], edges[i + 1], expr.xreplace(repl)))
+        chosen = repl[expr] if piecewise else expr
+        pieces.append((edges[i], edges[i + 1], chosen.xreplace(repl)))
+    _check_heights(pieces, breakpoints, numeric, defaults)
     # Convex kinks only: slope must not drop across a breakpoint.
     for i, b in enumerate(numeric):
         left = _slope(pieces[i][2], defaults, b, "-")
@@ -135,6 +186,84 @@ def split_walls(expr: sm.Basic, defaults: dict) -> tuple[list[sm.Basic], list[tu
             kinks.append(breakpoints[first - 1])
         walls.append((edges[first], edges[last + 1], wall))
     return kinks, walls
+
+
+def _branches(expr: sm.Basic) -> list[sm.Basic]:
+    """The pieces' expressions of a Piecewise, or [expr]."""
+    if isinstance(expr, sm.Piecewise):
+        return [value for value, _ in expr.args]
+    return [expr]
+
+
+def _check_heights(
+    pieces: list[tuple], breakpoints: list[sm.Basic], numeric: list[float], defaults: dict
+) -> None:
+    """Refuse a curve whose height jumps at a join (a Piecewise whose pieces do not meet),
+    decided exactly at the parameters' defaults, in one line naming the join and the jump."""
+    for i, b in enumerate(breakpoints):
+        at = b.subs(defaults)
+        left = _side_value(pieces[i][2].subs(defaults), at, "-")
+        right = _side_value(pieces[i + 1][2].subs(defaults), at, "+")
+        if left is None or right is None:
+            raise CurveDerivationError(f"the height is not finite at the join x = {numeric[i]:g} m")
+        jump = sm.simplify(right - left)
+        if jump != 0:
+            raise CurveDerivationError(
+                f"the height jumps by {float(jump):.6g} m at the join x = {numeric[i]:g} m "
+                f"(from {float(left):.6g} m to {float(right):.6g} m): the pieces must meet"
+            )
+
+
+def _side_value(piece: sm.Basic, at: sm.Basic, side: str) -> sm.Basic | None:
+    """piece at x = at, exactly (its limit from ``side`` where the value is undefined as
+    written), or None where it is not real and finite."""
+    value = piece.subs(x, at)
+    if not (value.is_real and value.is_finite):
+        try:
+            value = sm.limit(piece, x, at, side)
+        except (NotImplementedError, ValueError, TypeError):
+            return None
+    if not (value.is_real and value.is_finite):
+        return None
+    return value
+
+
+def classify_joins(
+    walls: list[tuple], breakpoints: list[sm.Basic], defaults: dict
+) -> tuple[list[str], list[bool]]:
+    """Each join's class, "C2", "C1" or "kink", and whether it holds for every value of the
+    parameters (decided symbolically) or at their defaults only (decided exactly there).
+
+    ``walls``: (lo, hi, f) of the walls in order; ``breakpoints``: the joins between them.
+    The limits of f' and f'' from both sides are compared: equal slopes make a C1 join
+    (C2 if f'' is equal too), a slope that jumps up a kink (the slope jumping down is
+    refused before: :func:`split_walls`).
+    """
+    classes, exact = [], []
+    for i, b in enumerate(breakpoints):
+        left, right = walls[i][2], walls[i + 1][2]
+        kind, holds = "kink", True
+        for order in (1, 2):
+            jump = sm.diff(right, x, order) - sm.diff(left, x, order)
+            symbolic = sm.simplify(_classical(jump).subs(x, b))
+            if symbolic == 0:
+                continue  # equal for every value of the parameters
+            at = b.subs(defaults)
+            values = [
+                _side_value(_classical(sm.diff(piece, x, order)).subs(defaults), at, side)
+                for piece, side in ((left, "-"), (right, "+"))
+            ]
+            if None not in values and sm.simplify(values[1] - values[0]) == 0:
+                holds = False  # equal at the defaults only
+                continue
+            if order == 2:
+                kind = "C1"
+            break
+        else:
+            kind = "C2"
+        classes.append(kind)
+        exact.append(holds)
+    return classes, exact
 
 
 def _smooth_join(left: sm.Basic, right: sm.Basic, at: sm.Basic, defaults: dict) -> bool:
@@ -174,9 +303,13 @@ def _wall_runs(
     the wall where that argument changes sign are split after all.
     """
     n = len(breakpoints)
-    pieces = [expr.xreplace(sign) for sign in signs]
+    piecewise = isinstance(expr, sm.Piecewise)
+    pieces = [(sign[expr] if piecewise else expr).xreplace(sign) for sign in signs]
+    # a Piecewise's pieces are only merged where they are the same formula
     smooth = [
-        _smooth_join(pieces[j], pieces[j + 1], b, defaults) for j, b in enumerate(breakpoints)
+        (not piecewise or signs[j][expr] == signs[j + 1][expr])
+        and _smooth_join(pieces[j], pieces[j + 1], b, defaults)
+        for j, b in enumerate(breakpoints)
     ]
     while True:
         runs = []
@@ -191,7 +324,8 @@ def _wall_runs(
         for first, last in runs:
             run = range(first, last + 1)
             kept = [k for k in signs[first] if any(signs[i][k] != signs[first][k] for i in run)]
-            wall = expr.xreplace({k: signs[first][k] for k in signs[first] if k not in kept})
+            base = signs[first][expr] if piecewise else expr
+            wall = base.xreplace({k: signs[first][k] for k in signs[first] if k not in kept})
             walls.append((first, last, wall))
             for j in (first - 1, last):  # the joins at the wall's ends
                 ends = [k for k in kept if 0 <= j < n and signs[j][k] != signs[j + 1][k]]
@@ -288,6 +422,7 @@ def derive_curve(
 ) -> CurveDerivation:
     defaults = {p: sm.Rational(parameters[p.name]) for p in parameter_symbols}
     breakpoints, pieces = split_walls(expression, defaults)
+    joins, joins_exact = classify_joins(pieces, breakpoints, defaults)
     walls = []
     for lo, hi, f in pieces:
         fs = f.subs(x, s)
@@ -298,13 +433,62 @@ def derive_curve(
         dnear = _classical(sm.diff(near, s))
         walls.append(Wall(lo, hi, fs, df, d2f, d3f, near, dnear, nearest_polynomial(near)))
     return CurveDerivation(
-        name, text, expression, parameters, parameter_symbols, breakpoints, walls
+        name,
+        text,
+        expression,
+        parameters,
+        parameter_symbols,
+        breakpoints,
+        walls,
+        joins,
+        joins_exact,
     )
 
 
+#: What each join class means, for the chain's description.
+JOIN_MEANING = {
+    "C2": "smooth: height, slope and f'' continuous",
+    "C1": "smooth: height and slope continuous, f'' jumps",
+    "kink": "a corner: the slope jumps up (a valley)",
+}
+
+
+def chain_lines(cd: CurveDerivation) -> list[str]:
+    """The curve as a chain, in words: each piece with its interval of x (m) and formula,
+    and between pieces the join with its class; symbolic bounds are followed by their value
+    at the parameters' defaults."""
+    defaults = {p: sm.Rational(cd.parameters[p.name]) for p in cd.parameter_symbols}
+
+    def at(bound: sm.Basic) -> str:
+        value = float(bound.subs(defaults))
+        text = sm.sstr(bound)
+        return f"{value:g} m" if bound.is_number else f"{text} = {value:g} m"
+
+    lines = [f"chain: {len(cd.walls)} piece(s), {len(cd.breakpoints)} join(s)"]
+    for i, wall in enumerate(cd.walls):
+        if wall.lo == -sm.oo and wall.hi == sm.oo:
+            where = "all x"
+        elif wall.lo == -sm.oo:
+            where = f"x < {at(wall.hi)}"
+        elif wall.hi == sm.oo:
+            where = f"x > {at(wall.lo)}"
+        else:
+            where = f"{at(wall.lo)} < x < {at(wall.hi)}"
+        lines.append(f"  piece {i}: {where}: f = {sm.sstr(wall.f.subs(s, x))}")
+        if i < len(cd.breakpoints):
+            kind = cd.joins[i]
+            proven = "" if cd.joins_exact[i] else " (at the parameters' defaults)"
+            lines.append(
+                f"  join at x = {at(cd.breakpoints[i])}: {kind}, {JOIN_MEANING[kind]}{proven}"
+            )
+    return lines
+
+
 __all__ = [
+    "chain_lines",
     "derive_curve",
     "split_walls",
+    "classify_joins",
     "nearest_polynomial",
     "PAPER_CURVES",
     "x",

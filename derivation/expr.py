@@ -26,7 +26,16 @@ node                                   meaning
 ``("pow", a, p)``                      a ** p, where p is ``("num", ...)`` or
                                        ``("neg", ("num", ...))``
 ``("call", "sqrt", a)``                one of the functions in :data:`FUNCTIONS`
+``("piecewise", ((a, c), ...))``       ``Piecewise((a, c), ...)``: the first piece
+                                       whose condition c holds; c is ``("true",)``
+                                       or ``("cmp", left, ((op, right), ...))``, a
+                                       (chained) comparison with ``<``, ``<=``,
+                                       ``>``, ``>=`` of x with numbers and
+                                       parameters, x appearing once, bare
 =====================================  ===========================================
+
+``Piecewise`` must be the whole expression (a curve made of pieces, each valid on an
+interval of x); the derivation checks that the pieces meet (no jump in height).
 
 The expression gives the height y (m) of the boundary in its own frame as a function
 of x (m); parameters carry whatever units make the expression a length.
@@ -114,6 +123,16 @@ PAPER_CURVES: dict[str, tuple[str, dict[str, str]]] = {
 }
 #: Names of the built-in curves: a user curve may not take one of them.
 BUILTIN_CURVES: tuple[str, ...] = tuple(PAPER_CURVES)
+
+#: The comparison operators allowed in a ``Piecewise`` condition: AST type -> text.
+_COMPARISONS: dict[type[ast.cmpop], str] = {
+    ast.Lt: "<",
+    ast.LtE: "<=",
+    ast.Gt: ">",
+    ast.GtE: ">=",
+}
+#: Most pieces in one ``Piecewise``.
+MAX_PIECES = 16
 
 #: Longest name of a user curve (it names a file).
 MAX_CURVE_NAME = 40
@@ -429,6 +448,10 @@ class _Validator:
                 f"{', '.join(FUNCTIONS)} may be called (at column {column})"
             )
         name = func.id
+        if name == "Piecewise":
+            raise _fail(
+                f"Piecewise must be the whole expression, not part of it (at column {column})"
+            )
         if name not in FUNCTIONS:
             raise _fail(
                 f"function '{name}' is not allowed; allowed: {', '.join(FUNCTIONS)} "
@@ -453,10 +476,120 @@ class _Validator:
             )
         return ("call", name, self.visit(node.args[0]))
 
+    # -- Piecewise (the whole expression only) ------------------------------------
+    def top(self, node: ast.AST) -> tuple:
+        """The whole expression: ``Piecewise((expr, condition), ...)`` or any other."""
+        if not (
+            isinstance(node, ast.Call)
+            and isinstance(node.func, ast.Name)
+            and node.func.id == "Piecewise"
+        ):
+            return self.visit(node)
+        column = self._column(node)
+        if node.keywords:
+            raise _fail(f"Piecewise takes no keyword arguments (at column {column})")
+        if not 1 <= len(node.args) <= MAX_PIECES:
+            raise _fail(
+                f"Piecewise takes 1 to {MAX_PIECES} pieces (expr, condition), got "
+                f"{len(node.args)} (at column {column})"
+            )
+        pieces = []
+        for k, arg in enumerate(node.args):
+            if not (isinstance(arg, ast.Tuple) and len(arg.elts) == 2):
+                raise _fail(
+                    f"piece {k + 1} of Piecewise must be a pair (expression, condition), not "
+                    f"'{self._snippet(arg)}' (at column {self._column(arg)})"
+                )
+            value, condition = arg.elts
+            pieces.append((self.visit(value), self._condition(condition, k)))
+        if pieces[-1][1] != ("true",):
+            raise _fail(
+                "the last piece of Piecewise must have the condition True, so that a piece "
+                f"holds at every x (at column {self._column(node.args[-1])})"
+            )
+        for k, (_, condition) in enumerate(pieces[:-1]):
+            if condition == ("true",):
+                raise _fail(
+                    f"piece {k + 1} of Piecewise has the condition True, so the pieces after "
+                    f"it are never used (at column {column})"
+                )
+        return ("piecewise", tuple(pieces))
+
+    def _condition(self, node: ast.AST, k: int) -> tuple:
+        column = self._column(node)
+        if isinstance(node, ast.Constant) and node.value is True:
+            return ("true",)
+        if not isinstance(node, ast.Compare):
+            raise _fail(
+                f"the condition of piece {k + 1} of Piecewise must compare x with numbers or "
+                f"parameters (as in 'x < 0' or '0 <= x < a') or be True, not "
+                f"'{self._snippet(node)}' (at column {column})"
+            )
+        operands = [node.left, *node.comparators]
+        ops = []
+        for op in node.ops:
+            symbol = _COMPARISONS.get(type(op))
+            if symbol is None:
+                raise _fail(
+                    f"comparison '{self._snippet(node)}' in piece {k + 1} of Piecewise: only "
+                    f"<, <=, >, >= are allowed (at column {column})"
+                )
+            ops.append(symbol)
+        trees = [self.visit(operand) for operand in operands]
+        bare = [i for i, tree in enumerate(trees) if tree == ("x",)]
+        if len(bare) != 1 or any(_has_x(tree) for tree in trees if tree != ("x",)):
+            raise _fail(
+                f"the condition '{self._snippet(node)}' of piece {k + 1} of Piecewise must "
+                f"compare x itself, once, with numbers or parameters (at column {column})"
+            )
+        return ("cmp", trees[0], tuple(zip(ops, trees[1:], strict=True)))
+
+
+def _has_x(tree: tuple) -> bool:
+    """Does the (non-Piecewise) tree use x?"""
+    if tree[0] == "x":
+        return True
+    return any(isinstance(child, tuple) and _has_x(child) for child in tree[1:])
+
+
+def _subtrees(tree: tuple) -> list[tuple]:
+    """The expressions inside a Piecewise tree (values and compared operands), or the tree."""
+    if tree[0] != "piecewise":
+        return [tree]
+    found = []
+    for value, condition in tree[1]:
+        found.append(value)
+        if condition[0] == "cmp":
+            found += [condition[1], *(operand for _, operand in condition[2])]
+    return found
+
+
+def _holds(condition: tuple, x: float, params: Mapping[str, float]) -> bool:
+    """Does a Piecewise condition hold at x?"""
+    if condition[0] == "true":
+        return True
+    left = _evaluate(condition[1], x, params)
+    for op, operand in condition[2]:
+        right = _evaluate(operand, x, params)
+        if not _COMPARE[op](left, right):
+            return False
+        left = right
+    return True
+
+
+_COMPARE: dict[str, Callable[[float, float], bool]] = {
+    "<": lambda a, b: a < b,
+    "<=": lambda a, b: a <= b,
+    ">": lambda a, b: a > b,
+    ">=": lambda a, b: a >= b,
+}
+
 
 def _nested_exponent(tree: tuple) -> Decimal:
     """Largest product of |exponents| along a chain of powers nested in each other."""
     tag = tree[0]
+    if tag == "piecewise":
+        return max(_nested_exponent(sub) for sub in _subtrees(tree))
     if tag in ("num", "x", "pi", "param"):
         return Decimal(1)
     if tag == "pow":
@@ -490,7 +623,7 @@ def parse_curve(text: str) -> CurveExpression:
     if nodes > MAX_NODES:
         raise _fail(f"too complex: {nodes} nodes, at most {MAX_NODES} are allowed")
     validator = _Validator(stripped, offset)
-    tree = validator.visit(syntax_tree.body)
+    tree = validator.top(syntax_tree.body)
     nested = _nested_exponent(tree)
     if nested > MAX_NESTED_EXPONENT:
         raise _fail(
@@ -506,6 +639,11 @@ _MATH_FUNCTIONS: dict[str, Callable[[float], float]] = {
 
 def _evaluate(tree: tuple, x: float, params: Mapping[str, float]) -> float:
     tag = tree[0]
+    if tag == "piecewise":
+        for value, condition in tree[1]:
+            if _holds(condition, x, params):
+                return _evaluate(value, x, params)
+        raise ValueError("no piece of the Piecewise holds there")
     if tag == "num":
         return float(tree[1])
     if tag == "x":
@@ -536,6 +674,10 @@ def _evaluate(tree: tuple, x: float, params: Mapping[str, float]) -> float:
 def _text(tree: tuple) -> tuple[str, int]:
     """Canonical text of *tree* and its precedence level."""
     tag = tree[0]
+    if tag == "piecewise":
+        return "Piecewise(" + ", ".join(
+            f"({_text(value)[0]}, {_condition_text(condition)})" for value, condition in tree[1]
+        ) + ")", _LEVEL_ATOM
     if tag == "num":
         return tree[1], _LEVEL_ATOM
     if tag in ("x", "pi"):
@@ -554,6 +696,14 @@ def _text(tree: tuple) -> tuple[str, int]:
         return text, _LEVEL_SUM
     symbol = "*" if tag == "mul" else "/"
     return _wrap(tree[1], _LEVEL_PRODUCT) + symbol + _wrap(tree[2], _LEVEL_UNARY), _LEVEL_PRODUCT
+
+
+def _condition_text(condition: tuple) -> str:
+    if condition[0] == "true":
+        return "True"
+    return " ".join(
+        [_text(condition[1])[0], *(f"{op} {_text(operand)[0]}" for op, operand in condition[2])]
+    )
 
 
 def _wrap(tree: tuple, minimum: int) -> str:
@@ -658,6 +808,19 @@ class CurveExpression:
 
         functions = {name: getattr(sympy, pair[1]) for name, pair in _FUNCTION_TABLE.items()}
 
+        relations = {"<": sympy.Lt, "<=": sympy.Le, ">": sympy.Gt, ">=": sympy.Ge}
+
+        def condition(cond: tuple) -> Any:
+            if cond[0] == "true":
+                return sympy.true
+            left = build(cond[1])
+            parts = []
+            for op, operand in cond[2]:
+                right = build(operand)
+                parts.append(relations[op](left, right, evaluate=False))
+                left = right
+            return sympy.And(*parts, evaluate=False) if len(parts) > 1 else parts[0]
+
         def build(tree: tuple) -> Any:
             tag = tree[0]
             if tag == "num":
@@ -675,6 +838,10 @@ class CurveExpression:
                 return sympy.Mul(sympy.Integer(-1), build(tree[1]))
             if tag == "call":
                 return functions[tree[1]](build(tree[2]))
+            if tag == "piecewise":
+                return sympy.Piecewise(
+                    *((build(value), condition(cond)) for value, cond in tree[1])
+                )
             left, right = build(tree[1]), build(tree[2])
             if tag == "add":
                 return sympy.Add(left, right)

@@ -49,6 +49,8 @@ def cmd_derive(args: argparse.Namespace) -> int:
                 derived=derived,
             )
         except (CurveExpressionError, CurveDerivationError) as exc:
+            if derived:
+                _print_chain(derived[0])
             if report is not None and derived:
                 _write_report(derived[0], args, report, refusal=str(exc))
             raise UserError(str(exc)) from None
@@ -57,6 +59,7 @@ def cmd_derive(args: argparse.Namespace) -> int:
             raise UserError(
                 f"derive: cannot write the curve to {directory}{where}: {exc.strerror or exc}"
             ) from None
+        _print_chain(derived[0])
         print(
             f"curve {args.name!r}: f(x) = {args.curve} -> {path} "
             f"({time.perf_counter() - started:.1f} s); a scene can now use "
@@ -102,6 +105,14 @@ def cmd_derive(args: argparse.Namespace) -> int:
         print(f"wrote {path}")
     print(f"derive: {len(written)} file(s) changed ({time.perf_counter() - started:.1f} s)")
     return 0
+
+
+def _print_chain(cd) -> None:
+    """The derived curve's chain: its pieces, their intervals and the joins' classes."""
+    from billiard.derivation.curve import chain_lines
+
+    for line in chain_lines(cd):
+        print(line)
 
 
 def _report_dir(args: argparse.Namespace) -> Path | None:

@@ -15,7 +15,7 @@ from dataclasses import dataclass
 __all__ = ["CURVE_FORMAT", "Wall"]
 
 #: The layout of generated curve modules this runtime reads (their ``FORMAT``).
-CURVE_FORMAT = 6
+CURVE_FORMAT = 7
 
 Params = tuple[float, ...]
 

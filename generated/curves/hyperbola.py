@@ -4,7 +4,7 @@
 # Curve 'hyperbola': f(x) = sqrt(alpha*(1 + beta*x**2)) - delta
 # Parameters: alpha = 0.00403, beta = 800, delta = 0.0445
 # Walls: 1; nearest-point polynomial degree: 4
-# content sha256: a4c74154c525ecfde4e9ddc0dfa63f8f7b0dd3fdc28e4ef7f63f3b1099c6043d
+# content sha256: 41ab985c1647a26c91273e2beb44484e923903d06674b12ead8ddd7f242fef54
 """Boundary curve 'hyperbola': f(x) = sqrt(alpha*(1 + beta*x**2)) - delta (x and f in metres).
 
 Every function takes the curve's parameters as its last argument, an array in the
@@ -14,7 +14,7 @@ nearest-point condition is not a polynomial."""
 
 import math
 
-FORMAT = 6
+FORMAT = 7
 NAME = 'hyperbola'
 EXPRESSION = 'sqrt(alpha*(1 + beta*x**2)) - delta'
 PARAMETER_NAMES = ('alpha', 'beta', 'delta')
@@ -113,3 +113,8 @@ WALLS = (
 def breakpoints(_p):
     """x positions of the kinks (m)."""
     return ()
+
+
+# per breakpoint, the class of the join there: 'C2' (f, f' and f'' continuous),
+# 'C1' (f and f' continuous, f'' jumps) or 'kink' (the slope jumps up: a valley)
+JOINS = ()

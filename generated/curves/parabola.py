@@ -4,7 +4,7 @@
 # Curve 'parabola': f(x) = a*x**2 + c
 # Parameters: a = 26, c = 0.0063
 # Walls: 1; nearest-point polynomial degree: 3
-# content sha256: 3f138ab39e6fb04c67a6d69b4db2d2c3c27cb911015aff718178c7d918445370
+# content sha256: 0a85d7a8bdb422ae27173eb260bf1c76b6807446c6dbcdd7ec8652a4e5d55a9a
 """Boundary curve 'parabola': f(x) = a*x**2 + c (x and f in metres).
 
 Every function takes the curve's parameters as its last argument, an array in the
@@ -14,7 +14,7 @@ nearest-point condition is not a polynomial."""
 
 import math
 
-FORMAT = 6
+FORMAT = 7
 NAME = 'parabola'
 EXPRESSION = 'a*x**2 + c'
 PARAMETER_NAMES = ('a', 'c')
@@ -86,3 +86,8 @@ WALLS = (
 def breakpoints(_p):
     """x positions of the kinks (m)."""
     return ()
+
+
+# per breakpoint, the class of the join there: 'C2' (f, f' and f'' continuous),
+# 'C1' (f and f' continuous, f'' jumps) or 'kink' (the slope jumps up: a valley)
+JOINS = ()

@@ -4,7 +4,7 @@
 # Curve 'wedge': f(x) = b*abs(x) + c
 # Parameters: b = 1.85, c = 0.0063
 # Walls: 2; nearest-point polynomial degree: 1, 1
-# content sha256: 4a6201c774e8207340fee6f806841b8a25d85e970ec854d01f32b70eb90b2340
+# content sha256: 0d2e96bfbcb8f563fd0d4862dd6b732e1f3aba347d76355d38ddd67327083df0
 """Boundary curve 'wedge': f(x) = b*abs(x) + c (x and f in metres).
 
 Every function takes the curve's parameters as its last argument, an array in the
@@ -14,7 +14,7 @@ nearest-point condition is not a polynomial."""
 
 import math
 
-FORMAT = 6
+FORMAT = 7
 NAME = 'wedge'
 EXPRESSION = 'b*abs(x) + c'
 PARAMETER_NAMES = ('b', 'c')
@@ -132,3 +132,8 @@ WALLS = (
 def breakpoints(_p):
     """x positions of the kinks (m)."""
     return (float(0.0),)
+
+
+# per breakpoint, the class of the join there: 'C2' (f, f' and f'' continuous),
+# 'C1' (f and f' continuous, f'' jumps) or 'kink' (the slope jumps up: a valley)
+JOINS = ('kink',)
