@@ -621,10 +621,10 @@ def derive_user_curve(
             out.write(source)
         os.chmod(temp, 0o666 & ~_umask())  # mkstemp makes it private; a module is not
         walls = _load_walls(temp, name, params)
-        problem = shape.shape_problem(walls)
+        problem = shape.shape_problem(shape.chained(walls))
         if problem is not None:
             raise curve.CurveDerivationError(f"curve {text!r} cannot hold a ball: {problem}")
-        problem = shape.join_problem(walls)
+        problem = shape.chain_problem(walls)
         if problem is not None:
             raise curve.CurveDerivationError(f"curve {text!r}: {problem}")
         os.replace(temp, path)
@@ -648,6 +648,7 @@ def _load_walls(path: Path, name: str, params: dict[str, str]) -> list[dict]:
     spec.loader.exec_module(module)
     p = tuple(float(params[n]) for n in module.PARAMETER_NAMES)
     walls = []
+    joins = list(module.JOINS)
     for interval, f, df, d2f, *_ in module.WALLS:
         lo, hi = interval(p)
         walls.append(
@@ -657,6 +658,7 @@ def _load_walls(path: Path, name: str, params: dict[str, str]) -> list[dict]:
                 "f": lambda x, f=f: f(x, p),
                 "df": lambda x, df=df: df(x, p),
                 "d2f": lambda x, d2f=d2f: d2f(x, p),
+                "smooth_hi": len(walls) < len(joins) and joins[len(walls)] in ("C1", "C2"),
             }
         )
     return walls

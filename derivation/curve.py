@@ -453,6 +453,12 @@ JOIN_MEANING = {
 }
 
 
+def _decimal_text(expr: sm.Basic) -> str:
+    """expr as text, its fractions as decimals (0.0063, not 63/10000)."""
+    fractions = {q: sm.Float(q, 15) for q in expr.atoms(sm.Rational) if not q.is_Integer}
+    return sm.sstr(expr.xreplace(fractions), full_prec=False)
+
+
 def chain_lines(cd: CurveDerivation) -> list[str]:
     """The curve as a chain, in words: each piece with its interval of x (m) and formula,
     and between pieces the join with its class; symbolic bounds are followed by their value
@@ -474,7 +480,7 @@ def chain_lines(cd: CurveDerivation) -> list[str]:
             where = f"x > {at(wall.lo)}"
         else:
             where = f"{at(wall.lo)} < x < {at(wall.hi)}"
-        lines.append(f"  piece {i}: {where}: f = {sm.sstr(wall.f.subs(s, x))}")
+        lines.append(f"  piece {i}: {where}: f = {_decimal_text(wall.f.subs(s, x))}")
         if i < len(cd.breakpoints):
             kind = cd.joins[i]
             proven = "" if cd.joins_exact[i] else " (at the parameters' defaults)"

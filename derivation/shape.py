@@ -10,8 +10,10 @@ smooth piece, continued past its kinks as the runtime evaluates it) must give a 
 finite height, slope and second derivative; and the curve must be convex there. A plane
 (one straight wall: a floor, as for a ball bouncing on a shaken plate, or a tilted plane,
 as in the impact validation) has no bottom but is accepted: the ball bounces on it.
-On the same range, the maximum of the walls' formulas must be the curve
-(:func:`join_problem`): the runtime takes the boundary's height as that maximum.
+Walls joined smoothly (C1 or C2) are checked as one chain (:func:`chained`), as the
+runtime makes one surface of them; on the same range, the maximum of the chains' formulas
+must be the curve (:func:`join_problem`: true at a valley), and every join is checked for
+the parameters' values (:func:`chain_problem`).
 """
 
 from __future__ import annotations
@@ -161,13 +163,13 @@ def _walk(curve: _Curve) -> tuple[list[float], str | None] | str:
 def join_problem(walls: Sequence[dict], xs: Iterable[float] | None = None) -> str | None:
     """Where the maximum of the walls' formulas is not the curve, in one line, or None.
 
-    The runtime takes the boundary's height at x as the maximum of every wall's formula,
-    each continued past its interval (:mod:`billiard.geometry.boundary`). That is the curve
-    only where no wall's formula lies above the piece that holds x: true at a convex kink
-    (the wedge's vertex), false on one side of a smooth (C^1) join, such as
-    ``20*x**2 + 10*x*abs(x)``: right of 0 its piece 30 x^2 lies above the left piece
-    10 x^2 for x < 0 too, and a ball there would bounce and roll on the wrong curve.
-    Until walls are an ordered chain of pieces, such curves are refused.
+    Where walls meet at a kink, the container is the intersection of the regions above
+    each (their offset surfaces, each continued past its interval: see
+    :mod:`billiard.geometry.boundary`). That is the curve only where no wall's formula
+    lies above the piece that holds x: true at a convex kink (the wedge's vertex). Walls
+    joined smoothly are passed here as one chain (:func:`chained`): on one side of a
+    smooth (C^1) join, such as ``20*x**2 + 10*x*abs(x)``, the right piece 30 x^2 lies
+    above the left piece 10 x^2, and the maximum of the two would be another curve.
 
     ``walls``: dicts with ``lo``, ``hi`` (m), ``f`` and ``df`` (functions of x, parameters
     bound); ``xs``: the abscissas (m) to compare at, by default :func:`usable_range`
@@ -195,6 +197,72 @@ def join_problem(walls: Sequence[dict], xs: Iterable[float] | None = None) -> st
         return None
     j, k = np.unravel_index(np.argmax(np.where(above, excess, -np.inf)), above.shape)
     return _join_message(walls, int(j), float(grid[k]), float(excess[j, k]))
+
+
+def chained(walls: Sequence[dict]) -> list[dict]:
+    """The walls joined into chains at their smooth joins (``smooth_hi``: C1 or C2, as the
+    runtime makes one surface of them): per chain a wall dict whose functions are those of
+    the wall holding x (the lower at a join), its end walls continued past its ends."""
+    groups: list[list[dict]] = []
+    for wall in walls:
+        if groups and groups[-1][-1].get("smooth_hi", False):
+            groups[-1].append(wall)
+        else:
+            groups.append([wall])
+    chains = []
+    for group in groups:
+        if len(group) == 1:
+            chains.append(group[0])
+            continue
+
+        def holder(x: float, group: list[dict] = group) -> dict:
+            for wall in group[:-1]:
+                if x <= wall["hi"]:
+                    return wall
+            return group[-1]
+
+        chain = {"lo": group[0]["lo"], "hi": group[-1]["hi"]}
+        chain["smooth_hi"] = group[-1].get("smooth_hi", False)
+        for key in ("f", "df", "d2f"):
+            if all(key in wall for wall in group):
+                chain[key] = lambda x, key=key, holder=holder: holder(x)[key](x)
+        chains.append(chain)
+    return chains
+
+
+def chain_problem(walls: Sequence[dict], xs: Iterable[float] | None = None) -> str | None:
+    """What is wrong with the chain of walls for these parameter values, in one line, or None.
+
+    The joins were classified by the derivation at the parameters' defaults (or for every
+    value): each is checked again here, where the values are known. At every join the
+    height must be continuous; a join derived smooth (``smooth_hi``) must have a
+    continuous slope, one derived a kink must have the slope jump up (a valley). Then, as
+    in :func:`join_problem`, the maximum of the chains must be the curve.
+    """
+    for left, right in zip(walls, walls[1:], strict=False):
+        at = left["hi"]
+        fl, fr = _real(left["f"], at), _real(right["f"], at)
+        sl, sr = _real(left["df"], at), _real(right["df"], at)
+        if None in (fl, fr, sl, sr):
+            return f"its height or slope is not real and finite at the join x = {at:.6g} m"
+        if abs(fr - fl) > rounding_allowance(fl, fr):
+            return (
+                f"the height jumps by {fr - fl:.3g} m at the join x = {at:.6g} m (from "
+                f"{fl:.6g} m to {fr:.6g} m): the pieces must meet"
+            )
+        tolerance = 1e-9 * (1.0 + abs(sl) + abs(sr))
+        if left.get("smooth_hi", False) and abs(sr - sl) > tolerance:
+            return (
+                f"the join at x = {at:.6g} m was derived smooth, but with these parameter "
+                f"values its slope jumps ({sl:.6g} -> {sr:.6g}); derive the curve with "
+                "these values as its defaults"
+            )
+        if not left.get("smooth_hi", False) and sr < sl - tolerance:
+            return (
+                f"the join at x = {at:.6g} m is a concave kink (slope {sl:.6g} -> {sr:.6g}): "
+                "the ball could touch the corner point, which the contact model excludes"
+            )
+    return join_problem(chained(walls), xs)
 
 
 def _heights(fn: Callable[[float], float], xs: np.ndarray) -> list[float]:

@@ -324,7 +324,7 @@ class Simulation:
             for j, _ in touching:
                 surface = self.boundary.offsets[j]
                 s, _, _ = surface.contact(px, list(self.warm[j]))
-                wall = surface.wall
+                wall = surface.piece(s)
                 sd = model.s_dot(wall, ball.theta, s, ball.u1, ball.u2)
                 mode, sgn = model.mode_for(wall, ball.theta, s, sd, ball.u3)
                 if model.forces(wall, mode, sgn, ball.theta, (s, sd, ball.u3))[2] > 0.0:

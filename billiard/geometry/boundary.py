@@ -18,7 +18,7 @@ from typing import Any
 import numpy as np
 
 from billiard import jit as _jit
-from billiard.derivation.shape import join_problem
+from billiard.derivation.shape import chain_problem
 from billiard.errors import GeometryError
 from billiard.geometry.drive import Drive
 from billiard.geometry.surfaces import (
@@ -31,13 +31,14 @@ from billiard.geometry.surfaces import (
     offset_stretch,
 )
 from billiard.geometry.wall_functions import plain_wall_functions
-from billiard.geometry.walls import Wall, nearest_newton
+from billiard.geometry.walls import Wall, curve_height, nearest_newton
 from billiard.kernels.interpreted import kernel_errors
 from billiard.kernels.interpreted import rest as _rest
 from billiard.kernels.interpreted import stop as _stop
 from billiard.kernels.names import (
     put_surface_block,
     put_warm_s,
+    read_surface,
     surface_block,
     surface_ctx,
     warm_start,
@@ -121,9 +122,13 @@ class Boundary:
             self.x_range = self._container_range()
             self._check_joins(curve)
             self.validate_radius()
+            #: the walls in chains joined smoothly (a wall alone between kinks: its own)
+            self.chains = _chains(self.walls)
             self.offsets: tuple[OffsetWall, ...] = tuple(
-                OffsetLine(w, radius, i) if self._is_straight(w) else OffsetWall(w, radius, i)
-                for i, w in enumerate(self.walls)
+                OffsetLine(c[0], radius, c[0].index)
+                if len(c) == 1 and self._is_straight(c[0])
+                else OffsetWall(c[0], radius, c[0].index, chain=c)
+                for c in self.chains
             )
             self._bound_offset_curvature()
         except GeometryError:
@@ -154,8 +159,8 @@ class Boundary:
     # ------------------------------------------------------------------ curve helpers
 
     def curve_height(self, x: float) -> float:
-        """Height of the boundary curve at x: the maximum of the walls."""
-        return max(w.f(x, w.p) for w in self.walls)
+        """Height of the boundary curve at x: that of the wall holding x."""
+        return curve_height(self.walls, x)
 
     def initial_warm(self) -> list[WarmStart]:
         """Fresh warm starts of the offset inversion, one per surface (the engine keeps
@@ -232,13 +237,15 @@ class Boundary:
         Checked here, where the parameters' values and the container are known."""
         if len(self.walls) < 2:
             return
-        problem = join_problem(
+        problem = chain_problem(
             [
                 {
                     "lo": w.lo,
                     "hi": w.hi,
                     "f": lambda x, w=w: w.f(x, w.p),
                     "df": lambda x, w=w: w.df(x, w.p),
+                    "d2f": lambda x, w=w: w.d2f(x, w.p),
+                    "smooth_hi": w.smooth_hi,
                 }
                 for w in self.walls
             ],
@@ -280,8 +287,10 @@ class Boundary:
             pos = 0.0
             absolute = 0.0
             for s in self._wall_samples(margin=2.0 * self.radius):
-                fp = off.df(float(s), off.p)
-                f2 = off.d2f(float(s), off.p)
+                # a chain: the wall holding s (its end walls continued past its ends)
+                wall = off.piece(float(s))
+                fp = wall.df(float(s), off.p)
+                f2 = wall.d2f(float(s), off.p)
                 dxds = offset_stretch(fp, f2, self.radius)
                 if dxds <= 0.0:
                     continue
@@ -356,9 +365,11 @@ class Boundary:
             return [self.offset_height(float(x), warm) for x in xs]
         ctx = surface_ctx(len(self.offsets))
         for j, offset in enumerate(self.offsets):
-            # each surface's own block (its surface 0), as block j
+            # each surface's own block (its surface 0), as block j (a chain's own block
+            # names its walls as the curve does)
             put_surface_block(ctx, j, surface_block(offset.ctx, 0))
-            write_surface(ctx, j, wall=float(j), warm_s=warm[j][0])
+            wall = read_surface(offset.ctx, 0, "wall") if len(offset.chain) > 1 else j
+            write_surface(ctx, j, wall=float(wall), warm_s=warm[j][0])
         try:
             if _jit.ENABLED:
                 from billiard.geometry.wall_functions import WallFunction, WallTable
@@ -390,6 +401,8 @@ class Boundary:
             # where the surface's own calls would have left its warm start
             warm[j][0] = warm_start(ctx, j)[0]
             put_warm_s(offset.ctx, 0, warm[j][0])
+            if len(offset.chain) > 1:
+                write_surface(offset.ctx, 0, wall=read_surface(ctx, j, "wall"))
         return heights
 
     # ------------------------------------------------------------------ nearest point
@@ -467,6 +480,17 @@ class Boundary:
             near = self.nearest_point(px, py)
             depth = self.radius + near.distance if near.below else self.radius - near.distance
             raise GeometryError(f"{where} puts the ball {depth:.3g} m into the wall")
+
+
+def _chains(walls: Sequence[Wall]) -> tuple[tuple[Wall, ...], ...]:
+    """The walls in runs joined smoothly (``Wall.smooth_hi``): one surface each."""
+    chains: list[list[Wall]] = []
+    for wall in walls:
+        if chains and chains[-1][-1].smooth_hi:
+            chains[-1].append(wall)
+        else:
+            chains.append([wall])
+    return tuple(tuple(chain) for chain in chains)
 
 
 def _curve_name(curve: str) -> str:

@@ -31,7 +31,7 @@ import numpy as np
 from billiard.derivation.contenthash import hash_matches
 from billiard.derivation.expr import BUILTIN_CURVES, is_curve_name, parse_curve
 from billiard.derivation.shape import rounding_allowance
-from billiard.geometry.walls import CURVE_FORMAT, Wall
+from billiard.geometry.walls import CURVE_FORMAT, Wall, curve_height
 
 #: The curves whose generated modules ship with the package (the paper's).
 PAPER_CURVES = BUILTIN_CURVES
@@ -74,8 +74,9 @@ class CurveModel:
     source: str = field(default="", compare=False)
 
     def f(self, x: float) -> float:
-        """Height of the curve at x (m): the maximum of the walls."""
-        return max(w.f(x, w.p) for w in self.walls)
+        """Height of the curve at x (m): that of the wall holding x (at a join, the
+        larger of the two: equal but for rounding)."""
+        return curve_height(self.walls, x)
 
     def samples(self, lo: float, hi: float, count: int) -> tuple[np.ndarray, np.ndarray]:
         """``(x, f(x))`` (m) on ``count`` points from ``lo`` to ``hi`` (m), plus the
@@ -92,6 +93,10 @@ class CurveModel:
             except (ValueError, ArithmeticError):
                 height[i] = np.nan
         return grid, height
+
+
+#: The join classes (the generated modules' JOINS) that chain two walls into one surface.
+SMOOTH_JOINS = ("C1", "C2")
 
 
 def is_expression(curve: str) -> bool:
@@ -216,6 +221,8 @@ def load_curve(curve: str, parameters: dict[str, float] | None = None) -> CurveM
         lo, hi = interval(p)
         walls.append(Wall(index, float(lo), float(hi), p, f, df, d2f, near, dnear, poly, d3f))
     walls, joins = _merge_equal_walls(walls)
+    classes = dict(zip(module.breakpoints(p), getattr(module, "JOINS", ()), strict=False))
+    walls = [replace(w, smooth_hi=classes.get(w.hi) in SMOOTH_JOINS) for w in walls]
     return CurveModel(
         name=module.NAME,
         expression=module.EXPRESSION,

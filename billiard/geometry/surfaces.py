@@ -22,6 +22,7 @@ checkpoint holds them and a resumed run repeats the same floating-point operatio
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 
 from billiard.geometry.walls import Wall
 from billiard.kernels.interpreted import layout as _L
@@ -34,6 +35,7 @@ from billiard.kernels.names import (
     surface_ctx,
     warm_start,
     write_surface,
+    write_surface_slots,
 )
 
 __all__ = [
@@ -143,12 +145,34 @@ class OffsetWall(Surface):
 
     def __init__(
         self, wall: Wall, radius: float, index: int, bend_bound: float = 0.0,
-        bend_abs_bound: float = 0.0,
+        bend_abs_bound: float = 0.0, chain: Sequence[Wall] = (),
     ):  # fmt: skip
         ctx = self._bind(wall, radius, index, _L.CURVED)
         write_surface(ctx, 0, a=self.r)
         self.bend_bound = bend_bound
         self.bend_abs_bound = bend_abs_bound
+        if len(chain) > 1:
+            #: the walls joined smoothly into this one surface (``wall`` first), in order
+            self.chain = tuple(chain)
+            self._chain(ctx)
+
+    def _chain(self, ctx: list[float]) -> None:
+        """A chain of walls: its own ctx indexes them as the engine does, by their index
+        in the curve (the functions of walls outside the chain are never called)."""
+        chain = self.chain
+        if len(chain) > _L.MAX_CHAIN:
+            raise ValueError(
+                f"{len(chain)} walls joined smoothly in a row; at most {_L.MAX_CHAIN} are supported"
+            )
+        first, last = chain[0].index, chain[-1].index
+        table = {w.index: w for w in chain}
+        self._walls = tuple(
+            tuple(getattr(table.get(i, chain[0]), name) for i in range(last + 1))
+            for name in ("f", "df", "d2f")
+        )
+        self.lo, self.hi = chain[0].lo, chain[-1].hi
+        write_surface(ctx, 0, wall=float(first), first_wall=float(first), last_wall=float(last))
+        write_surface_slots(ctx, 0, "joins", [w.hi for w in chain[:-1]])
 
     def _bind(self, wall: Wall, radius: float, index: int, kind: float) -> list[float]:
         self.wall = wall
@@ -162,12 +186,22 @@ class OffsetWall(Surface):
         self.code = index
         self._p = wall.p
         self._walls = ((wall.f,), (wall.df,), (wall.d2f,))
+        self.chain = (wall,)
         return self._new_ctx(kind)
 
     def block(self) -> list[float]:
         # in the locator's state vector, the wall's place in the curve's wall functions
-        # (in the surface's own ctx, the only one: 0)
+        # (in the surface's own ctx, the only one: 0; a chain's own ctx has the curve's)
+        if len(self.chain) > 1:
+            return surface_constants(self.ctx, 0, slope_at=math.nan)
         return surface_constants(self.ctx, 0, slope_at=math.nan, wall=float(self.index))
+
+    def piece(self, s: float) -> Wall:
+        """The wall of the chain holding s (the lower at a join)."""
+        for wall in self.chain[:-1]:
+            if s <= wall.hi:
+                return wall
+        return self.chain[-1]
 
     @property
     def bend_bound(self) -> float:
@@ -220,7 +254,8 @@ class OffsetWall(Surface):
 
     def curvature_term(self, s: float) -> float:
         """F''(X) at foot s: f''(s) / (dX/ds) (1/m)."""
-        return offset_curvature(self.df(s, self.p), self.d2f(s, self.p), self.r)
+        wall = self.piece(s)
+        return offset_curvature(wall.df(s, self.p), wall.d2f(s, self.p), self.r)
 
     def gap_accel(
         self, px: float, py: float, vx: float, vy: float, ax: float, ay: float, warm: WarmStart

@@ -9,10 +9,10 @@ their walls in ``WALLS``; :func:`billiard.geometry.curves.load_curve` binds the 
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
-__all__ = ["CURVE_FORMAT", "Wall"]
+__all__ = ["CURVE_FORMAT", "Wall", "curve_height"]
 
 #: The layout of generated curve modules this runtime reads (their ``FORMAT``).
 CURVE_FORMAT = 7
@@ -22,8 +22,9 @@ Params = tuple[float, ...]
 
 @dataclass(frozen=True, slots=True)
 class Wall:
-    """One smooth wall of the boundary curve, valid for x in [lo, hi] and extended
-    smoothly beyond (the curve is the maximum of its walls).
+    """One smooth wall of the boundary curve, valid for x in [lo, hi]: the curve's height
+    at x is that of the wall holding x. A wall ending at a kink is extended smoothly beyond
+    it (there the curve is the maximum of the walls either side).
 
     Attributes:
         index: the wall's number in its curve.
@@ -35,6 +36,9 @@ class Wall:
             the candidate nearest points, poly(px, py, p); None when there is none.
         d3f: third derivative f'''(x, p) (1/m^2), for the equations of sustained contact
             (billiard.generated.contact).
+        smooth_hi: the join at ``hi`` with the next wall is smooth (C1 or C2: height and
+            slope continuous), so the two are one chain: one offset surface, and a ball in
+            contact passes from one to the other; else a kink (or no join).
     """
 
     index: int
@@ -48,10 +52,17 @@ class Wall:
     dnear: Callable[[float, float, float, Params], float]
     poly: Callable[[float, float, Params], tuple[float, ...]] | None
     d3f: Callable[[float, Params], float]
+    smooth_hi: bool = False
 
     def height(self, x: float) -> float:
         """f(x) (m): not for hot loops, which call ``self.f(x, self.p)`` directly."""
         return self.f(x, self.p)
+
+
+def curve_height(walls: Sequence[Wall], x: float) -> float:
+    """Height (m) at x of the curve made of ``walls`` (in order, their intervals covering
+    every x): that of the wall holding x, the larger at a join (equal to rounding)."""
+    return max(w.f(x, w.p) for w in walls if w.lo <= x <= w.hi)
 
 
 def nearest_newton(

@@ -271,6 +271,8 @@ EN_LAST_REGIME = _ctx("EN_LAST_REGIME", "last_regime", 1, "", "... and its regim
 CTX.end()
 
 # --- surfaces -----------------------------------------------------------------------
+#: the most walls one surface chains through smooth joins
+MAX_CHAIN = 5
 # a surface's block, SURF_STRIDE slots: offsets from its start
 SURFACE.begin("surface")
 S_KIND = _surface("S_KIND", "kind", 1, "", "CURVED, LINE, LID or ESCAPE")
@@ -280,6 +282,12 @@ S_B = _surface("S_B", "b", 1, "", "curved: bend_bound (1/m); line: intercept (m)
 S_C = _surface("S_C", "c", 1, "", "curved: bend_abs (1/m); line: shift (m)")
 S_D = _surface("S_D", "d", 1, "rad", "line: z")
 S_E = _surface("S_E", "e", 1, "", "line: cos z")
+# curved: a chain of walls joined smoothly (C1 or C2) is one surface, walls S_FIRST to
+# S_LAST (equal for one wall), S_WALL the one holding the last foot; the joins' abscissas
+# in S_JOIN (surfaces.foot passes from one wall to the next at them)
+S_FIRST = _surface("S_FIRST", "first_wall", 1, "", "curved: the chain's first wall")
+S_LAST = _surface("S_LAST", "last_wall", 1, "", "curved: the chain's last wall")
+S_JOIN = _surface("S_JOIN", "joins", MAX_CHAIN - 1, "m", "curved: the smooth joins' x")
 # curved: the slope memo, f'(s) at s = S_SLOPE_AT as S_SLOPE (nan: none), so that an
 # inversion starting where the last one ended does not call f' there again; a block copied
 # from a surface (Surface.block) carries no memo
@@ -571,7 +579,7 @@ MOTION_NAMES = ("flight", "roll", "slide", "held")
 # surface (-1: none), mode, end, t_settle, the lab state at the start and at the end
 # (q1, q2, u1, u2, u3 each)
 CCOL = 19
-END_NAMES = ("lift-off", "slip", "roll", "wall-end", "impact", "release", "cut")
+END_NAMES = ("lift-off", "slip", "roll", "wall-end", "impact", "release", "cut", "join")
 END_LIFT_OFF = 0.0
 END_SLIP = 1.0
 END_ROLL = 2.0
@@ -579,6 +587,7 @@ END_WALL_END = 3.0
 END_IMPACT = 4.0
 END_RELEASE = 5.0
 END_CUT = 6.0
+END_JOIN = 7.0  # a smooth join reached: the phase goes on on the next wall
 
 # --- contact phase statuses (contact.advance) --------------------------------------
 PHASE_END = 0  # a transition ends the phase: PH_END_T, PH_END_I, PH_END_Y

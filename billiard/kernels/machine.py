@@ -81,6 +81,7 @@ from .layout import (
     EN_ZERO,
     END_CUT,
     END_IMPACT,
+    END_JOIN,
     END_LIFT_OFF,
     END_RELEASE,
     END_ROLL,
@@ -151,7 +152,9 @@ from .layout import (
     PHASE_PAUSE,
     PHASE_SAMPLE,
     ROLL,
+    S_FIRST,
     S_KIND,
+    S_LAST,
     S_SLOPE,
     S_SLOPE_AT,
     S_WALL,
@@ -920,10 +923,22 @@ def finish_phase(ctx, p, walls, out, cout, until, status):
         ctx[EN_STOP] = E_PHASE_NON_FINITE
         raise KernelError(E_PHASE_NON_FINITE)
     q3 = ctx[EN_Q3] + 0.5 * (u3_0 + u3) * tau
+    w2, sd2, mode2, sgn2 = -1, 0.0, mode, sgn
     if i == 0:
         reason = END_LIFT_OFF
     elif i < 3:
         reason = END_WALL_END
+        w2 = smooth_neighbour(ctx, w, i == 2)
+        if w2 >= 0:
+            # a smooth join: the centre's state is continuous, s_dot follows from it on
+            # the next wall (whose f'' differs), and so does the contact mode; the ball
+            # stays in contact if that wall presses it
+            sd2 = s_dot(ctx, p, walls, w2, theta, s1, u1, u2)
+            mode2, sgn2 = mode_for(ctx, p, walls, w2, theta, s1, sd2, u3)
+            if normal_force(ctx, p, walls, w2, mode2, sgn2, theta, s1, sd2) > 0.0:
+                reason = END_JOIN
+            else:
+                reason = END_LIFT_OFF
     elif i == 3:
         reason = END_SLIP if roll else END_ROLL
     else:
@@ -942,6 +957,12 @@ def finish_phase(ctx, p, walls, out, cout, until, status):
         ctx[EN_U1] = u1 - LIFT_OFF_SPEED * fp * c
         ctx[EN_U2] = u2 + LIFT_OFF_SPEED * c
         to_flight(ctx)
+    elif reason == END_JOIN:
+        base = SURF + j * SURF_STRIDE
+        ctx[base + S_WALL] = float(w2)
+        ctx[base + S_SLOPE_AT] = math.nan  # the slope memo was the other wall's
+        ctx[base + S_WS] = s1
+        set_contact(ctx, mode2, float(j), s1, sd2, sgn2, t, t)
     elif reason == END_SLIP:
         f = forces_of(ctx, p, walls, w, M_ROLL, 0.0, theta, s1, sd1)[3]
         set_contact(ctx, M_SLIDE, float(j), s1, sd1, -1.0 if f > 0.0 else 1.0, t, t)
@@ -962,6 +983,22 @@ def finish_phase(ctx, p, walls, out, cout, until, status):
     if reason == END_IMPACT:
         to_flight(ctx)
         impact_from_contact(ctx, p, walls, out, i - 4, j, t, tau, theta, q3)
+    return -1
+
+
+@inline
+def smooth_neighbour(ctx, w, high):
+    """The wall across a smooth join at wall w's high (``high``) or low end, where the
+    phase on w (on the surface of the ball's contact) reached that end of the wall's
+    interval, not the container's end: -1 if none."""
+    base = SURF + int(ctx[MC_CONTACT]) * SURF_STRIDE
+    if ctx[base + S_KIND] != CURVED:
+        return -1
+    if high:
+        if w < int(ctx[base + S_LAST]) and ctx[PH_HI] == ctx[MC_WALL_HI + w]:
+            return w + 1
+    elif w > int(ctx[base + S_FIRST]) and ctx[PH_LO] == ctx[MC_WALL_LO + w]:
+        return w - 1
     return -1
 
 

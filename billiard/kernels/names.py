@@ -39,6 +39,7 @@ __all__ = [
     "write_block",
     "write_slots",
     "write_surface",
+    "write_surface_slots",
 ]
 
 
@@ -166,6 +167,15 @@ def write_surface(ctx: MutableSequence[float], j: int, **values: float) -> None:
 
 # the warm start is copied in and out around every query of a surface: positional, the
 # fastest of these accessors (a tenth of a microsecond)
+def write_surface_slots(
+    ctx: MutableSequence[float], j: int, name: str, values: Sequence[float]
+) -> None:
+    """Set the first slots of surface ``j``'s quantity ``name`` (one of several slots, as
+    a chain's joins) to ``values``."""
+    base = SURF + j * SURF_STRIDE + _offset(name)
+    ctx[base : base + len(values)] = [float(v) for v in values]
+
+
 def warm_start(ctx: Sequence[float], j: int) -> tuple[float, float]:
     """Surface ``j``'s warm start ``(s, slope)``: its quantities ``warm_s`` and
     ``warm_slope``."""

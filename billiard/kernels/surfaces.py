@@ -21,11 +21,15 @@ from .layout import (
     EN_ERR_VALUE,
     EN_STOP,
     LINE,
+    MAX_CHAIN,
     S_A,
     S_B,
     S_C,
     S_D,
+    S_FIRST,
+    S_JOIN,
     S_KIND,
+    S_LAST,
     S_SLOPE,
     S_SLOPE_AT,
     S_WALL,
@@ -60,9 +64,67 @@ def offset_curvature(fp, f2, r):
 @inline
 def foot(ctx, p, walls, base, x, s, fp):
     """Abscissa s of the wall point whose offset point has abscissa x (Newton from s;
-    ``fp``: f'(s) when known, else nan)."""
+    ``fp``: f'(s) when known, else nan). On a chain of walls joined smoothly, past a join
+    at the end of the block's wall the foot is on the next wall, which becomes the
+    block's wall (:func:`pass_join`)."""
+    if ctx[base + S_FIRST] != ctx[base + S_LAST]:
+        return chain_foot(ctx, p, walls, base, x, s, fp)
+    return foot_on(ctx, p, walls, int(ctx[base + S_WALL]), ctx[base + S_A], x, s, fp)
+
+
+@inline
+def chain_foot(ctx, p, walls, base, x, s, fp):
+    """:func:`foot` on a chain of walls: Newton from s on the wall holding s (the lower
+    at a join; a pure function of the warm start, so that a resumed run repeats the same
+    operations), then across the joins as far as the foot lies past them."""
+    first = int(ctx[base + S_FIRST])
+    w = first
+    while w < int(ctx[base + S_LAST]) and s > ctx[base + S_JOIN + w - first]:
+        w += 1
+    if w != int(ctx[base + S_WALL]):
+        ctx[base + S_WALL] = float(w)
+        ctx[base + S_SLOPE_AT] = math.nan  # the memo was the other wall's
+        fp = math.nan
+    s = foot_on(ctx, p, walls, w, ctx[base + S_A], x, s, fp)
+    return pass_join(ctx, p, walls, base, x, s)
+
+
+@inline
+def pass_join(ctx, p, walls, base, x, s):
+    """The foot s found on the block's wall, or, where it lies past a smooth join at the
+    wall's end, on the wall across (and the next across while it lies past another). The
+    offset curves of two walls meeting at a smooth join share the join's offset point and
+    tangent, so together they are one offset curve and the ball sees no seam. A foot that
+    falls back across the join on the next wall is the join point itself, to rounding."""
     w = int(ctx[base + S_WALL])
+    first = int(ctx[base + S_FIRST])
+    last = int(ctx[base + S_LAST])
     r = ctx[base + S_A]
+    for _ in range(MAX_CHAIN):
+        if w < last and s > ctx[base + S_JOIN + w - first]:
+            edge = ctx[base + S_JOIN + w - first]
+            w += 1
+            s = foot_on(ctx, p, walls, w, r, x, edge, math.nan)
+            ctx[base + S_WALL] = float(w)
+            ctx[base + S_SLOPE_AT] = math.nan  # the memo was the other wall's
+            if s < edge:
+                return edge
+        elif w > first and s < ctx[base + S_JOIN + w - first - 1]:
+            edge = ctx[base + S_JOIN + w - first - 1]
+            w -= 1
+            s = foot_on(ctx, p, walls, w, r, x, edge, math.nan)
+            ctx[base + S_WALL] = float(w)
+            ctx[base + S_SLOPE_AT] = math.nan
+            if s > edge:
+                return edge
+        else:
+            return s
+    return s
+
+
+@inline
+def foot_on(ctx, p, walls, w, r, x, s, fp):
+    """Newton on wall w's offset curve (radius r) for the foot of abscissa x, from s."""
     for _ in range(60):
         if math.isnan(fp):
             fp = call_wall(walls, 1, w, s, p)

@@ -9,9 +9,6 @@ stay walls.
 from __future__ import annotations
 
 import math
-import os
-import subprocess
-import sys
 
 import numpy as np
 import pytest
@@ -130,31 +127,33 @@ def test_impacts_on_one_smooth_wall_equal_those_on_its_two_branches(tmp_path, mo
         assert np.max(np.abs(a[key] - b[key])) <= 1e-11 * scale, key
 
 
-# --- the walls' maximum must be the curve -----------------------------------------------
-# The runtime takes the boundary's height as the maximum of its walls' formulas. At a C^1
-# join such as 20*x**2 + 10*x*abs(x) the right piece 30 x^2 lies above the left piece
-# 10 x^2 for x < 0 too: the ball ran on 30 x^2 on both sides, without a word.
+# --- smooth joins: a chain of walls ----------------------------------------------------
+# At a C^1 join such as 20*x**2 + 10*x*abs(x) the right piece 30 x^2 lies above the left
+# piece 10 x^2 for x < 0 too: taken as the maximum of its walls, the curve was 30 x^2 on
+# both sides. Joined smoothly, the two walls are one chain (one offset surface).
 
 C1 = "20*x**2 + 10*x*abs(x) + 0.0063"
 SPLIT = "aa*x**2 + bb*x*abs(x) + 0.0063"  # split at 0 for every bb; smooth (C1) unless bb = 0
 
 
-def test_a_smooth_join_is_refused_when_derived(tmp_path, monkeypatch, capsys):
+def test_a_smooth_join_is_derived_as_a_chain(tmp_path, monkeypatch, capsys):
     from billiard.cli import main
 
     monkeypatch.setenv("BILLIARD_HOME", str(tmp_path))
-    code = main(["derive", "--name", "c1", "--curve", C1])
-    err = capsys.readouterr().err.strip().splitlines()
-    assert code == 2 and len(err) == 1 and err[0].startswith("billiard: error:"), err
-    assert f"curve {C1!r}: at the join x = 0 m, the formula of the piece for x > 0 m" in err[0]
-    assert "lies above the piece for x < 0 m" in err[0]
-    assert "smooth (C1" in err[0] and "not supported yet" in err[0]
-    # by 30 x^2 - 10 x^2 at the far end of the checked range (the shape check's)
-    x = float(err[0].split(" at x = ")[1].split(" m")[0])
-    excess = float(err[0].split("(by ")[1].split(" m")[0])
-    assert x < -0.04 and excess == pytest.approx(20 * x**2, rel=1e-2)
-    assert not list(tmp_path.rglob("*.py*"))
-    # the paper's curves pass the same check with the parameters they ship with
+    assert main(["derive", "--name", "c1", "--curve", C1]) == 0
+    out = capsys.readouterr().out.splitlines()
+    assert out[:4] == [
+        "chain: 2 piece(s), 1 join(s)",
+        "  piece 0: x < 0 m: f = 10*x**2 + 0.0063",
+        "  join at x = 0 m: C1, smooth: height and slope continuous, f'' jumps",
+        "  piece 1: x > 0 m: f = 30*x**2 + 0.0063",
+    ], out
+    curve = load_curve("c1")
+    assert [w.smooth_hi for w in curve.walls] == [True, False]
+    # the height is the piece's that holds x, not the maximum of the formulas
+    assert curve.f(-0.05) == pytest.approx(10 * 0.05**2 + 0.0063, rel=1e-15)
+    assert curve.f(0.05) == pytest.approx(30 * 0.05**2 + 0.0063, rel=1e-15)
+    # the paper's curves pass the same checks with the parameters they ship with
     for name, text, params in (
         ("parab", "a*x**2 + c", ["a=26", "c=0.0063"]),
         ("wedg", "b*abs(x) + c", ["b=1.85", "c=0.0063"]),
@@ -164,10 +163,10 @@ def test_a_smooth_join_is_refused_when_derived(tmp_path, monkeypatch, capsys):
         assert main(["derive", "--name", name, "--curve", text, *args]) == 0, capsys.readouterr()
 
 
-def test_a_curve_whose_walls_are_not_the_curve_is_refused_at_set_up(tmp_path, monkeypatch):
-    """Where parameters decide which formula is on top, the numbers are known only at
-    set-up: a module derived for bb = 0 (one curve), then run with bb = 10 (a C^1 join);
-    and the wedge with b < 0 (a concave kink, simulated before as the wedge |b| |x|)."""
+def test_the_joins_are_checked_again_for_the_scenes_values(tmp_path, monkeypatch):
+    """Where parameters decide a join's class, the numbers are known only at set-up: a
+    module derived for bb = 0 (one curve) runs with bb = 10 as a chain (its join is C1
+    for every bb); the wedge with b < 0 is a concave kink, refused in one line."""
     from billiard.errors import GeometryError
     from billiard.geometry.boundary import Boundary
 
@@ -177,16 +176,14 @@ def test_a_curve_whose_walls_are_not_the_curve_is_refused_at_set_up(tmp_path, mo
         load_scene("parabola-5.4hz"),
         {"boundary.curve": SPLIT, "boundary.parameters.aa": 20.0, "boundary.parameters.bb": 10},
     )
-    with pytest.raises(GeometryError) as caught:
-        simulate(scene, collisions=5)
-    message = str(caught.value)
-    assert "\n" not in message
-    assert message.startswith(f"boundary curve {SPLIT!r}: at the join x = 0 m, ")
-    assert "the pointwise maximum of the walls is not the curve" in message
-    assert "smooth (C1" in message
+    curve = load_curve(SPLIT, {"aa": 20.0, "bb": 10.0})
+    boundary = Boundary.from_scene(scene, curve.walls)
+    assert [len(c) for c in boundary.chains] == [2] and len(boundary.offsets) == 1
+    assert simulate(scene, duration=0.5).stop_reason is None
     wedge = with_values(load_scene("wedge-6.6hz"), {"boundary.parameters.b": -1.85})
-    with pytest.raises(GeometryError, match=r"concave kink \(slope 1.85 -> -1.85\)"):
+    with pytest.raises(GeometryError, match=r"concave kink \(slope 1.85 -> -1.85\)") as caught:
         simulate(wedge, collisions=5)
+    assert "\n" not in str(caught.value)
     # every built-in scene is accepted (the wedge's kink is convex: the maximum is the curve)
     from billiard.scene.scene import builtin_scene_names
 
@@ -196,28 +193,23 @@ def test_a_curve_whose_walls_are_not_the_curve_is_refused_at_set_up(tmp_path, mo
         Boundary.from_scene(scene, curve.walls)
 
 
-def test_a_named_curve_with_a_smooth_join_derived_before_the_check_does_not_run(tmp_path):
-    """``billiard derive --name c1 --curve C1`` succeeded before this check; a scene on
-    that module is refused in one line, exit status 2, nothing run."""
-    from billiard.derivation import build
+def test_a_join_derived_smooth_but_kinked_at_the_scenes_values_is_refused(tmp_path, monkeypatch):
+    """Equal slopes at x = 1 for b = 1 only (2 b on the left, b + 1 on the right): derived
+    with b = 1 as C1, run with b = 2 it is a kink the chain cannot take: one line."""
+    from billiard.errors import GeometryError
 
-    directory = tmp_path / "curves"
-    directory.mkdir()
-    (directory / "c1.py").write_text(build.curve_module(build.curve_from_text("c1", C1, {})))
-    scene = tmp_path / "c1.toml"
-    scene.write_text('name = "c1"\n[boundary]\ncurve = "c1"\n[contact]\nmodel = "phases"\n')
-    proc = subprocess.run(
-        [sys.executable, "-m", "billiard.cli", "run", str(scene), "--no-plot"],
-        capture_output=True,
-        text=True,
-        cwd=tmp_path,
-        env={**os.environ, "BILLIARD_HOME": str(tmp_path)},
-        timeout=300,
+    monkeypatch.setenv("BILLIARD_HOME", str(tmp_path))
+    text = "Piecewise((b*x**2, x < 1), (b*x + 2*x**3 - 3*x**2 + x, True))"
+    load_curve(text, {"b": 1.0})
+    scene = with_values(
+        load_scene("parabola-5.4hz"),
+        {"boundary.curve": text, "boundary.parameters.b": 2.0, "boundary.escape_height": 3.0},
     )
-    lines = proc.stderr.strip().splitlines()
-    assert proc.returncode == 2 and len(lines) == 1, proc.stderr
-    assert lines[0].startswith("billiard: error: boundary curve 'c1': at the join x = 0 m")
-    assert not (tmp_path / "runs").exists()
+    with pytest.raises(GeometryError) as caught:
+        simulate(scene, collisions=5)
+    message = str(caught.value)
+    assert "\n" not in message and "the join at x = 1 m was derived smooth" in message
+    assert "its slope jumps (4 -> 3)" in message
 
 
 def _parabola_runs(model: str, amplitude: float):
