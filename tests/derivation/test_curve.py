@@ -157,3 +157,43 @@ def test_the_generated_module_lists_the_joins():
     exec(compile(source, "wedge", "exec"), namespace)  # the generated text, as loaded
     assert namespace["JOINS"] == ("kink",)
     assert namespace["FORMAT"] == build.CURVE_FORMAT == 7
+
+
+@pytest.mark.parametrize(
+    ("curve", "fragment"),
+    [
+        (
+            "Piecewise((x**2, x < 0), (x**2 + 0.001, True))",
+            "the height jumps by 0.001 m at the join x = 0 m",
+        ),
+        ("Piecewise((x**2, y < 0), (x**2, True))", "must compare x itself"),
+        ("Piecewise((x**2, x < 0), (x**2, True)", "invalid syntax"),
+    ],
+)
+def test_derive_refuses_a_broken_piecewise_in_one_line(curve, fragment, tmp_path, capsys):
+    from billiard.cli import main
+
+    code = main(["derive", "--dir", str(tmp_path / "curves"), "--name", "pw", "--curve", curve])
+    captured = capsys.readouterr()
+    lines = captured.err.strip().splitlines()
+    assert code == 2 and len(lines) == 1 and lines[0].startswith("billiard: error:"), lines
+    assert fragment in lines[0]
+    assert "Traceback" not in captured.err + captured.out
+    assert not list(tmp_path.rglob("*.py"))
+
+
+def test_derive_prints_the_chain_of_a_piecewise_curve(tmp_path, capsys):
+    from billiard.cli import main
+
+    curve = "Piecewise(((x + 1)**2, x < -1), (0, x <= 1), ((x - 1)**2, True))"
+    args = ["derive", "--dir", str(tmp_path / "curves"), "--name", "flat", "--curve", curve]
+    assert main(args) == 0
+    out = capsys.readouterr().out.splitlines()
+    assert out[:6] == [
+        "chain: 3 piece(s), 2 join(s)",
+        "  piece 0: x < -1 m: f = (x + 1)**2",
+        "  join at x = -1 m: C1, smooth: height and slope continuous, f'' jumps",
+        "  piece 1: -1 m < x < 1 m: f = 0",
+        "  join at x = 1 m: C1, smooth: height and slope continuous, f'' jumps",
+        "  piece 2: x > 1 m: f = (x - 1)**2",
+    ], out
