@@ -26,7 +26,7 @@ import sympy as sm
 
 from . import shape
 from .contact import derive_contact, printable
-from .curve import CurveDerivation, x
+from .curve import JOIN_MEANING, CurveDerivation, x
 
 #: File names written into the report's folder.
 MARKDOWN, HTML = "report.md", "report.html"
@@ -259,19 +259,19 @@ def numeric_walls(cd: CurveDerivation, defaults: dict) -> list[dict]:
             for key in ("f", "df", "d2f")
         }
         lo, hi = (float(sm.sympify(v).subs(defaults)) for v in (w.lo, w.hi))
-        walls.append({"lo": lo, "hi": hi, **fns})
+        smooth = len(walls) < len(cd.joins) and cd.joins[len(walls)] in ("C1", "C2")
+        walls.append({"lo": lo, "hi": hi, **fns, "smooth_hi": smooth})
     return walls
 
 
-def joins(walls: list[dict]) -> list[tuple[float, float, float, str]]:
-    """(x, slope left, slope right, kind) at each join between neighbouring walls."""
+def joins(walls: list[dict], classes: list[str]) -> list[tuple[float, float, float, str]]:
+    """(x, slope left, slope right, kind) at each join between neighbouring walls, the
+    kind the derivation's exact class (:data:`JOIN_MEANING`)."""
     out = []
-    for left, right in zip(walls, walls[1:], strict=False):
+    for left, right, kind in zip(walls, walls[1:], classes, strict=False):
         at = left["hi"]
         sl, sr = float(left["df"](at)), float(right["df"](at))
-        smooth = abs(sr - sl) <= 1e-9 * (1.0 + abs(sl) + abs(sr))
-        kind = "smooth (C1: the slope is continuous, f'' jumps)" if smooth else "kink"
-        out.append((at, sl, sr, kind))
+        out.append((at, sl, sr, f"{kind}: {JOIN_MEANING[kind]}"))
     return out
 
 
@@ -345,9 +345,11 @@ def curve_report(cd: CurveDerivation, radius: float, refusal: str | None = None)
 
     pieces = Section("Pieces and joins")
     pieces.text(
-        "The curve is split at the kinks of abs() into walls, smooth pieces each valid on "
-        "an interval; a zero of an abs() argument where the curve is C2 stays inside one "
-        "wall. The runtime takes the boundary's height as the maximum of the walls."
+        "The curve is a chain of walls, smooth pieces each valid on an interval (split at "
+        "the zeros of abs() arguments and at the bounds of a Piecewise's conditions; a "
+        "zero of an abs() argument where the curve is C2 stays inside one wall). The "
+        "height at x is that of the wall holding x. Walls joined smoothly (C1, C2) are one "
+        "surface for the ball, which rolls across the join; at a kink it can touch both."
     )
     pieces.table(
         ["wall", "interval", "f(x) on it"],
@@ -356,7 +358,7 @@ def curve_report(cd: CurveDerivation, radius: float, refusal: str | None = None)
             for j, (w, wd) in enumerate(zip(cd.walls, walls, strict=True))
         ],
     )
-    found = joins(walls)
+    found = joins(walls, cd.joins)
     if found:
         pieces.table(
             ["join at x (m)", "slope left", "slope right", "kind"],
@@ -364,8 +366,8 @@ def curve_report(cd: CurveDerivation, radius: float, refusal: str | None = None)
         )
     else:
         pieces.text("One wall: the curve has no join.")
-    join_issue = shape.join_problem(walls)
-    shape_issue = shape.shape_problem(walls)
+    join_issue = shape.chain_problem(walls)
+    shape_issue = shape.shape_problem(shape.chained(walls))
     sections.append(pieces)
 
     offset = Section("The offset curve and where it is valid")
@@ -430,7 +432,7 @@ def curve_report(cd: CurveDerivation, radius: float, refusal: str | None = None)
     checks.append(
         Check(
             "the maximum of the walls is the curve (joins)",
-            "derivation/shape.py join_problem on the walls (numeric)"
+            "derivation/shape.py chain_problem on the walls (numeric)"
             + ("" if join_issue is None else f": {join_issue}"),
             join_issue is None,
         )

@@ -78,7 +78,8 @@ def test_the_report_of_a_curve_with_a_kink(tmp_path, capsys):
     text = (tmp_path / "kinked" / "report.md").read_text()
     assert "| 0 | x < 0 m | `20*x**2 - 2*x + 63/10000` |" in text
     assert "| 1 | x > 0 m | `20*x**2 + 2*x + 63/10000` |" in text
-    assert "| 0 | -2 | 2 | kink |" in text  # the slopes either side of x = 0
+    # the slopes either side of x = 0
+    assert "| 0 | -2 | 2 | kink: a corner: the slope jumps up (a valley) |" in text
     results = checks(text)
     assert set(results.values()) == {"passed"}
     for wall in ("wall 0", "wall 1"):
@@ -91,7 +92,7 @@ def test_the_report_of_the_wedge_with_parameters(tmp_path):
     assert derive(tmp_path, "wedgelike", *curve) == 0
     text = (tmp_path / "wedgelike" / "report.md").read_text()
     assert "Parameters: b = 1.85, c = 0.0063 (SI)." in text
-    assert "| 0 | -1.85 | 1.85 | kink |" in text
+    assert "| 0 | -1.85 | 1.85 | kink: a corner: the slope jumps up (a valley) |" in text
     assert text.count("\\rho = \\infty") == 2  # straight walls: f'' = 0
     assert "The walls are straight" in text
     assert set(checks(text).values()) == {"passed"}
@@ -116,18 +117,25 @@ def test_a_curve_too_tight_for_the_ball_is_marked_where(tmp_path):
     )
 
 
-def test_a_smooth_join_is_refused_with_a_report_saying_why(tmp_path, capsys):
-    assert derive(tmp_path, "smoothjoin", "20*x**2 + 10*x*abs(x)") == 2
+def test_a_smooth_join_is_reported_with_its_class(tmp_path, capsys):
+    assert derive(tmp_path, "smoothjoin", "20*x**2 + 10*x*abs(x)") == 0
     captured = capsys.readouterr()
-    assert "the join is smooth" in captured.err and "Traceback" not in captured.err
-    assert "refused curve's report" in captured.out
+    assert "Traceback" not in captured.err
     text = (tmp_path / "smoothjoin" / "report.md").read_text()
-    assert "**Refused:** `billiard derive` did not write this curve" in text
-    assert "| 0 | 0 | 0 | smooth (C1: the slope is continuous, f'' jumps) |" in text
+    assert "**Refused:**" not in text
+    assert "| 0 | 0 | 0 | C1: smooth: height and slope continuous, f'' jumps |" in text
     results = checks(text)
     (join,) = [name for name in results if name.startswith("the maximum of the walls")]
-    assert results[join] == "**FAILED**"
-    assert not (tmp_path / "curves" / "smoothjoin.py").exists()
+    assert results[join] == "passed"
+    assert (tmp_path / "curves" / "smoothjoin.py").exists()
+
+
+def test_a_join_with_a_jump_in_height_is_refused_with_a_report(tmp_path, capsys):
+    assert derive(tmp_path, "jump", "Piecewise((x**2, x < 0), (x**2 + 0.001, True))") == 2
+    captured = capsys.readouterr()
+    assert "the height jumps by 0.001 m at the join x = 0 m" in captured.err
+    assert "Traceback" not in captured.err
+    assert not (tmp_path / "curves" / "jump.py").exists()
 
 
 def test_a_curve_refused_for_its_shape_gets_a_report(tmp_path, capsys):
