@@ -43,8 +43,7 @@ CASES: dict[str, tuple[list[str], str]] = {
     "walls that are not the curve": (
         # b < 0 flips the wedge's kink: the maximum of its walls would be another wedge
         ["SCENE=wedge-6.6hz", "--set", "boundary.parameters.b=-1.85"],
-        "the pointwise maximum of the walls is not the curve: the join is a concave kink "
-        "(slope 1.85 -> -1.85)",
+        "the join at x = 0 m is a concave kink (slope 1.85 -> -1.85)",
     ),
     "start inside the wall": (
         ["--set", "initial.q1=0.01", "--set", "initial.q2=0.005"],
