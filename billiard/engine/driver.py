@@ -401,10 +401,9 @@ class Driver:
         rows = self._contacts[first * L.CCOL : stop * L.CCOL].reshape(-1, L.CCOL).tolist()
         for row in rows:
             # the surfaces' indices in the row (b < 0: one wall); their wall codes here
-            a, b = int(row[4]), int(row[5])
-            other = surfaces[b].code if b >= 0 else NO_WALL
+            wall, other = _row_walls(surfaces, row[4], row[5])
             record = ContactRecord(
-                row[2], row[3], surfaces[a].code, L.MOTION_NAMES[int(row[6])],
+                row[2], row[3], wall, L.MOTION_NAMES[int(row[6])],
                 L.END_NAMES[int(row[7])], row[8], *row[9:19], other,
             )  # fmt: skip
             hook = sim.on_contact if row[0] == 0.0 else sim.on_contact_cut
@@ -565,9 +564,9 @@ class Driver:
             return None
         rows = self._contacts[: L.CCOL].tolist()
         surfaces = sim.boundary.surfaces
-        other = surfaces[int(rows[5])].code if rows[5] >= 0 else NO_WALL
+        wall, other = _row_walls(surfaces, rows[4], rows[5])
         return ContactRecord(
-            rows[2], rows[3], surfaces[int(rows[4])].code, L.MOTION_NAMES[int(rows[6])],
+            rows[2], rows[3], wall, L.MOTION_NAMES[int(rows[6])],
             L.END_NAMES[int(rows[7])], rows[8], *rows[9:19], other,
         )  # fmt: skip
 
@@ -680,3 +679,14 @@ class Driver:
         where its state is an EngineState?"""
         ctx = self.ctx
         return ctx[L.MC_PHASE_ON] == 0.0 and ctx[L.MC_HOLD_ON] == 0.0 and ctx[L.SM_PENDING] == 0.0
+
+
+def _row_walls(surfaces: Any, a: float, b: float) -> tuple[int, int]:
+    """The ``wall`` and ``wall_other`` of a contact row whose surfaces are a and b: held
+    by two (b >= 0), their codes; on one wall w (b = ONE_WALL - w, see
+    :func:`billiard.kernels.machine.contact_row`), w itself, the piece of a chain."""
+    if b >= 0.0:
+        return surfaces[int(a)].code, surfaces[int(b)].code
+    if b <= -2.0:
+        return int(-2.0 - b), NO_WALL
+    return surfaces[int(a)].code, NO_WALL

@@ -522,10 +522,16 @@ def end_chatter(ctx, p, walls, until):
 # ---------------------------------------------------------------------- rows
 
 
+#: ``b`` of the row of a phase on one wall w: ONE_WALL - w (< 0), the wall itself, which on
+#: a chain of walls joined smoothly is not the surface's first
+ONE_WALL = -2.0
+
+
 @inline
 def contact_row(ctx, cout, kind, t_start, t_end, a, b, mode, end, settle):
     """Start contact row MC_CROW (its lab states follow: :func:`row_state`); returns
-    its offset in ``cout``."""
+    its offset in ``cout``. ``a``: the surface; ``b``: the other surface holding the
+    ball, or for a phase on one wall w, ONE_WALL - w."""
     o = int(ctx[MC_CROW]) * CCOL
     cout[o] = kind
     cout[o + 1] = ctx[EN_IMPACTS]
@@ -858,7 +864,7 @@ def phase_cut(ctx, p, walls, cout, tau, y):
     theta0 = ctx[PH_THETA0]
     theta = (theta0 + ctx[OMEGA] * tau) % (2.0 * math.pi)
     t_cut = ctx[EN_T] + tau
-    o = contact_row(ctx, cout, 1.0, ctx[MC_CONTACT + 4], t_cut, j, -1.0, mode, END_CUT,
+    o = contact_row(ctx, cout, 1.0, ctx[MC_CONTACT + 4], t_cut, j, ONE_WALL - w, mode, END_CUT,
                     ctx[MC_CONTACT + 5])  # fmt: skip
     q1, q2, u1, u2, u3 = lab_state(ctx, p, walls, w, theta0, ctx[MC_CONTACT + 1],
                                    ctx[MC_CONTACT + 2], ctx[EN_U3], roll)  # fmt: skip
@@ -943,7 +949,7 @@ def finish_phase(ctx, p, walls, out, cout, until, status):
         reason = END_SLIP if roll else END_ROLL
     else:
         reason = END_IMPACT
-    o = contact_row(ctx, cout, 0.0, t_start, t, j, -1.0, mode, reason, settle)
+    o = contact_row(ctx, cout, 0.0, t_start, t, j, ONE_WALL - w, mode, reason, settle)
     q1s, q2s, u1s, u2s, u3s = lab_state(ctx, p, walls, w, theta0, s0, sd0, u3_0, roll)
     row_state(cout, o + 9, q1s, q2s, u1s, u2s, u3s)
     row_state(cout, o + 14, q1, q2, u1, u2, u3)

@@ -143,6 +143,8 @@ def test_a_ball_rolls_across_a_smooth_join_as_on_the_true_curve():
     assert set(contacts["mode"]) == {"roll"}
     joins = [i for i, end in enumerate(ends) if end == "join"]
     assert ends[-1] == "cut" and len(joins) == len(ends) - 1
+    # each row names the piece it rolled on: 30 x^2 (wall 1) first, then in turn
+    assert list(contacts["wall"]) == [(i + 1) % 2 for i in range(len(ends))]
     crossings, turning, _ = reference(DURATION)
     times = np.asarray(contacts["t_end"])[joins]
     assert len(times) == len(crossings)
