@@ -162,12 +162,15 @@ __all__ = [
     "scene_from_dict",
     "scene_to_toml",
     "simulate",
+    "sweep",
     "view",
     "with_values",
 ]
 
 
 def __getattr__(name: str) -> Any:
+    if name == "sweep":  # the sweep package, which is also the call billiard.sweep(...)
+        return importlib.import_module("billiard.sweep")
     module = _EXPORTS.get(name)
     if module is None:
         raise AttributeError(f"module 'billiard' has no attribute {name!r}")

@@ -140,6 +140,23 @@ class EnsembleResult:
         shape = " x ".join(str(n) for n in self.shape) + " starts" if self.shape else "1 start"
         return f"<EnsembleResult {self.scene.name!r}: {shape} on {self.device}: {classes}>"
 
+    def _repr_html_(self) -> str:
+        """The scene, the starts and the share of each attractor class as an HTML table."""
+        from billiard.scene.display import html_table, scene_rows
+
+        names, counts = np.unique(self.attractor, return_counts=True)
+        total = int(counts.sum())
+        shares = ", ".join(
+            f"{c} {k} ({100.0 * k / total:.3g} %)" for c, k in zip(names, counts, strict=True)
+        )
+        starts = " x ".join(str(n) for n in self.shape) if self.shape else "1"
+        rows = scene_rows(self.scene) + [
+            ("starts", f"{starts} ({total} trajectories) on {self.device}"),
+            ("attractors", shares or "none"),
+            ("wall-clock time", f"{self.seconds:.3g} s"),
+        ]
+        return html_table(rows, f"EnsembleResult of {self.scene.name!r}")
+
     def to_pandas(self) -> Any:
         """One row per start, the measured columns.
 

@@ -45,7 +45,7 @@ from billiard.sweep.columns import STATUSES, ChunkResult, empty_columns, record_
 from billiard.sweep.definition import Sweep, SweepError, read_sweep_file, sweep_to_toml
 from billiard.sweep.ensemble import check_device
 from billiard.sweep.measure import ChunkTask, measure_chunk
-from billiard.sweep.netcdf import RESULT_NAME, write_result
+from billiard.sweep.netcdf import RESULT_NAME, open_result, write_result
 from billiard.sweep.progress import SweepProgress
 from billiard.sweep.store import (
     CHECKSUMS_NAME,
@@ -168,18 +168,20 @@ class SweepOutcome:
     def dataset(self) -> Any:
         """The result file as an ``xarray.Dataset`` (opened lazily: arrays are read when
         used), coordinates the swept keys' values, missing values masked, units in each
-        variable's ``attrs``; e.g. ``outcome.dataset.height_mean.sel(drive_amplitude=0.027)``.
+        variable's ``attrs``, ``attractor`` as class names
+        (:func:`~billiard.sweep.netcdf.open_result`); e.g.
+        ``outcome.dataset.height_mean.sel(drive_amplitude=0.027)``.
 
         Raises:
             ModuleNotFoundError: xarray is not installed (one line naming the extra).
         """
         try:
-            import xarray
+            import xarray  # noqa: F401
         except ImportError:
             raise ModuleNotFoundError(
                 f"SweepOutcome.dataset needs xarray: {DATA_HINT}", name="xarray"
             ) from None
-        return xarray.open_dataset(self.result)
+        return open_result(self.result)
 
     def _summary(self) -> dict[str, str]:
         """The outcome in a few short lines (for its repr and its HTML table)."""
@@ -208,18 +210,10 @@ class SweepOutcome:
         )
 
     def _repr_html_(self) -> str:
-        from html import escape
+        from billiard.scene.display import html_table
 
-        rows = "".join(
-            f"<tr><th style='text-align:left'>{escape(name)}</th><td style='text-align:left'>"
-            f"{escape(text)}</td></tr>"
-            for name, text in self._summary().items()
-        )
-        return (
-            "<table><caption style='text-align:left'><b>SweepOutcome</b> "
-            "(<code>.dataset</code>: the result as an xarray.Dataset)</caption>"
-            f"{rows}</table>"
-        )
+        caption = "SweepOutcome (.dataset: the result as an xarray.Dataset)"
+        return html_table(list(self._summary().items()), caption)
 
 
 # ----------------------------------------------------------------------------------------
@@ -1065,6 +1059,7 @@ def _drive(
                     raise SweepError(
                         f"points {task.start} to {task.stop - 1}: the worker running them "
                         f"failed ({message}); finished points are kept: continue with --resume"
+                        + _script_hint(computed)
                     ) from None
                 store.append(chunk)
                 indices = chunk.columns["index"]
@@ -1087,6 +1082,21 @@ def _drive(
     finally:
         for future in pending:
             future.cancel()
+
+
+def _script_hint(computed: array.array) -> str:
+    """Why a local pool may break before its first chunk: a Python script that starts a
+    sweep at its top level. Each spawned worker imports the script again (as
+    multiprocessing's "spawn" does), starts a sweep of its own and dies."""
+    main = sys.modules.get("__main__")
+    if computed or main is None or getattr(main, "__spec__", None) is not None:
+        return ""
+    if not getattr(main, "__file__", None):
+        return ""  # a notebook or an interactive session: nothing is imported again
+    return (
+        f" (if {os.path.basename(main.__file__)} starts the sweep at its top level, put "
+        "that under `if __name__ == \"__main__\":`: each worker imports the script again)"
+    )
 
 
 def _look_at_workers(pool: Workers, before: dict[str, int], store: ChunkStore) -> dict[str, int]:

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-__all__ = ["axis_label", "key_unit", "variable_name"]
+__all__ = ["axis_label", "key_long_name", "key_unit", "variable_name"]
 
 _UNITS = {
     "boundary.ceiling": "m",
@@ -33,6 +33,46 @@ _UNITS = {
     "run.duration": "s",
     "run.contact_span": "s",
 }
+
+#: What each key is, in words (the result file's ``long_name``: xarray labels its plots'
+#: axes "drive frequency [Hz]" from it and ``units``).
+_NAMES = {
+    "boundary.ceiling": "lid height",
+    "boundary.escape_height": "escape height",
+    "drive.amplitude": "drive amplitude",
+    "drive.frequency": "drive frequency",
+    "drive.phase": "drive phase",
+    "ball.radius": "ball radius",
+    "ball.mass": "ball mass",
+    "ball.inertia_factor": "inertia factor I/(m r^2)",
+    "contact.restitution": "coefficient of restitution",
+    "contact.mu_static": "static friction coefficient",
+    "contact.mu_kinetic": "kinetic friction coefficient",
+    "contact.elastic_below": "elastic-impact speed threshold",
+    "air.c_lin": "linear drag coefficient",
+    "air.c_quad": "quadratic drag coefficient",
+    "air.magnus": "Magnus coefficient",
+    "initial.q1": "initial horizontal position",
+    "initial.q2": "initial height",
+    "initial.v1": "initial horizontal velocity",
+    "initial.v2": "initial vertical velocity",
+    "initial.omega": "initial spin",
+    "initial.t": "initial time",
+    "run.collisions": "impacts per run",
+    "run.rtol": "relative tolerance",
+    "run.step": "time step",
+    "run.gravity": "gravitational acceleration",
+    "run.duration": "simulated time",
+    "run.contact_span": "contact span",
+}
+
+
+def key_long_name(key: str) -> str:
+    """The key in words, as a plot's axis names it ("drive frequency"); a key without a
+    description (a curve parameter, a text key) is named "scene key KEY"."""
+    if key.startswith("boundary.parameters."):
+        return f"curve parameter {key.rsplit('.', 1)[-1]}"
+    return _NAMES.get(key, f"scene key {key}")
 
 
 def key_unit(key: str) -> str:
