@@ -49,7 +49,11 @@ TARGETS = {
     "gpu_impacts_per_s": 1e8,
     "basin_seconds": 600.0,
     "phases_ratio": 2.0,
+    "map_seconds": 900.0,
 }
+#: the parameter map of the target: the parabola's drive.frequency x drive.amplitude
+MAP_SCENE = "parabola-5.4hz"
+MAP_POINTS = 10**6
 #: (starts, impacts per start, repeats) of the kernel measurement
 SIZES = {False: (4000, 1000, 3), True: (1000, 500, 2)}
 #: (points, impacts per point, repeats) of the contact phases' cost per point
@@ -253,6 +257,9 @@ def measure(quick: bool, save: Any = None) -> dict:
     print("bench.ensemble: a point under contact phases against impacts ...", flush=True)
     result["phases"] = phases_ratio(quick)
     _save(save, result)
+    print("bench.ensemble: a parameter map, patched set-ups against one each ...", flush=True)
+    result["map"] = parameter_map(quick)
+    _save(save, result)
     pair = sorted({1, min(cores, 16)})
     print(f"bench.ensemble: a sweep on {pair} workers ...", flush=True)
     result["scaling"] = sweep_scaling(quick, pair)
@@ -329,6 +336,121 @@ def sweep_overhead(quick: bool) -> dict:
     }
 
 
+def _map_sweep(side: int, workers: int, patched: bool = True) -> dict:
+    """A ``side`` x ``side`` drive.frequency x drive.amplitude map of the parabola, 200
+    impacts after a 300-impact transient, through run_sweep (plots excluded); with
+    ``patched`` False every parameter set is set up on its own (the path before)."""
+    from billiard.scene.scene import load_scene
+    from billiard.sweep import Sweep, batch, parse_vary, run_sweep
+    from billiard.sweep.progress import SweepProgress
+
+    sweep = Sweep(
+        load_scene(MAP_SCENE),
+        (
+            parse_vary(f"drive.frequency=4.5:6.5:{side}"),
+            parse_vary(f"drive.amplitude=0.01:0.04:{side}"),
+        ),
+        impacts=200,
+        transient=300,
+        keep=10,
+    )
+    before = os.environ.get(batch.PATCH_ENV)
+    os.environ[batch.PATCH_ENV] = "1" if patched else "0"  # read by the workers too
+    try:
+        with tempfile.TemporaryDirectory() as tmp:
+            began = time.perf_counter()
+            progress = SweepProgress(sweep.size, stream=_Silent())
+            outcome = run_sweep(
+                sweep, Path(tmp) / "m", workers=workers, progress=progress, plots=False
+            )
+            wall = time.perf_counter() - began
+    finally:
+        if before is None:
+            os.environ.pop(batch.PATCH_ENV, None)
+        else:
+            os.environ[batch.PATCH_ENV] = before
+    return {"side": side, "points": sweep.size, "workers": workers, "wall": wall,
+            "computed": len(outcome.computed), "patched": patched}  # fmt: skip
+
+
+def _map_chunk(side: int, patched: bool) -> float:
+    """Seconds of one worker's measuring of a ``side`` x ``side`` map as one chunk, in
+    this process (no pool, no files): set-ups, trajectories and measurements."""
+    import numpy as np
+
+    from billiard.scene.scene import load_scene
+    from billiard.sweep import Sweep, batch, parse_vary
+
+    sweep = Sweep(
+        load_scene(MAP_SCENE),
+        (
+            parse_vary(f"drive.frequency=4.6:6.4:{side}"),
+            parse_vary(f"drive.amplitude=0.011:0.039:{side}"),
+        ),
+        impacts=200,
+        transient=300,
+        keep=10,
+    )
+    os.environ[batch.PATCH_ENV] = "1" if patched else "0"
+    try:
+        began = time.perf_counter()
+        batch.measure_batch(sweep, np.arange(sweep.size), sweep.settings())
+        return time.perf_counter() - began
+    finally:
+        os.environ.pop(batch.PATCH_ENV, None)
+
+
+def parameter_map(quick: bool) -> dict:
+    """A parameter map's cost: a chunk of it measured in this process with patched
+    set-ups and with a set-up per parameter set (the path before), alternately; and
+    through the sweep on all cores at two sizes, whose slope (start-up cancelled)
+    projects the 10^6-point map. The files of that map are estimated, the parent's
+    peak memory measured."""
+    from billiard.scene.scene import load_scene
+    from billiard.sweep import Sweep, parse_vary
+    from billiard.sweep.execute import estimate_size
+
+    cores = os.cpu_count() or 1
+    chunk = 12 if quick else 20
+    _map_chunk(2, True)  # kernels loaded
+    pairs = [(_map_chunk(chunk, True), _map_chunk(chunk, False)) for _ in range(2 if quick else 3)]
+    patched = statistics.median(p for p, _ in pairs) / chunk**2
+    each = statistics.median(u for _, u in pairs) / chunk**2
+    small, large = (20, 40) if quick else (60, 120)
+    runs = []
+    for _ in range(1 if quick else 2):
+        runs += [_map_sweep(small, cores), _map_sweep(large, cores)]
+    a = statistics.median(r["wall"] for r in runs if r["side"] == small)
+    b = statistics.median(r["wall"] for r in runs if r["side"] == large)
+    per_point = (b - a) / (large**2 - small**2)
+    side = int(MAP_POINTS**0.5)
+    big = Sweep(
+        load_scene(MAP_SCENE),
+        (
+            parse_vary(f"drive.frequency=4.5:6.5:{side}"),
+            parse_vary(f"drive.amplitude=0.01:0.04:{side}"),
+        ),
+        impacts=200,
+        transient=300,
+        keep=10,
+    )
+    return {
+        "runs": runs,
+        "chunk_pairs": pairs,
+        "chunk": chunk,
+        "patched_ms_per_point": 1e3 * patched,
+        "own_setup_ms_per_point": 1e3 * each,
+        "speedup": each / patched,
+        "workers": cores,
+        "per_point_s": per_point,
+        "projected_s": a + per_point * (MAP_POINTS - small**2),
+        "small": small,
+        "large": large,
+        "files_bytes": sum(estimate_size(big).values()),
+        "peak_rss_mib": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024,
+    }
+
+
 def sweep_scaling(quick: bool, workers: list[int]) -> dict:
     """One basin map of 1000-impact points on each worker count (start-up included)."""
     side = 120 if quick else 300
@@ -397,6 +519,23 @@ def render(results: dict) -> str:
             f"made), **{ph['ratio']:.2f}x**.",
             "",
         ]
+    mp = results.get("map")
+    if mp is not None:
+        lines += [
+            f"**A parameter map** (`billiard sweep {MAP_SCENE} --vary drive.frequency=4.5:6.5:N "
+            "--vary drive.amplitude=0.01:0.04:N --impacts 200 --transient 300 --keep 10`): "
+            "the parameter sets of a chunk run as one ensemble, set up once and patched per "
+            f"point. A {mp['chunk']} x {mp['chunk']} chunk measured in one process: "
+            f"{mp['patched_ms_per_point']:.2f} ms per point, against "
+            f"{mp['own_setup_ms_per_point']:.2f} ms with a set-up per parameter set (the "
+            f"path before; **{mp['speedup']:.1f}x**). Through the sweep on "
+            f"{mp['workers']} workers, {mp['small']}^2 and {mp['large']}^2-point maps give "
+            f"{1e3 * mp['per_point_s']:.2f} ms of wall time per point, so a 1000 x 1000 map "
+            f"takes about **{mp['projected_s'] / 60:.1f} min** (projected), with "
+            f"{mp['files_bytes'] / 2**20:,.0f} MiB of files; the parent peaked at "
+            f"{mp['peak_rss_mib']:.0f} MiB.",
+            "",
+        ]
     sc = results["scaling"]
     runs = sc["runs"]
     lines += [
@@ -449,6 +588,12 @@ def render(results: dict) -> str:
         f"{o['bytes_per_point']:.0f} | "
         f"{_verdict(o['bytes_per_point'], TARGETS['point_bytes'], False)} |"
     )
+    if mp is not None:
+        lines.append(
+            f"| a 1000 x 1000 parameter map <= {TARGETS['map_seconds'] / 60:.0f} min | "
+            f"{mp['projected_s'] / 60:.1f} min (projected) | "
+            f"{_verdict(mp['projected_s'], TARGETS['map_seconds'], False)} |"
+        )
     if ph is not None:
         lines.append(
             f"| a point under contact phases <= {TARGETS['phases_ratio']:.0f}x one under "

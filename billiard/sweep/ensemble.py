@@ -304,8 +304,11 @@ def measured_columns(
     rest_height: Any,
     rest_band: float,
     scene: Any,
+    frequency: Any = None,
 ) -> dict[str, np.ndarray]:
-    """The sweep's measurements of each trajectory from the kernel's ``stats``."""
+    """The sweep's measurements of each trajectory from the kernel's ``stats``
+    (``rest_height`` in m and ``frequency`` in Hz per trajectory or one for all; the
+    frequency by default ``scene``'s drive frequency)."""
     from billiard.kernels import ensemble as E
 
     measured = stats[:, E.ST_MEASURED]
@@ -319,13 +322,12 @@ def measured_columns(
     ok = (codes != CLASSES.index("failed")) & (codes != CLASSES.index("invalid"))
     # a run that ended on the boundary is classed by that, without a period
     period = np.where(ok & (contact_codes(stats) < 0), stats[:, E.ST_PERIOD], 0).astype(np.int64)
-    frequency = scene.drive.frequency
-    drive_periods = np.zeros_like(period)
-    if frequency > 0.0:
-        # as the sweep rounds it: the period's time over the drive period
-        # (Python's round and numpy's rint both round half to even)
+    frequency = np.asarray(scene.drive.frequency if frequency is None else frequency, float)
+    # as the sweep rounds it: the period's time over the drive period (Python's round
+    # and numpy's rint both round half to even); none without a drive
+    with np.errstate(invalid="ignore"):  # no period found: its time is not a number
         cycles = np.rint(stats[:, E.ST_PERIOD_TIME] * frequency)
-        drive_periods = np.where(period > 0, cycles, 0).astype(np.int64)
+    drive_periods = np.where((period > 0) & (frequency > 0.0), cycles, 0).astype(np.int64)
     nan = np.where(has & ok, 1.0, math.nan)
     status = stats[:, E.ST_STATUS]
     # the run's Status, lower case, as a run reports it ("": stopped)
