@@ -89,7 +89,7 @@ def measure_batch(
     this core or (``device = "gpu"``) on the GPU.
 
     The parameter sets of a family (:func:`_families`) under the impacts model run as one
-    ensemble on the CPU: the first set is set up (:func:`_setup`), the others are
+    ensemble (on the CPU or the GPU): the first set is set up (:func:`_setup`), the others are
     patched from it (:func:`billiard.engine.ensemble.patch`, no Simulation of their own),
     each trajectory with its own state vector and constants.
 
@@ -119,7 +119,7 @@ def measure_batch(
             scenes.append((scene, points))
         if not scenes:
             continue
-        patched = device == "cpu" and scenes[0][0].contact.model == "impacts"
+        patched = scenes[0][0].contact.model == "impacts"
         patched = patched and os.environ.get(PATCH_ENV, "1") != "0"
         family = [scenes] if patched else [[one] for one in scenes]
         for members in family:
@@ -207,7 +207,7 @@ def _measure_family(
     device: str = "cpu",
 ) -> tuple[dict[str, np.ndarray] | None, list[int]]:
     """Measure the points of parameter sets that share one set-up's geometry (one set,
-    or a family of the impacts model on the CPU) as one ensemble."""
+    or a family of the impacts model) as one ensemble."""
     from billiard.kernels import ensemble as E
 
     setups, left = _setups(scenes)
