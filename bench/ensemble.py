@@ -50,6 +50,7 @@ TARGETS = {
     "basin_seconds": 600.0,
     "phases_ratio": 2.0,
     "map_seconds": 900.0,
+    "kernel_ratio": 1.2,
 }
 #: the parameter map of the target: the parabola's drive.frequency x drive.amplitude
 MAP_SCENE = "parabola-5.4hz"
@@ -257,6 +258,9 @@ def measure(quick: bool, save: Any = None) -> dict:
     print("bench.ensemble: a point under contact phases against impacts ...", flush=True)
     result["phases"] = phases_ratio(quick)
     _save(save, result)
+    print("bench.ensemble: the ensemble kernel against the bare kernel ...", flush=True)
+    result["kernel_ratio"] = kernel_ratio(quick)
+    _save(save, result)
     print("bench.ensemble: a parameter map, patched set-ups against one each ...", flush=True)
     result["map"] = parameter_map(quick)
     _save(save, result)
@@ -371,6 +375,56 @@ def _map_sweep(side: int, workers: int, patched: bool = True) -> dict:
             os.environ[batch.PATCH_ENV] = before
     return {"side": side, "points": sweep.size, "workers": workers, "wall": wall,
             "computed": len(outcome.computed), "patched": patched}  # fmt: skip
+
+
+def _bare_per_impact(starts: list[tuple[float, float]], impacts: int) -> float:
+    """CPU seconds per impact of the bare single-trajectory kernel (``run_chunk``, one
+    chunk of ``impacts`` impacts per start, rows written) over the wedge ``starts``."""
+    import numpy as np
+
+    from billiard.engine.simulation import Simulation
+    from billiard.geometry.wall_functions import wall_functions
+    from billiard.kernels import layout as L
+    from billiard.kernels.loop import run_chunk
+    from billiard.scene.scene import load_scene, with_values
+
+    spent, made = 0.0, 0
+    buffer = np.empty(impacts * L.NCOL)
+    for q1, q2 in starts:
+        sim = Simulation(with_values(load_scene(SCENE), {"initial.q1": q1, "initial.q2": q2}))
+        ctx = np.array(sim.ctx, dtype=np.float64)
+        ctx[L.EN_TARGET] = float(impacts)
+        params = np.array(sim.boundary.walls[0].p, dtype=np.float64)
+        walls = wall_functions(sim)
+        began = time.process_time()
+        _, rows = run_chunk(ctx, params, walls, buffer, impacts)
+        spent += time.process_time() - began
+        made += rows
+    return spent / max(made, 1)
+
+
+def kernel_ratio(quick: bool) -> dict:
+    """CPU per impact of the ensemble kernel on one thread against the bare
+    single-trajectory kernel over the same wedge starts (a sample of :func:`_starts`),
+    the two taken alternately."""
+    from billiard import run_ensemble
+
+    count, impacts, repeats = (20, 2000, 3) if quick else (40, 5000, 5)
+    # starts well inside the wedge (each a valid start of a run)
+    q1 = np.linspace(-0.02, 0.02, count)
+    q2 = np.linspace(0.12, 0.07, count)
+    run_ensemble(SCENE, q1=q1[:2], q2=q2[:2], impacts=10, threads=1)  # kernels loaded
+    _bare_per_impact([(q1[0], q2[0])], 10)
+    bare, ensemble = [], []
+    for _ in range(repeats):
+        bare.append(_bare_per_impact(list(zip(q1.tolist(), q2.tolist(), strict=True)), impacts))
+        began = time.process_time()
+        result = run_ensemble(SCENE, q1=q1, q2=q2, impacts=impacts, threads=1)
+        spent = time.process_time() - began
+        ensemble.append(spent / float(result.columns["total_impacts"].sum()))
+    b, e = statistics.median(bare), statistics.median(ensemble)
+    return {"bare_us": 1e6 * b, "ensemble_us": 1e6 * e, "ratio": e / b,
+            "bare": bare, "ensemble": ensemble, "starts": len(q1), "impacts": impacts}  # fmt: skip
 
 
 def _map_chunk(side: int, patched: bool) -> float:
@@ -519,6 +573,16 @@ def render(results: dict) -> str:
             f"made), **{ph['ratio']:.2f}x**.",
             "",
         ]
+    kr = results.get("kernel_ratio")
+    if kr is not None:
+        lines += [
+            f"**The ensemble kernel against the bare kernel** (CPU per impact, one thread, "
+            f"taken alternately): {kr['ensemble_us']:.2f} us per impact for "
+            f"{kr['starts']:,} wedge starts of {kr['impacts']} impacts, against "
+            f"{kr['bare_us']:.2f} us for the bare kernel (`run_chunk`, a row written per "
+            f"impact) from the same starts (**{kr['ratio']:.2f}x**).",
+            "",
+        ]
     mp = results.get("map")
     if mp is not None:
         lines += [
@@ -588,6 +652,11 @@ def render(results: dict) -> str:
         f"{o['bytes_per_point']:.0f} | "
         f"{_verdict(o['bytes_per_point'], TARGETS['point_bytes'], False)} |"
     )
+    if kr is not None:
+        lines.append(
+            f"| ensemble kernel <= {TARGETS['kernel_ratio']:.1f}x the bare kernel per impact | "
+            f"{kr['ratio']:.2f}x | {_verdict(kr['ratio'], TARGETS['kernel_ratio'], False)} |"
+        )
     if mp is not None:
         lines.append(
             f"| a 1000 x 1000 parameter map <= {TARGETS['map_seconds'] / 60:.0f} min | "
