@@ -14,11 +14,13 @@ default, :data:`billiard.analysis.phase.DEFAULT_PHASE_REFERENCE`); the point is
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass
 
 import numpy as np
 
+from billiard.analysis.dissipation import impact_dissipation, relative_energy
 from billiard.analysis.phase import PhaseFrame, phase_frame, phase_point
 from billiard.errors import GeometryError
 from billiard.run.simulate import simulate
@@ -42,6 +44,11 @@ class Orbit:
     impacts_to_lock: int  # impacts before the orbit was reached
     omega: float = 0.0  # spin after the impact (rad/s)
     reference: str = "lab-origin+spin"  # the phase reference of the normalized point
+    #: kinetic energy (J) the impact law removes at an impact of the orbit, in the
+    #: boundary's frame (:mod:`billiard.analysis.dissipation`), and the ball's kinetic
+    #: energy relative to the boundary before it (nan: not computed)
+    dissipated: float = math.nan
+    relative_energy: float = math.nan
 
 
 def find_period_one(
@@ -102,7 +109,15 @@ def orbit_for(scene: Scene, parameter: str, value: float, impacts: int) -> Orbit
         frame = phase_frame(trial)
     except GeometryError:  # no bottom, so no lowest centre: E as it is (orbit.reference)
         frame = None
-    return find_period_one(result.columns, trial.ball.mass, trial.run.gravity, reference=frame)
+    orbit = find_period_one(result.columns, trial.ball.mass, trial.run.gravity, reference=frame)
+    if orbit is None:
+        return None
+    last = {key: np.asarray(result.columns[key])[-1:] for key in result.columns}
+    return dataclasses.replace(
+        orbit,
+        dissipated=float(impact_dissipation(last, trial)[0]),
+        relative_energy=float(relative_energy(last, trial)[0]),
+    )
 
 
 @dataclass(frozen=True)
@@ -126,6 +141,8 @@ class Calibration:
             "u4_normalized": abs(o.u4_normalized),
             "phase_reference": o.reference,
             "impacts_to_lock": o.impacts_to_lock,
+            "dissipated_per_impact": o.dissipated,
+            "relative_energy": o.relative_energy,
             "evaluations": self.evaluations,
         }
 

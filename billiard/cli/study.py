@@ -25,27 +25,44 @@ def cmd_calibrate(args: argparse.Namespace) -> int:
     import json
 
     from billiard.analysis.calibrate import calibrate
+    from billiard.models.impact import IMPACT_LAWS, with_law
     from billiard.scene.scene import load_scene
 
     if args.impacts < 1:
         raise UserError(f"calibrate: --impacts must be >= 1, got {args.impacts}")
+    if args.parameter is None and args.law is None:
+        raise UserError("calibrate: give --parameter KEY, or --law NAME to fit its main parameter")
     scene = load_scene(args.scene, overrides=args.set, notify=_note)
+    if args.law is not None:
+        scene = with_law(scene, args.law)
+    low, high, points = args.low, args.high, 9
+    parameter = args.parameter
+    if parameter is None:
+        # the law's main parameter, scanned finely over the law's range: a period-one
+        # orbit exists only in windows of it
+        law = IMPACT_LAWS[scene.contact.law]
+        parameter = f"contact.{law.main}"
+        low = law.main_range[0] if low is None else low
+        high = law.main_range[1] if high is None else high
+        points = 33
     started = time.perf_counter()
     result = calibrate(
         scene,
-        args.parameter,
+        parameter,
         args.target_height,
-        low=args.low,
-        high=args.high,
+        low=low,
+        high=high,
+        points=points,
         impacts=args.impacts,
     )
     if args.json:
-        print(json.dumps(result.as_dict()))
+        print(json.dumps({**result.as_dict(), "law": scene.contact.law}))
         return 0
     o = result.orbit
     print(
-        f"{args.parameter} = {result.value:.6g}  "
-        f"(period-one orbit at q2 = {o.height:.6f} m, target {args.target_height} m)"
+        f"{parameter} = {result.value:.6g}  "
+        f"(period-one orbit at q2 = {o.height:.6f} m, target {args.target_height} m; "
+        f"impact law {scene.contact.law})"
     )
     print(
         f"orbit: time of flight {o.time_of_flight:.6f} s, locked after {o.impacts_to_lock} "
@@ -60,6 +77,11 @@ def cmd_calibrate(args: argparse.Namespace) -> int:
         f"lowest position of the ball's centre, spin left out (phase reference "
         f"{DEFAULT_PHASE_REFERENCE!r}; the candidates are compared in "
         "docs/paper-reproduction.md)"
+    )
+    print(
+        f"energy the impact law removes per impact at the orbit: {o.dissipated:.4e} J, "
+        f"{o.dissipated / o.relative_energy:.1%} of the ball's kinetic energy relative to "
+        "the wall"
     )
     print(f"{result.evaluations} runs, {time.perf_counter() - started:.1f} s")
     return 0
@@ -136,8 +158,15 @@ def add_parsers(sub: argparse._SubParsersAction) -> None:
     p.add_argument("scene", help="built-in scene name or a .toml file")
     p.add_argument(
         "--parameter",
-        required=True,
-        help="dotted scene key, e.g. drive.amplitude or contact.restitution",
+        help="dotted scene key, e.g. drive.amplitude or contact.restitution (default with "
+        "--law: the law's main parameter)",
+    )
+    p.add_argument(
+        "--law",
+        metavar="NAME",
+        help="run under the impact law NAME (contact.law; its other parameters at their "
+        "defaults where the scene has none, docs/impact-laws.md) and fit its main "
+        "parameter unless --parameter says another",
     )
     p.add_argument(
         "--target-height",
