@@ -24,8 +24,7 @@ def cmd_scenes(args: argparse.Namespace) -> int:
 def cmd_calibrate(args: argparse.Namespace) -> int:
     import json
 
-    from billiard.analysis.calibrate import calibrate
-    from billiard.models.impact import IMPACT_LAWS, with_law
+    from billiard.analysis.calibrate import calibrate_law
     from billiard.scene.scene import load_scene
 
     if args.impacts < 1:
@@ -33,28 +32,17 @@ def cmd_calibrate(args: argparse.Namespace) -> int:
     if args.parameter is None and args.law is None:
         raise UserError("calibrate: give --parameter KEY, or --law NAME to fit its main parameter")
     scene = load_scene(args.scene, overrides=args.set, notify=_note)
-    if args.law is not None:
-        scene = with_law(scene, args.law)
-    low, high, points = args.low, args.high, 9
-    parameter = args.parameter
-    if parameter is None:
-        # the law's main parameter, scanned finely over the law's range: a period-one
-        # orbit exists only in windows of it
-        law = IMPACT_LAWS[scene.contact.law]
-        parameter = f"contact.{law.main}"
-        low = law.main_range[0] if low is None else low
-        high = law.main_range[1] if high is None else high
-        points = 33
     started = time.perf_counter()
-    result = calibrate(
+    scene, result = calibrate_law(
         scene,
-        parameter,
         args.target_height,
-        low=low,
-        high=high,
-        points=points,
+        law=args.law,
+        parameter=args.parameter,
+        low=args.low,
+        high=args.high,
         impacts=args.impacts,
     )
+    parameter = result.parameter
     if args.json:
         print(json.dumps({**result.as_dict(), "law": scene.contact.law}))
         return 0
@@ -135,10 +123,16 @@ def cmd_bench(args: argparse.Namespace) -> int:
 def cmd_reproduce(args: argparse.Namespace) -> int:
     from billiard.reproduce.paper import run_reproduce
 
+    if args.runs is None:
+        args.runs = "runs/paper" if args.laws is None else "runs/laws"
     # a folder that cannot be made fails here in one line, not after minutes of work
     check_output_folder(args.runs, "reproduce --runs")
     if args.docs is not None:
         check_output_folder(args.docs, "reproduce --docs")
+    if args.laws is not None:
+        from billiard.reproduce.laws import run_laws
+
+        return run_laws(args)
     return run_reproduce(args)
 
 
@@ -259,7 +253,19 @@ def add_parsers(sub: argparse._SubParsersAction) -> None:
         help="where the report and its figures go (default: docs for the full reproduction "
         "with the default settings, else the --runs folder)",
     )
-    p.add_argument("--runs", default="runs/paper", help="where the runs go (default runs/paper)")
+    p.add_argument(
+        "--runs",
+        help="where the runs go (default runs/paper; with --laws runs/laws)",
+    )
+    p.add_argument(
+        "--laws",
+        nargs="?",
+        const="all",
+        metavar="NAMES",
+        help="instead: compare impact laws (all, or a comma-separated list of contact.law "
+        "names): calibrate each on the paper's orbit, run the four paper scenes under each "
+        "and write docs/impact-laws.md with its figures",
+    )
     p.add_argument(
         "--collisions", type=int, default=25000, help="impacts per scene (default 25000)"
     )
