@@ -194,7 +194,7 @@ def _fit_row(fit: LawFit) -> str:
     o = fit.orbit
     if fit.value is None or o is None:
         return (
-            f"| `{fit.law}` | `{fit.parameter}` | none: {fit.error} | - | - | "
+            f"| `{fit.law}` | `{fit.parameter}` | none: {_reason(fit.error)} | - | - | "
             f"{fit.wall_time:.1f} s |"
         )
     return (
@@ -203,6 +203,13 @@ def _fit_row(fit: LawFit) -> str:
         f"{o.dissipated:.4e} J ({_pct(o.dissipated / o.relative_energy)}) | "
         f"{fit.wall_time:.1f} s |"
     )
+
+
+def _reason(error: str | None) -> str:
+    """A calibration's error without its scan of orbit heights; the page says the
+    default the law's runs take instead."""
+    text = (error or "").split(" (orbit heights")[0]
+    return f"{text}; the runs take the law's default"
 
 
 def _run_row(run: LawRun) -> str:
