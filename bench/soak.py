@@ -1060,7 +1060,7 @@ def _aggregate(reports: list[dict[str, Any]]) -> dict[str, Any]:
     laws = {
         law: {
             key: total(key, [r for r in reports if r.get("law") == law])
-            for key in ("impacts", "energy_created")
+            for key in ("impacts", "energy_created", "separating")
         }
         for law in LAWS
     }
@@ -1202,9 +1202,10 @@ def format_summary(s: dict[str, Any]) -> str:
         f"mid-run; {s['resume_phases']} phases scenes, {s['resume_phases_interrupted']} "
         f"interrupted)",
         f"  random-scene outcomes: {s['stops']} (phases scenes: {s['phases_stops']})",
-        "  impacts (energy created) by impact law: "
+        "  impacts (energy created, at a separating contact) by impact law: "
         + ", ".join(
-            f"{law} {n['impacts']:,} ({n['energy_created']})" for law, n in s["laws"].items()
+            f"{law} {n['impacts']:,} ({n['energy_created']}, {n['separating']})"
+            for law, n in s["laws"].items()
         ),
     ]
     lines += [f"  violation: {v}" for v in s["violations"]]
