@@ -314,9 +314,12 @@ class ContactSpec:
             ``"kane-levinson"``, the paper's, by default.
         beta0: Walton's tangential restitution of the contact point in a sticking
             impact, in [-1, 1] (``law = "walton"``).
-        e_ref, v_ref, exponent: the power law e(v) = min(1, e_ref (v / v_ref)^-exponent),
-            v the normal impact speed; v_ref in m/s (``law = "power-law"``).
-        viscous: the viscoelastic dissipation A alpha^(2/5), in (s/m)^(1/5)
+        e_ref: the power law's restitution at the speed v_ref (dimensionless): e(v) =
+            min(1, e_ref (v / v_ref)^-exponent), v the normal impact speed
+            (``law = "power-law"``).
+        v_ref: the power law's reference speed (m/s).
+        exponent: the power law's exponent (dimensionless).
+        viscous: ((s/m)^(1/5)) the viscoelastic dissipation A alpha^(2/5)
             (``law = "viscoelastic"``).
         energy_scale: E0 (J) of the energy-dependent restitution
             e = restitution + (1 - restitution) exp(-E / E0), E = m wn^2 / 2
