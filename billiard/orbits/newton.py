@@ -23,7 +23,7 @@ from billiard.orbits.jacobian import map_jacobian
 from billiard.orbits.returnmap import STATE, Landing, OrbitError, ReturnMap
 from billiard.runfile.record import ImpactRecord
 
-__all__ = ["NEWTON_TOL", "Orbit", "find_orbit", "newton", "stable"]
+__all__ = ["NEWTON_TOL", "Orbit", "find_orbit", "free_indices", "newton", "stable"]
 
 #: Newton converges when every coordinate's step is at most this, relative to
 #: 1 + |coordinate| (s, m, m/s, rad/s): the orbit is then known to 1e-12 in its state.
@@ -86,7 +86,8 @@ def stable(multipliers: np.ndarray) -> bool:
     return bool(np.all(np.abs(multipliers) < 1.0 - UNIT_TOL))
 
 
-def _indices(free: Sequence[str] | None) -> list[int]:
+def free_indices(free: Sequence[str] | None) -> list[int]:
+    """The positions in :data:`STATE` of the coordinates ``free`` (None: all)."""
     if free is None:
         return list(range(len(STATE)))
     unknown = [name for name in free if name not in STATE]
@@ -122,7 +123,7 @@ def newton(
         OrbitError: no convergence, the orbit leaves its wall sequence during the
             search, or a held coordinate is not invariant.
     """
-    idx = _indices(free)
+    idx = free_indices(free)
     x = np.array(x0, dtype=float)
     if x.shape != (len(STATE),) or not np.all(np.isfinite(x)):
         raise OrbitError(f"a guess is five finite numbers ({', '.join(STATE)}), not {x0!r}")
