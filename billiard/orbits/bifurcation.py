@@ -2,7 +2,10 @@
 change sign at them (Kuznetsov, *Elements of Applied Bifurcation Theory*, 3rd ed.,
 sec. 10.2, for maps):
 
-* fold: a multiplier through +1, det(J - I) = 0;
+* fold: a multiplier through +1, det(J - I) = 0, where the branch turns back in the
+  key; where it goes on instead, a branch point (``branch_point``: a symmetric orbit's
+  pitchfork, the parabola's mirror-symmetric orbit losing its symmetry, or a
+  transcritical crossing), told apart by the key's component of the branch's tangent;
 * period doubling: a multiplier through -1, det(J + I) = 0;
 * Neimark-Sacker: a complex pair through the unit circle, prod_{i<j} (m_i m_j - 1) = 0
   (the determinant of the bialternate product's shift; it also vanishes at a neutral
@@ -20,7 +23,14 @@ __all__ = ["BIFURCATIONS", "GRAZING", "NONE", "neimark_sacker_pair", "test_funct
 
 #: Codes of the ``bifurcation`` variable of branch.nc, in the order of its
 #: ``flag_values`` (0, 1, ...): the names are its ``flag_meanings``.
-BIFURCATIONS: tuple[str, ...] = ("none", "fold", "period_doubling", "neimark_sacker", "grazing")
+BIFURCATIONS: tuple[str, ...] = (
+    "none",
+    "fold",
+    "period_doubling",
+    "neimark_sacker",
+    "grazing",
+    "branch_point",
+)
 NONE = 0
 GRAZING = BIFURCATIONS.index("grazing")
 #: the smooth bifurcations, in the order of :func:`test_functions`' values

@@ -78,7 +78,7 @@ def scene(gamma: float, e: float, **changes):
 def orbit(gamma: float, e: float, n: int = 1, stable: bool = True) -> tuple[float, float]:
     """(t, v2) just after the impact of the period-n orbit (t in [0, T)): the stable one
     (table decelerating, sin(theta) > 0) or the unstable one."""
-    theta = math.acos(onset(e, n) / gamma)
+    theta = math.acos(min(1.0, onset(e, n) / gamma))  # at the fold, rounding may pass 1
     theta = theta if stable else 2 * math.pi - theta
     return theta / W, G * n * T / 2
 

@@ -112,7 +112,7 @@ def test_continue_orbit_returns_the_dataset_of_the_issue():
     assert ds["multipliers_real"].dims == ("point", "multiplier")
     assert ds["bifurcation"].attrs["flag_meanings"] == " ".join(BIFURCATIONS)
     assert ds["bifurcation"].attrs["flag_meanings"] == (
-        "none fold period_doubling neimark_sacker grazing"
+        "none fold period_doubling neimark_sacker grazing branch_point"
     )
     assert ds["stable"].values.tolist() == [1] * ds.sizes["point"]
     a = ds["drive_amplitude"].values
