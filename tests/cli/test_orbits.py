@@ -154,3 +154,33 @@ def test_ctrl_c_ends_it_within_a_second(tmp_path):
     assert "interrupted; nothing was written" in proc.stderr.read()
     assert not (out / "branch.nc").exists()
     assert np.isfinite(took)
+
+
+@pytest.mark.parametrize("start", ["at", "from-run"])
+def test_the_start_from_another_value_or_from_a_run(table_scene, tmp_path, capsys, start):
+    """--at: the orbit the scene's run settles on at that value of the key; --from-run:
+    the last impact of a run folder. Either way the stable orbit of the closed form."""
+    lo, hi = table.amplitude(1.2), table.amplitude(1.4)
+    args = ["--continue", f"drive.amplitude={lo!r}:{hi!r}", "--free", "t,v2", "--points", "6"]
+    gamma = 1.3
+    if start == "at":
+        gamma = 1.25
+        args += ["--at", f"drive.amplitude={table.amplitude(gamma)!r}"]
+    else:
+        run = tmp_path / "run"
+        assert main(["run", str(table_scene), "--collisions", "500", "--out", str(run)]) == 0
+        args += ["--from-run", str(run)]
+    capsys.readouterr()
+    out = tmp_path / "out"
+    assert main(["orbits", str(table_scene), *args, "--out", str(out)]) == 0
+    first = capsys.readouterr().out.splitlines()[0]
+    assert f"drive.amplitude = {table.amplitude(gamma):.10g} m" in first and "stable" in first
+    f = netcdf_file(out / "branch.nc", "r", mmap=False)
+    try:
+        a = f.variables["drive_amplitude"][:].copy()
+        phase = f.variables["t_phase"][:].copy()
+    finally:
+        f.close()
+    for value, t in zip(a, phase, strict=True):
+        expected, _ = table.orbit(value / table.amplitude(1.0), 0.5)
+        assert t == pytest.approx(expected, abs=1e-12)

@@ -74,3 +74,11 @@ def test_a_guess_without_an_orbit_near_it_is_refused_in_one_line():
         find_orbit(scene, 1, guess=(0.0, 0.0, 0.0, 0.01, 0.0), free=VERTICAL)
     with pytest.raises(OrbitError, match="five finite numbers"):
         find_orbit(scene, 1, guess=(0.0, math.nan, 0.0, 0.2, 0.0))
+
+
+def test_the_public_api_has_find_orbit_and_continue_orbit():
+    import billiard
+    from billiard.orbits.continuation import continue_orbit
+
+    assert billiard.find_orbit is find_orbit
+    assert billiard.continue_orbit is continue_orbit
