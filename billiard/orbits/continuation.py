@@ -24,6 +24,7 @@ measured on the parabola).
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from typing import Any
@@ -275,7 +276,7 @@ def _orbit(problem: _Problem, p: _Point) -> tuple[float, Orbit]:
         sequence=p.sequence(),
         records=p.records,
         lab=(ball.q1, ball.q2),
-        residual=0.0,
+        residual=math.nan,  # converged by the corrector: its step, not its residual
         free=tuple(STATE[i] for i in problem.idx),
     )
     return lam, orbit

@@ -50,7 +50,8 @@ class Orbit:
         sequence: (wall, regime) of each of the N impacts.
         records: the engine's records of the N impacts.
         lab: (q1, q2) (m) of the centre just after the first impact.
-        residual: max |P^N(x) - x - m T e_t| relative to 1 + |x| at the end.
+        residual: max |P^N(x) - x - m T e_t| relative to 1 + |x| at the end (NaN for
+            a point of a continued branch, converged by its corrector's step instead).
         free: the coordinates Newton varied (the others held at the guess).
     """
 
