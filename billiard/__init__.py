@@ -138,6 +138,8 @@ _EXPORTS = {
     "run_ensemble": "billiard.sweep.ensemble",
     "run_hysteresis": "billiard.sweep.hysteresis",
     "run_uncertainty": "billiard.sweep.uncertainty",
+    "find_orbit": "billiard.orbits.newton",
+    "continue_orbit": "billiard.orbits.continuation",
 }
 
 __all__ = [
@@ -149,6 +151,8 @@ __all__ = [
     "builtin_scenes",
     "calibrate",
     "camera_filter",
+    "continue_orbit",
+    "find_orbit",
     "load_curve",
     "load_scene",
     "open_run",

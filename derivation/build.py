@@ -25,6 +25,7 @@ from . import codegen, curve, report, shape
 from .ball import BallDerivation, derive_ball, plain
 from .contact import ContactDerivation, derive_contact
 from .expr import DERIVE_TIMEOUT, PAPER_CURVES, curve_name_problem, parse_curve
+from .orbit import orbit_module
 
 GENERATED = Path(__file__).resolve().parent.parent / "generated"
 
@@ -432,6 +433,7 @@ def _expected_texts() -> tuple[tuple[str, str], ...]:
     files = [
         ("generated/ball.py", ball_module(d)),
         ("generated/contact.py", contact_module(contact)),
+        ("generated/orbit.py", orbit_module(d)),
     ]
     curves = []
     for name, (text, params) in PAPER_CURVES.items():
