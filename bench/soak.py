@@ -475,8 +475,7 @@ class PhaseAudit:
     is allowed, beyond it it is not. The
     other transitions are audited elsewhere: the impact at a second wall (the wedge's
     vertex) by :class:`ImpactAudit`, like every impact; lift-off and the wall's end
-    give the ball ``LIFT_OFF_SPEED`` (1e-6 m/s) along the wall's normal by design,
-    0.5 m (1e-6 m/s)^2 relative to the boundary, after the phase's recorded end.
+    keep the phase's recorded end state, no speed added.
 
     Phases (static boundary only). On a boundary at rest (amplitude or frequency 0) the
     normal force does no work, rolling friction none, sliding friction and drag only
