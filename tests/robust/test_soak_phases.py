@@ -276,6 +276,44 @@ def test_the_phase_audit_counts_a_doctored_record():
     assert late.unlinked == 1 and late.transitions == 1
 
 
+def test_the_event_audit_counts_an_energy_rise_on_a_still_boundary():
+    """On a static boundary the state just before an event holds no more mechanical
+    energy than the state after the event before it, with no allowance (nothing there
+    adds energy): the real records pass, a phase starting 1e-9 m higher (within the
+    transition's jump limit) or 1e-9 faster is counted."""
+    from bench.soak import PhaseAudit
+
+    sim, records = recorded_phases()
+    audit = sim.phase_audit
+    assert audit.event_checks >= len(records) and audit.event_energy_rises == 0
+    assert audit.worst_event <= 1e-12
+
+    def audited(*recs):
+        fresh = PhaseAudit.of(sim)
+        for rec in recs:
+            fresh.contact(rec, steps=1000)
+        return fresh
+
+    first, second = records[0], records[1]
+    assert audited(first, second).event_energy_rises == 0
+    higher = audited(first, second._replace(q2_start=second.q2_start + 1e-9))
+    assert higher.event_energy_rises == 1 and higher.transition_jumps == 0
+    faster = audited(first, second._replace(v1_start=second.v1_start * (1.0 + 1e-9)))
+    assert faster.event_energy_rises == 1
+    assert "mechanical energy" in faster.examples[0]
+
+
+def test_the_impulse_audit_counts_rows_below_1e_20_n_s():
+    from bench.soak import audit_impulses
+
+    rn = np.array([1e-3, 0.0, 5e-21, 2e-20, 1e-25])
+    rt = np.array([0.0, 0.0, -5e-21, 0.0, -3e-20])
+    assert audit_impulses({"Rn": rn, "Rt": rt}) == {
+        "zero_impulse_rows": 1,
+        "small_impulse_rows": 2,
+    }
+
+
 def test_the_contact_rows_audit_counts_a_ball_off_the_wall():
     """A contacts.csv row whose end leaves the wall's offset curve by 1 um either way, or
     holds a NaN, is counted."""
