@@ -703,27 +703,33 @@ def corner(ctx, p, walls, out, row, i, j):
     relative to the boundary (CORNER_REST: the ball moves with the boundary, the spin
     the series left). Row ``row`` then records the whole series: the velocities after
     it, the energy, and the total impulse in wall j's frame. CORNER_NONE (nothing
-    changed) where the ball leaves wall i, or touches it not."""
+    changed) where the ball leaves wall i, or touches it not.
+
+    Returns (answer, the surface of the series' last impact, the normal speed (m/s)
+    before that impact, whether the low-velocity rule made it elastic)."""
     kind_i, kind_j = ctx[SURF + i * SURF_STRIDE + S_KIND], ctx[SURF + j * SURF_STRIDE + S_KIND]
     if i == j or kind_i == ESCAPE or kind_j == ESCAPE:
-        return CORNER_NONE
+        return CORNER_NONE, j, 0.0, False
     theta = ctx[EN_THETA]
     px, py, _, _ = boundary_frame(ctx, theta, ctx[EN_Q1], ctx[EN_Q2], 0.0, 0.0)
     at_i, z_i = touches(ctx, p, walls, i, px, py)
     at_j, z_j = touches(ctx, p, walls, j, px, py)
     if not (at_i and at_j):
-        return CORNER_NONE
+        return CORNER_NONE, j, 0.0, False
     u1, u2, u3 = ctx[EN_U1], ctx[EN_U2], ctx[EN_U3]
     vb1, vb2, _, _ = boundary(ctx, theta)
     if (u2 - vb2) * math.cos(z_i) - (u1 - vb1) * math.sin(z_i) >= 0.0:
-        return CORNER_NONE
+        return CORNER_NONE, j, 0.0, False
     start = math.sqrt((u1 - vb1) ** 2 + (u2 - vb2) ** 2)
     v1, v2, v3 = u1, u2, u3
     z, other = z_i, z_j
     quiet = 0
     answer = CORNER_REST
+    # the surface of the series' last impact, its normal speed before it and whether
+    # the low-velocity rule made it elastic (the landing test's inputs)
+    at, last, last_wn, last_elastic = i, j, 0.0, False
     for _ in range(CORNER_SERIES):
-        n1, n2, n3, rt, rn, _, _, _, _ = impact_law(ctx, v1, v2, v3, z, vb1, vb2, False)
+        n1, n2, n3, rt, rn, regime, _, _, wn = impact_law(ctx, v1, v2, v3, z, vb1, vb2, False)
         if rn == 0.0 and rt == 0.0:
             quiet += 1
             if quiet == 2:
@@ -732,9 +738,11 @@ def corner(ctx, p, walls, out, row, i, j):
         else:
             quiet = 0
             v1, v2, v3 = n1, n2, n3
+            last, last_wn, last_elastic = at, wn, regime == ELASTIC
             if math.sqrt((v1 - vb1) ** 2 + (v2 - vb2) ** 2) <= CORNER_LIMIT * start:
                 break
         z, other = other, z
+        at = j if at == i else i
     if answer == CORNER_REST:
         v1, v2 = vb1, vb2
     m = ctx[IM_M]
@@ -753,7 +761,23 @@ def corner(ctx, p, walls, out, row, i, j):
     ctx[EN_U1] = v1
     ctx[EN_U2] = v2
     ctx[EN_U3] = v3
-    return answer
+    return answer, last, last_wn, last_elastic
+
+
+@inline
+def after_corner(ctx, p, walls, i, j, last, wn, elastic, t):
+    """After a series at one instant in the corner of surfaces i and j that ended
+    (:func:`corner`), its last impact on surface ``last`` with normal speed wn before
+    it: held by both or landed on ``last`` as after any impact there (the rebound below
+    the landing speed, or its chatter summed), else the ball flies on."""
+    theta = ctx[EN_THETA]
+    px, _, _, _ = boundary_frame(ctx, theta, ctx[EN_Q1], ctx[EN_Q2], 0.0, 0.0)
+    other = j if last == i else i
+    u1, u2, u3 = ctx[EN_U1], ctx[EN_U2], ctx[EN_U3]
+    if hold_after(ctx, p, walls, other, last, theta, u3, wn, elastic, t, True, False):
+        return
+    s = contact_kept(ctx, p, walls, last, px)[0]
+    land(ctx, p, walls, last, s, theta, u1, u2, u3, wn, elastic, -1, t)
 
 
 @inline
@@ -927,15 +951,13 @@ def impact_from_contact(ctx, p, walls, out, other, index, t, tau, theta, q3):
     ctx[EN_FAULT] = 1.0 if collapsed else 0.0
     # the surface of this impact, for one with another at this instant (loop.impact)
     ctx[EN_LAST_J] = float(j)
-    series = corner(ctx, p, walls, out, int(ctx[MC_ROW]) - 1, index, j)
+    series, last, last_wn, last_elastic = corner(ctx, p, walls, out, int(ctx[MC_ROW]) - 1,
+                                                 index, j)  # fmt: skip
     if series == CORNER_REST:
         corner_rest(ctx, p, walls, index, j, t)
         return True
     if series == CORNER_ENDS:
-        # the ball leaves both walls: no series at one instant is left to skip
-        n1, n2, n3 = ctx[EN_U1], ctx[EN_U2], ctx[EN_U3]
-        if not hold_after(ctx, p, walls, index, j, theta, n3, wn, elastic, t, True, False):
-            land(ctx, p, walls, j, s_o, theta, n1, n2, n3, wn, elastic, -1, t)
+        after_corner(ctx, p, walls, index, j, last, last_wn, last_elastic, t)
         return True
     if not hold_after(ctx, p, walls, index, j, theta, n3, wn, elastic, t, True, tau == 0.0):
         land(ctx, p, walls, j, s_o, theta, n1, n2, n3, wn, elastic, -1, t)
@@ -1212,9 +1234,13 @@ def run_machine(ctx, p, walls, nears, out, rows, cout, crows, sctx, sout, srows)
                 # an impact at the instant of one with another wall (loop.impact)
                 i = int(ctx[EN_SETTLES] // SETTLES_CORNER) - 1
                 j = int(ctx[EN_LAST_J])
-                series = corner(ctx, p, walls, out, int(ctx[MC_ROW]) - 1, i, j)
+                series, last, last_wn, last_elastic = corner(
+                    ctx, p, walls, out, int(ctx[MC_ROW]) - 1, i, j
+                )
                 if series == CORNER_REST:
                     corner_rest(ctx, p, walls, i, j, ctx[EN_T])
+                elif series == CORNER_ENDS:
+                    after_corner(ctx, p, walls, i, j, last, last_wn, last_elastic, ctx[EN_T])
             if ctx[EN_SETTLES] != 0.0 and series == CORNER_NONE:
                 j = int(ctx[EN_LAST_J])
                 # the free flight's test of the chatter's tail (loop.SETTLES_TAIL)

@@ -100,7 +100,11 @@ def test_a_phase_starting_in_the_wedges_vertex_does_not_slide_through_the_other_
     # A w^2 = 9.0 m/s^2 is below g tan(beta) = 18 m/s^2, so both walls hold it
     drive = sim.drive
     assert drive.amplitude * drive.omega**2 < sim.scene.run.gravity * 1.85
-    assert len(phases) >= 3 and len(columns["n"]) >= 3 and sim.mode == "held"
+    # slides, rolls into the vertex and meets the other wall, where the series of impacts
+    # at that instant is one impact whose limit is rest: held there (before, a row per
+    # impact of the series, a roll on the other wall and one more impact 7.5 ms later:
+    # 5 rows, 3 phases)
+    assert len(phases) >= 2 and len(columns["n"]) >= 3 and sim.mode == "held"
     worst = min(clearances(sim, columns, phases), key=lambda item: item[1])
     assert worst[1] >= -GAP_LIMIT, worst
     ends = {(p.mode, p.end) for p in phases}
