@@ -49,7 +49,13 @@ TARGETS = {
     "gpu_impacts_per_s": 1e8,
     "basin_seconds": 600.0,
     "phases_ratio": 2.0,
+    "map_seconds": 900.0,
+    "kernel_ratio": 1.2,
+    "growing": 0.4,
 }
+#: the parameter map of the target: the parabola's drive.frequency x drive.amplitude
+MAP_SCENE = "parabola-5.4hz"
+MAP_POINTS = 10**6
 #: (starts, impacts per start, repeats) of the kernel measurement
 SIZES = {False: (4000, 1000, 3), True: (1000, 500, 2)}
 #: (points, impacts per point, repeats) of the contact phases' cost per point
@@ -253,6 +259,18 @@ def measure(quick: bool, save: Any = None) -> dict:
     print("bench.ensemble: a point under contact phases against impacts ...", flush=True)
     result["phases"] = phases_ratio(quick)
     _save(save, result)
+    print("bench.ensemble: the ensemble kernel against the bare kernel ...", flush=True)
+    result["kernel_ratio"] = kernel_ratio(quick)
+    _save(save, result)
+    print("bench.ensemble: a parameter map, patched set-ups against one each ...", flush=True)
+    result["map"] = parameter_map(quick)
+    _save(save, result)
+    print("bench.ensemble: a cluster that grows from 1 to 4 workers ...", flush=True)
+    try:
+        result["growing"] = growing_cluster(quick)
+    except ImportError as exc:  # no dask.distributed: the row says so
+        result["growing"] = {"missing": str(exc)}
+    _save(save, result)
     pair = sorted({1, min(cores, 16)})
     print(f"bench.ensemble: a sweep on {pair} workers ...", flush=True)
     result["scaling"] = sweep_scaling(quick, pair)
@@ -329,6 +347,222 @@ def sweep_overhead(quick: bool) -> dict:
     }
 
 
+def _map_sweep(side: int, workers: int, patched: bool = True) -> dict:
+    """A ``side`` x ``side`` drive.frequency x drive.amplitude map of the parabola, 200
+    impacts after a 300-impact transient, through run_sweep (plots excluded); with
+    ``patched`` False every parameter set is set up on its own (the path before)."""
+    from billiard.scene.scene import load_scene
+    from billiard.sweep import Sweep, batch, parse_vary, run_sweep
+    from billiard.sweep.progress import SweepProgress
+
+    sweep = Sweep(
+        load_scene(MAP_SCENE),
+        (
+            parse_vary(f"drive.frequency=4.5:6.5:{side}"),
+            parse_vary(f"drive.amplitude=0.01:0.04:{side}"),
+        ),
+        impacts=200,
+        transient=300,
+        keep=10,
+    )
+    before = os.environ.get(batch.PATCH_ENV)
+    os.environ[batch.PATCH_ENV] = "1" if patched else "0"  # read by the workers too
+    try:
+        with tempfile.TemporaryDirectory() as tmp:
+            began = time.perf_counter()
+            progress = SweepProgress(sweep.size, stream=_Silent())
+            outcome = run_sweep(
+                sweep, Path(tmp) / "m", workers=workers, progress=progress, plots=False
+            )
+            wall = time.perf_counter() - began
+    finally:
+        if before is None:
+            os.environ.pop(batch.PATCH_ENV, None)
+        else:
+            os.environ[batch.PATCH_ENV] = before
+    return {"side": side, "points": sweep.size, "workers": workers, "wall": wall,
+            "computed": len(outcome.computed), "patched": patched}  # fmt: skip
+
+
+def _bare_per_impact(starts: list[tuple[float, float]], impacts: int) -> float:
+    """CPU seconds per impact of the bare single-trajectory kernel (``run_chunk``, one
+    chunk of ``impacts`` impacts per start, rows written) over the wedge ``starts``."""
+    import numpy as np
+
+    from billiard.engine.simulation import Simulation
+    from billiard.geometry.wall_functions import wall_functions
+    from billiard.kernels import layout as L
+    from billiard.kernels.loop import run_chunk
+    from billiard.scene.scene import load_scene, with_values
+
+    spent, made = 0.0, 0
+    buffer = np.empty(impacts * L.NCOL)
+    for q1, q2 in starts:
+        sim = Simulation(with_values(load_scene(SCENE), {"initial.q1": q1, "initial.q2": q2}))
+        ctx = np.array(sim.ctx, dtype=np.float64)
+        ctx[L.EN_TARGET] = float(impacts)
+        params = np.array(sim.boundary.walls[0].p, dtype=np.float64)
+        walls = wall_functions(sim)
+        began = time.process_time()
+        _, rows = run_chunk(ctx, params, walls, buffer, impacts)
+        spent += time.process_time() - began
+        made += rows
+    return spent / max(made, 1)
+
+
+def kernel_ratio(quick: bool) -> dict:
+    """CPU per impact of the ensemble kernel on one thread against the bare
+    single-trajectory kernel over the same wedge starts (a sample of :func:`_starts`),
+    the two taken alternately."""
+    from billiard import run_ensemble
+
+    count, impacts, repeats = (20, 2000, 3) if quick else (40, 5000, 5)
+    # starts well inside the wedge (each a valid start of a run)
+    q1 = np.linspace(-0.02, 0.02, count)
+    q2 = np.linspace(0.12, 0.07, count)
+    run_ensemble(SCENE, q1=q1[:2], q2=q2[:2], impacts=10, threads=1)  # kernels loaded
+    _bare_per_impact([(q1[0], q2[0])], 10)
+    bare, ensemble = [], []
+    for _ in range(repeats):
+        bare.append(_bare_per_impact(list(zip(q1.tolist(), q2.tolist(), strict=True)), impacts))
+        began = time.process_time()
+        result = run_ensemble(SCENE, q1=q1, q2=q2, impacts=impacts, threads=1)
+        spent = time.process_time() - began
+        ensemble.append(spent / float(result.columns["total_impacts"].sum()))
+    b, e = statistics.median(bare), statistics.median(ensemble)
+    return {"bare_us": 1e6 * b, "ensemble_us": 1e6 * e, "ratio": e / b,
+            "bare": bare, "ensemble": ensemble, "starts": len(q1), "impacts": impacts}  # fmt: skip
+
+
+def _cluster_sweep(side: int, grow_after: float | None, workers: int = 4) -> dict:
+    """A wedge basin map on a Dask ``LocalCluster`` of worker processes (one thread
+    each) that starts with one worker; ``grow_after`` s after the sweep starts it is
+    scaled to ``workers`` (None: it stays at one). Wall time from the call to the result
+    file, worker start-up included."""
+    import threading
+
+    import distributed
+
+    from billiard.scene.scene import load_scene
+    from billiard.sweep import Sweep, parse_vary, run_sweep
+    from billiard.sweep.progress import SweepProgress
+
+    sweep = Sweep(
+        load_scene(SCENE),
+        (parse_vary(f"initial.q1=-0.03:0.03:{side}"), parse_vary(f"initial.q2=0.07:0.12:{side}")),
+        impacts=500,
+        transient=500,
+        keep=10,
+    )
+    with distributed.LocalCluster(
+        n_workers=1, processes=True, threads_per_worker=1, dashboard_address=None
+    ) as cluster, tempfile.TemporaryDirectory() as tmp:  # fmt: skip
+        cluster.wait_for_workers(1, timeout=120)
+        timer = None
+        if grow_after is not None:
+            timer = threading.Timer(grow_after, cluster.scale, args=(workers,))
+            timer.start()
+        try:
+            began = time.perf_counter()
+            run_sweep(
+                sweep, Path(tmp) / "g", dask=cluster.scheduler_address, plots=False,
+                progress=SweepProgress(sweep.size, stream=_Silent()),
+            )  # fmt: skip
+            wall = time.perf_counter() - began
+        finally:
+            if timer is not None:
+                timer.cancel()
+    return {"side": side, "points": sweep.size, "grow_after": grow_after, "wall": wall}
+
+
+def growing_cluster(quick: bool) -> dict:
+    """A sweep on a cluster that starts with one worker and gains three after 10 s,
+    against the same sweep on one worker throughout."""
+    side = 40 if quick else 70
+    one = _cluster_sweep(side, None)
+    grown = _cluster_sweep(side, 10.0)
+    return {"one": one, "grown": grown, "ratio": grown["wall"] / one["wall"],
+            "cores": os.cpu_count() or 1}  # fmt: skip
+
+
+def _map_chunk(side: int, patched: bool) -> float:
+    """Seconds of one worker's measuring of a ``side`` x ``side`` map as one chunk, in
+    this process (no pool, no files): set-ups, trajectories and measurements."""
+    import numpy as np
+
+    from billiard.scene.scene import load_scene
+    from billiard.sweep import Sweep, batch, parse_vary
+
+    sweep = Sweep(
+        load_scene(MAP_SCENE),
+        (
+            parse_vary(f"drive.frequency=4.6:6.4:{side}"),
+            parse_vary(f"drive.amplitude=0.011:0.039:{side}"),
+        ),
+        impacts=200,
+        transient=300,
+        keep=10,
+    )
+    os.environ[batch.PATCH_ENV] = "1" if patched else "0"
+    try:
+        began = time.perf_counter()
+        batch.measure_batch(sweep, np.arange(sweep.size), sweep.settings())
+        return time.perf_counter() - began
+    finally:
+        os.environ.pop(batch.PATCH_ENV, None)
+
+
+def parameter_map(quick: bool) -> dict:
+    """A parameter map's cost: a chunk of it measured in this process with patched
+    set-ups and with a set-up per parameter set (the path before), alternately; and
+    through the sweep on all cores at two sizes, whose slope (start-up cancelled)
+    projects the 10^6-point map. The files of that map are estimated, the parent's
+    peak memory measured."""
+    from billiard.scene.scene import load_scene
+    from billiard.sweep import Sweep, parse_vary
+    from billiard.sweep.execute import estimate_size
+
+    cores = os.cpu_count() or 1
+    chunk = 12 if quick else 20
+    _map_chunk(2, True)  # kernels loaded
+    pairs = [(_map_chunk(chunk, True), _map_chunk(chunk, False)) for _ in range(2 if quick else 3)]
+    patched = statistics.median(p for p, _ in pairs) / chunk**2
+    each = statistics.median(u for _, u in pairs) / chunk**2
+    small, large = (20, 40) if quick else (60, 120)
+    runs = []
+    for _ in range(1 if quick else 2):
+        runs += [_map_sweep(small, cores), _map_sweep(large, cores)]
+    a = statistics.median(r["wall"] for r in runs if r["side"] == small)
+    b = statistics.median(r["wall"] for r in runs if r["side"] == large)
+    per_point = (b - a) / (large**2 - small**2)
+    side = int(MAP_POINTS**0.5)
+    big = Sweep(
+        load_scene(MAP_SCENE),
+        (
+            parse_vary(f"drive.frequency=4.5:6.5:{side}"),
+            parse_vary(f"drive.amplitude=0.01:0.04:{side}"),
+        ),
+        impacts=200,
+        transient=300,
+        keep=10,
+    )
+    return {
+        "runs": runs,
+        "chunk_pairs": pairs,
+        "chunk": chunk,
+        "patched_ms_per_point": 1e3 * patched,
+        "own_setup_ms_per_point": 1e3 * each,
+        "speedup": each / patched,
+        "workers": cores,
+        "per_point_s": per_point,
+        "projected_s": a + per_point * (MAP_POINTS - small**2),
+        "small": small,
+        "large": large,
+        "files_bytes": sum(estimate_size(big).values()),
+        "peak_rss_mib": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024,
+    }
+
+
 def sweep_scaling(quick: bool, workers: list[int]) -> dict:
     """One basin map of 1000-impact points on each worker count (start-up included)."""
     side = 120 if quick else 300
@@ -397,6 +631,44 @@ def render(results: dict) -> str:
             f"made), **{ph['ratio']:.2f}x**.",
             "",
         ]
+    kr = results.get("kernel_ratio")
+    if kr is not None:
+        lines += [
+            f"**The ensemble kernel against the bare kernel** (CPU per impact, one thread, "
+            f"taken alternately): {kr['ensemble_us']:.2f} us per impact for "
+            f"{kr['starts']:,} wedge starts of {kr['impacts']} impacts, against "
+            f"{kr['bare_us']:.2f} us for the bare kernel (`run_chunk`, a row written per "
+            f"impact) from the same starts (**{kr['ratio']:.2f}x**).",
+            "",
+        ]
+    mp = results.get("map")
+    if mp is not None:
+        lines += [
+            f"**A parameter map** (`billiard sweep {MAP_SCENE} --vary drive.frequency=4.5:6.5:N "
+            "--vary drive.amplitude=0.01:0.04:N --impacts 200 --transient 300 --keep 10`): "
+            "the parameter sets of a chunk run as one ensemble, set up once and patched per "
+            f"point. A {mp['chunk']} x {mp['chunk']} chunk measured in one process: "
+            f"{mp['patched_ms_per_point']:.2f} ms per point, against "
+            f"{mp['own_setup_ms_per_point']:.2f} ms with a set-up per parameter set (the "
+            f"path before; **{mp['speedup']:.1f}x**). Through the sweep on "
+            f"{mp['workers']} workers, {mp['small']}^2 and {mp['large']}^2-point maps give "
+            f"{1e3 * mp['per_point_s']:.2f} ms of wall time per point, so a 1000 x 1000 map "
+            f"takes about **{mp['projected_s'] / 60:.1f} min** (projected), with "
+            f"{mp['files_bytes'] / 2**20:,.0f} MiB of files; the parent peaked at "
+            f"{mp['peak_rss_mib']:.0f} MiB.",
+            "",
+        ]
+    gr = results.get("growing")
+    if gr is not None and "ratio" in gr:
+        one, grown = gr["one"], gr["grown"]
+        lines += [
+            f"**A cluster that grows** (a {one['side']} x {one['side']} wedge basin map of "
+            "1000-impact points on a Dask `LocalCluster` of worker processes): one worker "
+            f"throughout took {one['wall']:.1f} s; started with one and scaled to four after "
+            f"10 s, {grown['wall']:.1f} s (**{gr['ratio']:.2f}x**; on {gr['cores']} cores, "
+            "four workers can at most share them).",
+            "",
+        ]
     sc = results["scaling"]
     runs = sc["runs"]
     lines += [
@@ -449,6 +721,23 @@ def render(results: dict) -> str:
         f"{o['bytes_per_point']:.0f} | "
         f"{_verdict(o['bytes_per_point'], TARGETS['point_bytes'], False)} |"
     )
+    if gr is not None and "ratio" in gr:
+        reason = "" if gr["ratio"] <= TARGETS["growing"] else f" ({gr['cores']} cores)"
+        lines.append(
+            f"| 1 worker, 3 more after 10 s: <= {TARGETS['growing']:.1f}x the 1-worker time | "
+            f"{gr['ratio']:.2f}x | {_verdict(gr['ratio'], TARGETS['growing'], False)}{reason} |"
+        )
+    if kr is not None:
+        lines.append(
+            f"| ensemble kernel <= {TARGETS['kernel_ratio']:.1f}x the bare kernel per impact | "
+            f"{kr['ratio']:.2f}x | {_verdict(kr['ratio'], TARGETS['kernel_ratio'], False)} |"
+        )
+    if mp is not None:
+        lines.append(
+            f"| a 1000 x 1000 parameter map <= {TARGETS['map_seconds'] / 60:.0f} min | "
+            f"{mp['projected_s'] / 60:.1f} min (projected) | "
+            f"{_verdict(mp['projected_s'], TARGETS['map_seconds'], False)} |"
+        )
     if ph is not None:
         lines.append(
             f"| a point under contact phases <= {TARGETS['phases_ratio']:.0f}x one under "

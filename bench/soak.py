@@ -116,6 +116,7 @@ from billiard.run.simulate import (
 from billiard.runfile.sidecsv import CONTACTS_NAME, read_side_csv
 from billiard.runfile.tables import read_collisions
 from billiard.scene.scene import PAPER_SCENES, Scene, fowles_coefficients, load_scene, with_values
+from billiard.scene.spec import LAW_PARAMETERS
 from billiard.status import Status
 
 __all__ = [
@@ -148,6 +149,8 @@ ENERGY_ROUNDING = 1e-12
 SMALL_IMPULSE = 1e-20
 #: Contact models of the random scenes (``contact.model``).
 MODELS = ("impacts", "phases")
+#: the impact laws (``contact.law``), each drawn as often
+LAWS = tuple(LAW_PARAMETERS)
 #: Simulated time (s) a random ``phases`` scene runs at most (``run.duration``).
 PHASES_DURATION = 30.0
 _LARGEST_RADIUS = 4e-3  # m; random balls are at most this large
@@ -197,6 +200,15 @@ def random_draw(rng: random.Random) -> dict[str, Any]:
         "omega": uniform(-300.0, 300.0),
         "t0": uniform(0.0, 50.0),
         "model": rng.choice(MODELS),
+        # the impact law and every law's parameters (those of the law drawn are used)
+        "law": rng.choice(LAWS),
+        "beta0": uniform(-1.0, 1.0),
+        "e_ref": uniform(0.0, 1.0),
+        "v_ref": uniform(0.01, 2.0),
+        "exponent": uniform(0.0, 0.5),
+        "viscous": uniform(0.0, 2.0),
+        "energy_scale": 10.0 ** uniform(-8.0, -3.0),
+        "angle_slope": uniform(0.0, 1.0),
     }
 
 
@@ -231,6 +243,8 @@ def scene_from_draw(draw: Mapping[str, Any]) -> Scene:
     and an initial position inside the container (on or above the wall, below the lid),
     or at rest on the bottom. ``contact.model`` is the draw's ``model``, always set
     explicitly; a ``phases`` scene also gets ``run.duration = PHASES_DURATION``.
+    ``contact.law`` is the draw's ``law`` (Kane and Levinson's where it has none), with
+    the law's parameters from the draw.
     """
     curve = draw["curve"]
     bottom = load_curve(curve).f(0.0)
@@ -269,6 +283,10 @@ def scene_from_draw(draw: Mapping[str, Any]) -> Scene:
         # scene runs for a bounded simulated time
         "run.duration": PHASES_DURATION if draw["model"] == "phases" else None,
     }
+    law = draw.get("law", "kane-levinson")
+    values["contact.law"] = law
+    for key in sum(LAW_PARAMETERS[law], ()):
+        values[f"contact.{key}"] = draw[key]
     scene = with_values(load_scene("parabola-5.4hz"), values)
     scene = with_values(scene, {"name": "random", "description": "random valid scene"})
     if draw["start"] != "inside":
@@ -481,8 +499,7 @@ class PhaseAudit:
     is allowed, beyond it it is not. The
     other transitions are audited elsewhere: the impact at a second wall (the wedge's
     vertex) by :class:`ImpactAudit`, like every impact; lift-off and the wall's end
-    give the ball ``LIFT_OFF_SPEED`` (1e-6 m/s) along the wall's normal by design,
-    0.5 m (1e-6 m/s)^2 relative to the boundary, after the phase's recorded end.
+    keep the phase's recorded end state, no speed added.
 
     Phases (static boundary only). On a boundary at rest (amplitude or frequency 0) the
     normal force does no work, rolling friction none, sliding friction and drag only
@@ -946,6 +963,7 @@ def run_job(job: Job) -> dict[str, Any]:
         return report
     audit = sim.impact_audit
     report["model"] = scene.contact.model
+    report["law"] = scene.contact.law
     with tempfile.TemporaryDirectory(prefix="billiard-soak-") as tmp:
         result = run_streamed(sim, Path(tmp) / "a", collisions=job.impacts)
         columns = read_collisions(Path(tmp) / "a" / "collisions.csv")
@@ -1099,7 +1117,15 @@ def _aggregate(reports: list[dict[str, Any]]) -> dict[str, Any]:
     ends: Counter = Counter()
     for r in phase_runs:
         ends.update(r.get("phase_ends", {}))
+    laws = {
+        law: {
+            key: total(key, [r for r in reports if r.get("law") == law])
+            for key in ("impacts", "energy_created", "separating")
+        }
+        for law in LAWS
+    }
     return {
+        "laws": laws,
         "events": total("events"),
         "impacts": total("impacts"),
         "contact_phases": total("contact_phases"),
@@ -1244,6 +1270,11 @@ def format_summary(s: dict[str, Any]) -> str:
         f"mid-run; {s['resume_phases']} phases scenes, {s['resume_phases_interrupted']} "
         f"interrupted)",
         f"  random-scene outcomes: {s['stops']} (phases scenes: {s['phases_stops']})",
+        "  impacts (energy created, at a separating contact) by impact law: "
+        + ", ".join(
+            f"{law} {n['impacts']:,} ({n['energy_created']}, {n['separating']})"
+            for law, n in s["laws"].items()
+        ),
     ]
     lines += [f"  violation: {v}" for v in s["violations"]]
     lines += [f"  violating draw: {json.dumps(d)}" for d in s["violating_draws"]]

@@ -138,6 +138,8 @@ _EXPORTS = {
     "run_ensemble": "billiard.sweep.ensemble",
     "run_hysteresis": "billiard.sweep.hysteresis",
     "run_uncertainty": "billiard.sweep.uncertainty",
+    "find_orbit": "billiard.orbits.newton",
+    "continue_orbit": "billiard.orbits.continuation",
 }
 
 __all__ = [
@@ -149,6 +151,8 @@ __all__ = [
     "builtin_scenes",
     "calibrate",
     "camera_filter",
+    "continue_orbit",
+    "find_orbit",
     "load_curve",
     "load_scene",
     "open_run",
@@ -162,12 +166,15 @@ __all__ = [
     "scene_from_dict",
     "scene_to_toml",
     "simulate",
+    "sweep",
     "view",
     "with_values",
 ]
 
 
 def __getattr__(name: str) -> Any:
+    if name == "sweep":  # the sweep package, which is also the call billiard.sweep(...)
+        return importlib.import_module("billiard.sweep")
     module = _EXPORTS.get(name)
     if module is None:
         raise AttributeError(f"module 'billiard' has no attribute {name!r}")

@@ -11,7 +11,8 @@ Read top to bottom, this module follows the derivation in the order a student me
 5. equations of motion in flight (gravity, Fowles drag, optional Magnus force):
    Kane's mass matrix and forcing vector, kept separate, never inverted symbolically;
 6. impact equations (generalized impulse = jump in generalized momentum) for a
-   moving boundary, under the hypotheses of sticking and of slipping.
+   moving boundary, under the hypotheses of sticking and of slipping, and with Walton's
+   tangential restitution of the contact point in place of sticking.
 
 Every expression is built from ``sympy.physics.mechanics`` objects; nothing here is a
 hand-written formula for a sphere.
@@ -33,6 +34,8 @@ z = sm.symbols("z", real=True)  # tangent angle of the boundary at the contact p
 vb1, vb2 = sm.symbols("vb1 vb2", real=True)  # boundary velocity at the impact
 e, mu_k = sm.symbols("e mu_k", nonnegative=True)
 sgn = sm.symbols("sgn", real=True)  # sign of the slip velocity before the impact
+# Walton's tangential restitution of the contact point in a sticking impact: wt+ = -beta0 wt-
+beta0 = sm.symbols("beta0", real=True)
 Rt, Rn = sm.symbols("Rt Rn", real=True)  # impulse components along c1 and c2
 
 q1, q2, q3 = me.dynamicsymbols("q1 q2 q3")
@@ -64,6 +67,7 @@ class BallDerivation:
     frame_velocity: sm.Matrix  # (u4, un)
     stick: sm.Matrix  # (u1+, u2+, u3+, Rt, Rn)
     slip: sm.Matrix
+    walton: sm.Matrix  # (u1+, u2+, u3+, Rt, Rn) with wt+ = -beta0 wt-
     energy: sm.Basic
     post: list[sm.Symbol]  # symbols of the post-impact speeds
 
@@ -213,6 +217,7 @@ def derive_ball() -> BallDerivation:
     restitution = wn.subs(to_post) + e * wn
     no_slip = wt.subs(to_post)
     coulomb = Rt + mu_k * sgn * Rn
+    tangential = wt.subs(to_post) + beta0 * wt
     unknowns = post + [Rt, Rn]
 
     def solve(conditions):
@@ -222,6 +227,7 @@ def derive_ball() -> BallDerivation:
 
     stick = solve([restitution, no_slip])
     slip = solve([restitution, coulomb])
+    walton = solve([restitution, tangential])
     steps.append(
         Step(
             "Impact: generalized impulse equals the jump in generalized momentum",
@@ -257,6 +263,21 @@ def derive_ball() -> BallDerivation:
         )
     )
 
+    steps.append(
+        Step(
+            "Impact, third hypothesis: tangential restitution of the contact point",
+            "Walton's law of granular physics (O. R. Walton, in Particulate Two-Phase Flow, "
+            "1993; S. F. Foerster, M. Y. Louge, H. Chang and K. Allia, Phys. Fluids 6, 1108, "
+            "1994) replaces the no-slip condition of a sticking impact by a tangential "
+            "restitution of the contact point, wt+ = -beta0 wt-, with the same normal "
+            "restitution: beta0 = 0 is the no-slip impact above, beta0 = -1 leaves wt "
+            "unchanged (a smooth sphere), beta0 > 0 reverses it as real spheres do. A "
+            "sliding impact is the slip hypothesis above, taken when this impulse needs "
+            "more than mu Rn.",
+            [(r"(u_1^+, u_2^+, u_3^+, R_t, R_n)_{\mathrm{Walton}}", walton.T)],
+        )
+    )
+
     energy = ball.kinetic_energy(N) + ball.potential_energy
     return BallDerivation(
         steps=steps,
@@ -271,6 +292,7 @@ def derive_ball() -> BallDerivation:
         frame_velocity=frame_velocity,
         stick=stick.xreplace(pre),
         slip=slip.xreplace(pre),
+        walton=walton.xreplace(pre),
         energy=energy,
         post=post,
     )

@@ -25,6 +25,7 @@ from . import codegen, curve, report, shape
 from .ball import BallDerivation, derive_ball, plain
 from .contact import ContactDerivation, derive_contact
 from .expr import DERIVE_TIMEOUT, PAPER_CURVES, curve_name_problem, parse_curve
+from .orbit import orbit_module
 
 GENERATED = Path(__file__).resolve().parent.parent / "generated"
 
@@ -39,6 +40,7 @@ def ball_module(d: BallDerivation) -> str:
     m, r, k, g = S("m"), S("r"), S("k"), S("g")
     c_lin, c_quad, c_magnus = S("c_lin"), S("c_quad"), S("c_magnus")
     z, vb1, vb2, e, mu_k, sgn, t = (S(n) for n in ("z", "vb1", "vb2", "e", "mu_k", "sgn", "t"))
+    beta0 = S("beta0")
 
     def p(expr):
         # Drop the assumptions of the derivation's symbols so that printing is uniform.
@@ -108,6 +110,13 @@ def ball_module(d: BallDerivation) -> str:
             "sgn is the sign of wt before the impact.",
         ),
         codegen.function_source(
+            "impact_walton",
+            [u1, u2, u3, z, vb1, vb2, m, r, k, e, beta0],
+            list(p(d.walton)),
+            "Walton's sticking impact, wt+ = -beta0 wt-: post-impact (u1, u2, u3) and "
+            "impulse (Rt, Rn) in N s.",
+        ),
+        codegen.function_source(
             "energy",
             [q2, u1, u2, u3, m, r, k, g],
             p(d.energy),
@@ -117,7 +126,8 @@ def ball_module(d: BallDerivation) -> str:
     body = "\n\n".join(parts)
     header = codegen.generated_notice("derivation/ball.py (Kane's method)") + [
         "Functions: mass_matrix, forcing_drag, flight_rhs_drag, flight_rhs_magnus, "
-        "flight_exact, contact_velocity, frame_velocity, impact_stick, impact_slip, energy",
+        "flight_exact, contact_velocity, frame_velocity, impact_stick, impact_slip, "
+        "impact_walton, energy",
     ]
     return codegen.module_text(header, body)
 
@@ -423,6 +433,7 @@ def _expected_texts() -> tuple[tuple[str, str], ...]:
     files = [
         ("generated/ball.py", ball_module(d)),
         ("generated/contact.py", contact_module(contact)),
+        ("generated/orbit.py", orbit_module(d)),
     ]
     curves = []
     for name, (text, params) in PAPER_CURVES.items():

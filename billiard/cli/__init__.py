@@ -1,5 +1,5 @@
 """Command line: ``billiard derive | scenes | run | export | calibrate | plot | lyapunov |
-bench | reproduce | sweep | hysteresis | uncertainty | view``, one module per command or
+bench | reproduce | sweep | hysteresis | uncertainty | orbits | view``, one module per command or
 group (this package).
 
 Errors a user can cause (a bad scene, a bad curve expression, a stop condition) print one
@@ -16,7 +16,7 @@ import warnings
 from collections.abc import Callable, Sequence
 from typing import Any
 
-from billiard.cli import analyses, derive, export, run, study, sweep, view
+from billiard.cli import analyses, derive, export, orbits, run, study, sweep, view
 from billiard.cli.common import UserError, long_name_error
 
 __all__ = ["UserError", "build_parser", "main", "shows_default", "version_text"]
@@ -37,6 +37,7 @@ def _user_errors() -> tuple[type[BaseException], ...]:
         ("billiard.derivation.curve", ["CurveDerivationError"]),
         ("billiard.analysis.calibrate", ["CalibrationError"]),
         ("billiard.analysis.lyapunov", ["LyapunovError"]),
+        ("billiard.orbits.returnmap", ["OrbitError"]),
         ("billiard.reproduce.paper", ["ReproduceError"]),
         ("billiard.runfile.record", ["RunDataError"]),
         ("billiard.runfile.checkpoint", ["CheckpointError"]),
@@ -124,6 +125,7 @@ def build_parser() -> argparse.ArgumentParser:
     study.add_parsers(sub)  # calibrate, plot, lyapunov, bench, reproduce
     sweep._add_sweep_parser(sub)
     analyses.add_parsers(sub)  # hysteresis, uncertainty
+    orbits.add_parser(sub)
     view.add_parser(sub)
     for command in sub.choices.values():
         command.formatter_class = _DefaultsFormatter
@@ -188,7 +190,7 @@ def _interrupted(args: argparse.Namespace) -> str:
             "no row was lost: a run that started keeps whole rows and its checkpoint "
             "(`billiard run --resume DIR` finishes it, `billiard plot DIR` draws its figures)"
         )
-    if command in ("calibrate", "lyapunov", "scenes"):
+    if command in ("calibrate", "lyapunov", "scenes", "orbits"):
         return "nothing was written"
     if command == "plot":
         where = args.out or args.dir

@@ -24,28 +24,33 @@ def cmd_scenes(args: argparse.Namespace) -> int:
 def cmd_calibrate(args: argparse.Namespace) -> int:
     import json
 
-    from billiard.analysis.calibrate import calibrate
+    from billiard.analysis.calibrate import calibrate_law
     from billiard.scene.scene import load_scene
 
     if args.impacts < 1:
         raise UserError(f"calibrate: --impacts must be >= 1, got {args.impacts}")
+    if args.parameter is None and args.law is None:
+        raise UserError("calibrate: give --parameter KEY, or --law NAME to fit its main parameter")
     scene = load_scene(args.scene, overrides=args.set, notify=_note)
     started = time.perf_counter()
-    result = calibrate(
+    scene, result = calibrate_law(
         scene,
-        args.parameter,
         args.target_height,
+        law=args.law,
+        parameter=args.parameter,
         low=args.low,
         high=args.high,
         impacts=args.impacts,
     )
+    parameter = result.parameter
     if args.json:
-        print(json.dumps(result.as_dict()))
+        print(json.dumps({**result.as_dict(), "law": scene.contact.law}))
         return 0
     o = result.orbit
     print(
-        f"{args.parameter} = {result.value:.6g}  "
-        f"(period-one orbit at q2 = {o.height:.6f} m, target {args.target_height} m)"
+        f"{parameter} = {result.value:.6g}  "
+        f"(period-one orbit at q2 = {o.height:.6f} m, target {args.target_height} m; "
+        f"impact law {scene.contact.law})"
     )
     print(
         f"orbit: time of flight {o.time_of_flight:.6f} s, locked after {o.impacts_to_lock} "
@@ -60,6 +65,11 @@ def cmd_calibrate(args: argparse.Namespace) -> int:
         f"lowest position of the ball's centre, spin left out (phase reference "
         f"{DEFAULT_PHASE_REFERENCE!r}; the candidates are compared in "
         "docs/paper-reproduction.md)"
+    )
+    print(
+        f"energy the impact law removes per impact at the orbit: {o.dissipated:.4e} J, "
+        f"{o.dissipated / o.relative_energy:.1%} of the ball's kinetic energy relative to "
+        "the wall"
     )
     print(f"{result.evaluations} runs, {time.perf_counter() - started:.1f} s")
     return 0
@@ -113,10 +123,16 @@ def cmd_bench(args: argparse.Namespace) -> int:
 def cmd_reproduce(args: argparse.Namespace) -> int:
     from billiard.reproduce.paper import run_reproduce
 
+    if args.runs is None:
+        args.runs = "runs/paper" if args.laws is None else "runs/laws"
     # a folder that cannot be made fails here in one line, not after minutes of work
     check_output_folder(args.runs, "reproduce --runs")
     if args.docs is not None:
         check_output_folder(args.docs, "reproduce --docs")
+    if args.laws is not None:
+        from billiard.reproduce.laws import run_laws
+
+        return run_laws(args)
     return run_reproduce(args)
 
 
@@ -136,8 +152,15 @@ def add_parsers(sub: argparse._SubParsersAction) -> None:
     p.add_argument("scene", help="built-in scene name or a .toml file")
     p.add_argument(
         "--parameter",
-        required=True,
-        help="dotted scene key, e.g. drive.amplitude or contact.restitution",
+        help="dotted scene key, e.g. drive.amplitude or contact.restitution (default with "
+        "--law: the law's main parameter)",
+    )
+    p.add_argument(
+        "--law",
+        metavar="NAME",
+        help="run under the impact law NAME (contact.law; its other parameters at their "
+        "defaults where the scene has none, docs/impact-laws.md) and fit its main "
+        "parameter unless --parameter says another",
     )
     p.add_argument(
         "--target-height",
@@ -230,7 +253,19 @@ def add_parsers(sub: argparse._SubParsersAction) -> None:
         help="where the report and its figures go (default: docs for the full reproduction "
         "with the default settings, else the --runs folder)",
     )
-    p.add_argument("--runs", default="runs/paper", help="where the runs go (default runs/paper)")
+    p.add_argument(
+        "--runs",
+        help="where the runs go (default runs/paper; with --laws runs/laws)",
+    )
+    p.add_argument(
+        "--laws",
+        nargs="?",
+        const="all",
+        metavar="NAMES",
+        help="instead: compare impact laws (all, or a comma-separated list of contact.law "
+        "names): calibrate each on the paper's orbit, run the four paper scenes under each "
+        "and write docs/impact-laws.md with its figures",
+    )
     p.add_argument(
         "--collisions", type=int, default=25000, help="impacts per scene (default 25000)"
     )

@@ -1,31 +1,45 @@
 """The impact laws, chosen by their kind (``ctx[IM_KIND]``) in :func:`impact_law`, which
 every kernel calls: Kane and Levinson's law with the low-velocity rule on the generated
 maps (:class:`billiard.models.impact.KaneLevinsonImpact` is this, run interpreted;
-:class:`billiard.models.impact.LowVelocityRule` describes the rule); and the chatter
-series an impact starts."""
+:class:`billiard.models.impact.LowVelocityRule` describes the rule), the other laws of
+the ladder (docs/impact-laws.md) on the same maps; and the chatter series an impact
+starts."""
 
 from __future__ import annotations
 
 import math
 
-from .ball import contact_velocity, impact_slip, impact_stick
+from .ball import contact_velocity, impact_slip, impact_stick, impact_walton
 from .decorators import inline
 from .layout import (
+    ANGLE_DEPENDENT,
     E_KIND,
     ELASTIC,
     EN_ERR_VALUE,
     EN_STOP,
+    ENERGY_DEPENDENT,
+    IM_ASLOPE,
+    IM_BETA0,
     IM_E,
     IM_EB,
+    IM_EREF,
+    IM_ESCALE,
+    IM_EXP,
     IM_K,
     IM_KIND,
     IM_M,
     IM_MUK,
     IM_MUS,
     IM_R,
+    IM_VISC,
+    IM_VREF,
     KANE_LEVINSON,
+    POINT_PARTICLE,
+    POWER_LAW,
     SLIP,
     STICK,
+    VISCOELASTIC,
+    WALTON,
     KernelError,
 )
 
@@ -40,16 +54,69 @@ from .layout import (
 #: the momenta) still slips.
 REGIME_RTOL = 16 * 2.0**-52
 
+#: The viscoelastic restitution's series in x = A alpha^(2/5) v^(1/5) (v the normal
+#: impact speed, m/s): e = 1 - C1 x + C2 x^2 (J. Ramirez, T. Poeschel, N. V. Brilliantov
+#: and T. Schwager, Phys. Rev. E 60, 4465, 1999; the first order is N. V. Brilliantov,
+#: F. Spahn, J.-M. Hertzsch and T. Poeschel, Phys. Rev. E 53, 5382, 1996).
+VISCO_C1 = 1.15344
+VISCO_C2 = 0.79826
+#: Beyond x = C1 / (2 C2) the truncated series would rise again: it is held at its
+#: minimum there, 1 - C1^2 / (4 C2) = 0.5834, so that e never grows with the speed.
+VISCO_XMAX = VISCO_C1 / (2.0 * VISCO_C2)
+VISCO_EMIN = 1.0 - VISCO_C1 * VISCO_C1 / (4.0 * VISCO_C2)
+
+
+@inline
+def viscoelastic_restitution(b, v):
+    """The viscoelastic restitution at the normal impact speed ``v`` (m/s) of a contact
+    with dissipation ``b`` = A alpha^(2/5) ((s/m)^(1/5)): the series VISCO_C1, VISCO_C2."""
+    x = b * v**0.2
+    if x >= VISCO_XMAX:
+        return VISCO_EMIN
+    return 1.0 - VISCO_C1 * x + VISCO_C2 * x * x
+
+
+@inline
+def restitution(ctx, kind, wt, wn):
+    """Newton's e of an impact of kind ``kind`` whose contact point approaches with the
+    relative velocity (wt, wn) (m/s): contact.restitution for Kane and Levinson's,
+    Walton's and the point particle's constant e, else the law's e(v) (docs/impact-laws.md)."""
+    v = abs(wn)
+    if kind == POWER_LAW:
+        # e_ref (v / v_ref)^-p, at most 1; p = 0 is e_ref exactly; 1 at v = 0 (p > 0)
+        p = ctx[IM_EXP]
+        if not v > 0.0:
+            return 1.0 if p > 0.0 else ctx[IM_EREF]
+        e = ctx[IM_EREF] * (v / ctx[IM_VREF]) ** (-p)
+        return e if e < 1.0 else 1.0
+    if kind == VISCOELASTIC:
+        return viscoelastic_restitution(ctx[IM_VISC], v)
+    if kind == ENERGY_DEPENDENT or kind == POINT_PARTICLE:
+        scale = ctx[IM_ESCALE]
+        if scale > 0.0:
+            # from 1 for a slow impact to contact.restitution for an energetic one
+            inf = ctx[IM_E]
+            return inf + (1.0 - inf) * math.exp(-0.5 * ctx[IM_M] * wn * wn / scale)
+    if kind == ANGLE_DEPENDENT:
+        slope = ctx[IM_ASLOPE]
+        if slope != 0.0 and v > 0.0:
+            # e rises with the tangent of the angle of incidence |wt| / |wn|, at most 1
+            e = ctx[IM_E] + slope * (abs(wt) / v)
+            return e if e < 1.0 else 1.0
+    return ctx[IM_E]
+
 
 @inline
 def impact_law(ctx, u1, u2, u3, z, vb1, vb2, pressing):
     """The impact law of kind ``ctx[IM_KIND]``: post-impact (u1, u2, u3, Rt, Rn, regime
     code, resting, wt, wn), as :func:`kane_levinson` documents them. Another law is a
-    function with these arguments and results and a branch here (docs/design.md, "How
-    to add a model"); a kind the kernels do not have stops with E_KIND."""
+    branch here and in :func:`restitution` (docs/design.md, "How to add a model"); a
+    kind the kernels do not have stops with E_KIND."""
     kind = ctx[IM_KIND]
     if kind == KANE_LEVINSON:
         return kane_levinson(ctx, u1, u2, u3, z, vb1, vb2, pressing)
+    if kind >= WALTON and kind <= POINT_PARTICLE and kind == math.floor(kind):
+        return ladder(ctx, kind, u1, u2, u3, z, vb1, vb2, pressing)
     ctx[EN_ERR_VALUE] = kind
     ctx[EN_STOP] = E_KIND
     raise KernelError(E_KIND)
@@ -64,12 +131,22 @@ def kane_levinson(ctx, u1, u2, u3, z, vb1, vb2, pressing):
     the law starts from (the landing test and the record read it too). The impulse-
     momentum equations are T. R. Kane and D. A. Levinson, *Dynamics: Theory and
     Applications* (McGraw-Hill, 1985), derived in ``derivation/ball.py``."""
+    return ladder(ctx, KANE_LEVINSON, u1, u2, u3, z, vb1, vb2, pressing)
+
+
+@inline
+def ladder(ctx, kind, u1, u2, u3, z, vb1, vb2, pressing):
+    """:func:`kane_levinson` for the impact law ``kind``: Newton's e from
+    :func:`restitution`; the sticking impact Kane and Levinson's no-slip one, or
+    Walton's tangential restitution wt+ = -beta0 wt- (WALTON, its cone mu =
+    contact.mu_kinetic), or none for the frictionless POINT_PARTICLE, which keeps the
+    tangential velocity and the spin (regime slip); the low-velocity rule for all."""
     m = ctx[IM_M]
     r = ctx[IM_R]
     k = ctx[IM_K]
     threshold = ctx[IM_EB]
     wt, wn = contact_velocity(u1, u2, u3, z, vb1, vb2, r)
-    e = ctx[IM_E]
+    e = restitution(ctx, kind, wt, wn)
     low = abs(wn) < threshold
     resting = False
     v1, v2 = u1, u2
@@ -84,14 +161,26 @@ def kane_levinson(ctx, u1, u2, u3, z, vb1, vb2, pressing):
     if wn >= 0.0 and not resting:
         # the contact point is already separating: no impulse
         return u1, u2, u3, 0.0, 0.0, ELASTIC if low else SLIP, False, wt, wn
-    n1, n2, n3, rt, rn = impact_stick(v1, v2, u3, z, vb1, vb2, m, r, k, e)
-    regime = STICK
+    frictionless = kind == POINT_PARTICLE
+    if frictionless:
+        n1, n2, n3, rt, rn = impact_slip(v1, v2, u3, z, vb1, vb2, m, r, k, e, 0.0, 1.0)
+        n3 = u3
+        regime = SLIP
+        cone = math.inf
+    elif kind == WALTON:
+        n1, n2, n3, rt, rn = impact_walton(v1, v2, u3, z, vb1, vb2, m, r, k, e, ctx[IM_BETA0])
+        regime = STICK
+        cone = ctx[IM_MUK]
+    else:
+        n1, n2, n3, rt, rn = impact_stick(v1, v2, u3, z, vb1, vb2, m, r, k, e)
+        regime = STICK
+        cone = ctx[IM_MUS]
     rounding = REGIME_RTOL * m * (abs(v1) + abs(v2) + r * abs(u3) + abs(vb1) + abs(vb2))
     applied = 1.0
     if resting and rn > 0.0:
         c, s = math.cos(z), math.sin(z)
         applied = m * (c * (n2 - u2) - s * (n1 - u1)) / rn
-    if abs(rt) > ctx[IM_MUS] * applied * rn + rounding:
+    if not frictionless and abs(rt) > cone * applied * rn + rounding:
         sgn = math.copysign(1.0, wt)
         n1, n2, n3, rt, rn = impact_slip(
             v1, v2, u3, z, vb1, vb2, m, r, k, e, ctx[IM_MUK] * applied, sgn

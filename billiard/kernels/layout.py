@@ -221,7 +221,7 @@ FLIGHT_RK4 = 2.0  # the paper's fixed-step RK4 (method "rk4"; kernels: fixed_ste
 # contact.restitution and contact.elastic_below: the impact law's, and the landing test's
 # of contact.model = "phases" (loop.settles)
 IM = CTX.begin("impact")
-IM_KIND = _ctx("IM_KIND", "kind", 1, "", "the impact law: KANE_LEVINSON")
+IM_KIND = _ctx("IM_KIND", "kind", 1, "", "the impact law: KANE_LEVINSON, WALTON, ...")
 IM_M = _ctx("IM_M", "mass", 1, "kg", "mass")
 IM_R = _ctx("IM_R", "radius", 1, "m", "radius")
 IM_K = _ctx("IM_K", "inertia_factor", 1, "", "inertia factor I / (m r^2)")
@@ -229,10 +229,24 @@ IM_E = _ctx("IM_E", "restitution", 1, "", "Newton's coefficient of restitution")
 IM_MUS = _ctx("IM_MUS", "mu_static", 1, "", "static friction")
 IM_MUK = _ctx("IM_MUK", "mu_kinetic", 1, "", "kinetic friction")
 IM_EB = _ctx("IM_EB", "elastic_below", 1, "m/s", "low-velocity threshold; the landing speed")
+# the other laws' parameters (billiard.models.impact; 0.0 where a law has none)
+IM_BETA0 = _ctx("IM_BETA0", "beta0", 1, "", "Walton: tangential restitution of a sticking impact")
+IM_EREF = _ctx("IM_EREF", "e_ref", 1, "", "power law: restitution at v_ref")
+IM_VREF = _ctx("IM_VREF", "v_ref", 1, "m/s", "power law: reference normal speed")
+IM_EXP = _ctx("IM_EXP", "exponent", 1, "", "power law: exponent p of e ~ v^-p")
+IM_VISC = _ctx("IM_VISC", "viscous", 1, "(s/m)^(1/5)", "viscoelastic: A alpha^(2/5)")
+IM_ESCALE = _ctx("IM_ESCALE", "energy_scale", 1, "J", "energy-dependent: E0 (0: constant e)")
+IM_ASLOPE = _ctx("IM_ASLOPE", "angle_slope", 1, "", "angle-dependent: de/d(tan incidence)")
 IM_END = CTX.end()
 
-# the kinds (kernels: impact.impact_law; models: billiard.models.kinds)
+# the kinds (kernels: impact.impact_law; models: billiard.models.impact, .kinds)
 KANE_LEVINSON = 0.0  # Kane and Levinson's law with the low-velocity rule (impact.py)
+WALTON = 1.0  # Walton's three-parameter law (e, mu, beta0)
+POWER_LAW = 2.0  # Kane-Levinson with e(v) = min(1, e_ref (v / v_ref)^-p)
+VISCOELASTIC = 3.0  # Kane-Levinson with the viscoelastic e(v) (Ramirez et al.'s series)
+ENERGY_DEPENDENT = 4.0  # Kane-Levinson with e falling with the impact's normal energy
+ANGLE_DEPENDENT = 5.0  # Kane-Levinson with e rising with the angle of incidence
+POINT_PARTICLE = 6.0  # no friction, no change of spin: constant or energy-dependent e
 
 # --- engine state -------------------------------------------------------------------
 CTX.begin("engine")

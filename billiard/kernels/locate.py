@@ -41,7 +41,7 @@ from .layout import (
     G,
     KernelError,
 )
-from .surfaces import contact, gap_accel, gap_rate, max_gap_deceleration
+from .surfaces import contact, gap_accel, gap_accel_bound, gap_rate, max_gap_deceleration
 
 # The longest flight the locators follow before giving up (s of simulated time).
 MAX_FLIGHT_TIME = 1.0e3
@@ -105,6 +105,22 @@ def relative(ctx, tau, q1, q2, u1, u2):
 def relative_acceleration(ctx, tau, u1, u2):
     a1, a2 = flight.acceleration(ctx, u1, u2)
     return accel_to_boundary_frame(ctx, ctx[THETA0] + ctx[OMEGA] * tau, a1, a2)
+
+
+@inline
+def opening(ctx, p, walls, j, tau, u1, u2, px, py, vx, vy):
+    """(d2G/dtau2, opens) of surface j at tau, the ball's velocity (u1, u2), the centre's
+    position and velocity relative to the boundary (px, py, vx, vy): ``opens`` when the
+    flight's acceleration does not press the ball into the surface beyond rounding (a
+    lift-off, where the normal force has just reached zero; a release from a vertex; an
+    impact with e = 0 where the wall does not press), nor beyond the air's forces, which
+    a contact phase's equations hold only in part (no Magnus force: a spinning ball
+    they let go of may be pressed back by it)."""
+    ax, ay = relative_acceleration(ctx, tau, u1, u2)
+    a = gap_accel(ctx, p, walls, j, px, py, vx, vy, ax, ay)
+    noise = RATE_NOISE * (abs(ax) + abs(ay) + ctx[G] + ctx[DRIVE_ACCEL])
+    air = flight.aero_bound(ctx, math.sqrt(u1 * u1 + u2 * u2))
+    return a, a >= -gap_accel_bound(ctx, j, noise + air)
 
 
 @inline
@@ -241,14 +257,31 @@ def scan(ctx, p, walls, j, ta, ga, dga, tb, gb, dgb, m, splits, leaving):
         if leaving:
             span = tb - ta
             if not (gb > 0.0 and provably_clear(max(ga, 0.0), dga, gb, dgb, span, m)):
-                # restart where the ball has certainly risen off the surface
+                # restart where the ball has certainly risen off the surface: after the
+                # top of the bound's parabola dga t - m t^2 / 2, or, from a grazing
+                # start (dga = 0: G opens with the acceleration, as t^2, or as t^3 at a
+                # lift-off, where the normal force crosses zero), where G > 0 is
+                # measured within half a bracket, which holds at most one crossing: G
+                # leaves 0 at ta and is positive there, so it did not cross in between
                 proven = m > 0.0 and dga > 0.0 and dga / m < span
-                tp = ta + dga / m if proven else ta + 0.5 * span
+                if proven:
+                    tp = ta + dga / m
+                else:
+                    tp = ta + 0.5 * min(span, ctx[H_BRACKET])
                 gp, dgp = gap(ctx, p, walls, j, tp)
                 if gp > 0.0:
                     ta, ga, dga = tp, gp, dgp
                     leaving = False
                     continue
+                if proven:
+                    q1, q2, u1, u2 = flight.state(ctx, ta)
+                    px, py, vx, vy = relative(ctx, ta, q1, q2, u1, u2)
+                    if opening(ctx, p, walls, j, ta, u1, u2, px, py, vx, vy)[1]:
+                        # a rate of rounding's size (a gap just below zero kept closed
+                        # up to the top of its parabola) and an acceleration that
+                        # opens it: a grazing start
+                        dga = 0.0
+                        continue
                 if proven or splits == 0:
                     return tp  # the contact never opened beyond rounding
                 ctx[SPLIT] = 1.0
@@ -329,19 +362,25 @@ def locate(ctx, p, walls, theta0, q1, q2, u1, u2, u3):
         base = SURF + j * SURF_STRIDE
         g0 = ctx[base + S_GA]
         dg0 = ctx[base + S_DGA]
-        if g0 > CONTACT_TOLERANCE or (g0 > 0.0 and dg0 < 0.0):
+        if g0 > CONTACT_TOLERANCE:
             continue
-        if abs(dg0) <= RATE_NOISE * (abs(u1) + abs(u2) + abs(u1 - vxa) + abs(u2 - vya)):
-            ax, ay = relative_acceleration(ctx, 0.0, u1, u2)
-            a0 = gap_accel(ctx, p, walls, j, pxa, pya, vxa, vya, ax, ay)
-            if a0 >= 0.0:
-                # at rest relative to it to within rounding, and accelerating away: the
-                # gap opens by the acceleration, which a rising rate cannot prove
-                # (scan would wait dG/dtau / m for it, a time in which nothing opens)
-                ctx[base + S_DGA] = 0.0
-                dg0 = 0.0
-            elif dg0 <= 0.0:
-                dg0 = a0
+        # at rest relative to it to within rounding, and accelerating away (or not
+        # pressed: ``opening``): a grazing start, G = dG/dtau = 0, whichever sign
+        # rounding gave them, and the gap opened by the acceleration, which a rising
+        # rate cannot prove (scan would wait dG/dtau / m for it, a time in which nothing
+        # opens), nor a falling one deny (a search from G = 1e-18 m at -5e-17 m/s
+        # meets it 2e-18 s on)
+        still = abs(dg0) <= RATE_NOISE * (abs(u1) + abs(u2) + abs(u1 - vxa) + abs(u2 - vya))
+        a0, opens = 0.0, False
+        if still:
+            a0, opens = opening(ctx, p, walls, j, 0.0, u1, u2, pxa, pya, vxa, vya)
+        if opens:
+            ctx[base + S_DGA] = 0.0
+            dg0 = 0.0
+        elif g0 > 0.0 and dg0 < 0.0:
+            continue  # approached from outside: the search finds it
+        elif still and dg0 <= 0.0:
+            dg0 = a0
         if dg0 >= 0.0:
             ctx[base + S_LEAVING] = 1.0
         elif immediate < 0 or dg0 < immediate_rate:

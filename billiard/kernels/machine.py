@@ -210,10 +210,6 @@ from .surfaces import contact, gap_rate
 from .vertex import forces as hold_forces
 from .vertex import held_spin, run_hold, sign
 
-#: Normal speed (m/s) a ball leaving a wall at lift-off is given, far below any speed
-#: resolved (it moves the ball by 1e-12 m per second of flight): rounding could
-#: otherwise make the flight touch the wall again at once.
-LIFT_OFF_SPEED = 1e-6
 #: Impacts of a series at one instant in a corner (:func:`corner`) followed at most: each
 #: shrinks the speed relative to the boundary by a fixed factor (about 0.55 an impact in
 #: the paper's wedge), so that the series reaches its limit within some 50.
@@ -450,21 +446,22 @@ def summed(ctx, p, walls, w, mode, sgn, theta, s, sd, v, e):
 
 @inline
 def leave_wall(ctx, p, walls, w, s, theta):
-    """A settling impact where the wall does not press the ball (N <= 0): it flies on.
-    Leaving at a relative normal speed below LIFT_OFF_SPEED (after an impact with e = 0,
-    or a grazing one), rounding could make the flight touch the wall again at once: an
-    impact of zero duration, again and again at one instant. It leaves at
-    LIFT_OFF_SPEED along the wall's normal, as at a lift-off."""
+    """A settling impact where the wall does not press the ball (N <= 0): it flies on,
+    with the relative normal speed the impact left, or none (after an impact with e = 0,
+    or a grazing one): a normal speed towards the wall, rounding's, is taken away, so
+    that the flight starts at most grazing it. Its acceleration away from the wall (N
+    <= 0) opens the gap; the flight's locator takes it from there (a grazing start:
+    :func:`billiard.kernels.locate.locate`). No speed is added: the ball leaves as the
+    equations of motion say."""
     fp = walls[1][w](s, p)
     c = 1.0 / math.sqrt(1.0 + fp * fp)
     nx, ny = -fp * c, c
     vb1, vb2, _, _ = boundary(ctx, theta)
     vn = (ctx[EN_U1] - vb1) * nx + (ctx[EN_U2] - vb2) * ny
-    if vn >= LIFT_OFF_SPEED:
+    if vn >= 0.0:
         return
-    dv = LIFT_OFF_SPEED - vn
-    ctx[EN_U1] = ctx[EN_U1] + dv * nx
-    ctx[EN_U2] = ctx[EN_U2] + dv * ny
+    ctx[EN_U1] = ctx[EN_U1] - vn * nx
+    ctx[EN_U2] = ctx[EN_U2] - vn * ny
 
 
 @jit
@@ -667,17 +664,6 @@ def continue_on(ctx, p, walls, j, px, theta, u3, t):
 
 
 @inline
-def leave_both(ctx, za, zb, u1, u2):
-    """A ball at (u1, u2) (m/s), at rest relative to two walls with tangent angles za and
-    zb that do not press it, leaves both along the sum of their normals (see
-    LIFT_OFF_SPEED)."""
-    nx, ny = -math.sin(za) - math.sin(zb), math.cos(za) + math.cos(zb)
-    norm = math.sqrt(nx * nx + ny * ny)
-    ctx[EN_U1] = u1 + LIFT_OFF_SPEED * nx / norm
-    ctx[EN_U2] = u2 + LIFT_OFF_SPEED * ny / norm
-
-
-@inline
 def touches(ctx, p, walls, j, px, py):
     """(touching, z): is the centre, at (px, py) in the boundary's frame, on surface j's
     offset (a wall's or the lid's; within CORNER_GAP of it, measured vertically), and the
@@ -802,8 +788,8 @@ def corner_rest(ctx, p, walls, i, j, t):
     on = i if n_i >= n_j else j
     if is_wall(ctx, on):
         continue_on(ctx, p, walls, on, px, theta, u3, t)
-    if ctx[MC_MODE] == M_FLIGHT:
-        leave_both(ctx, z_i, z_j, ctx[EN_U1], ctx[EN_U2])
+    # left in flight, at rest relative to both surfaces: its acceleration relative to the
+    # boundary takes it off both (a grazing start of the flight's locator)
 
 
 @inline
@@ -900,8 +886,9 @@ def hold_step(ctx, p, walls, cout, until, sout, srows):
     # on the lid (of a wall-lid corner) no contact phase: the ball leaves it
     if keeps >= 0 and is_wall(ctx, kept):
         continue_on(ctx, p, walls, kept, px, theta, u3, t)
-    if ctx[MC_MODE] == M_FLIGHT:
-        leave_both(ctx, za, zb, u1, u2)
+    # a ball released by both surfaces (mode flight) flies on at the boundary's
+    # velocity: its acceleration relative to the boundary takes it off both (a grazing
+    # start)
     return -1
 
 
@@ -1102,12 +1089,8 @@ def finish_phase(ctx, p, walls, out, cout, until, status):
     set_ball(ctx, t, theta, q1, q2, u1, u2, u3, q3)
     end_phase(ctx, mode, t_start, tau, total, error)
     if reason == END_LIFT_OFF or reason == END_WALL_END:
-        # the centre is on the offset curve with a tangent velocity: leave along the
-        # wall's normal (see LIFT_OFF_SPEED)
-        fp = walls[1][w](s1, p)
-        c = 1.0 / math.sqrt(1.0 + fp * fp)
-        ctx[EN_U1] = u1 - LIFT_OFF_SPEED * fp * c
-        ctx[EN_U2] = u2 + LIFT_OFF_SPEED * c
+        # the centre is on the offset curve with a tangent velocity, the wall no longer
+        # pressing it: the flight starts grazing the wall, its own equations lift it off
         to_flight(ctx)
     elif reason == END_SLIP:
         f = forces_of(ctx, p, walls, w, M_ROLL, 0.0, theta, s1, sd1)[3]

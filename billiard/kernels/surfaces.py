@@ -152,6 +152,19 @@ def gap_accel(ctx, p, walls, j, px, py, vx, vy, ax, ay):
 
 
 @inline
+def gap_accel_bound(ctx, j, a):
+    """Bound on |d2G/dt2| of surface j from a relative acceleration of size a (m/s^2),
+    at the slope its last gap_rate saw: |a_y - F' a_x| <= a (1 + |F'|)."""
+    base = SURF + j * SURF_STRIDE
+    kind = ctx[base + S_KIND]
+    if kind == CURVED:
+        return a * (1.0 + abs(ctx[base + S_WSLOPE]))
+    if kind == LINE:
+        return a * (1.0 + abs(ctx[base + S_A]))
+    return a
+
+
+@inline
 def contact(ctx, p, walls, j, px):
     """(s, z) of the contact point of a centre at abscissa px on surface j's offset."""
     base = SURF + j * SURF_STRIDE

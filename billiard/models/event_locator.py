@@ -40,8 +40,13 @@ flight starts at tau = 0 with the drive angle theta0 and ends at the returned ev
     Right after an impact the wall just hit sits at G ~ 0 with dG/dtau > 0: it is marked
     *leaving*, and its search starts at the top of the bound's parabola
     G'_a t - M t^2 / 2, before which G > 0 is proven: the impact just resolved is never
-    found again, while a hop that ends within the same substep is. A surface with G <= 0
-    and dG/dtau < 0 at tau = 0 (the second wall at a wedge's vertex) is an immediate
+    found again, while a hop that ends within the same substep is. A wall left at a
+    lift-off, a release or an impact with no rebound sits at G ~ 0 with dG/dtau ~ 0 (to
+    rounding) and an acceleration away from it: a *grazing start*, G opening as t^2 (or
+    t^3 at a lift-off, where the normal force crosses zero); its search restarts where
+    G > 0 is measured within half a bracket (a bracket holds at most one crossing), and
+    G <= 0 there is a landing searched for by halving. A surface with G <= 0 and
+    dG/dtau < 0 at tau = 0 (the second wall at a wedge's vertex) is an immediate
     impact.
 
     For drag-free flight the trajectory is the exact parabola, so the impact time is

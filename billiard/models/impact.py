@@ -13,23 +13,33 @@ method alone has no kernel: :func:`billiard.models.kinds.require_kernel` refuses
 
 from __future__ import annotations
 
-from collections.abc import MutableSequence
+from collections.abc import Mapping, MutableSequence
 from dataclasses import dataclass
+from types import MappingProxyType
 from typing import Any, Protocol
 
 from billiard.kernels.interpreted import impact as _impact
 from billiard.kernels.interpreted import layout as _L
 from billiard.kernels.names import copy, new_ctx, read, write
+from billiard.scene.scene import with_values
+from billiard.scene.spec import LAW_PARAMETERS
 
 __all__ = [
     "IMPACT_LAWS",
     "Contact",
     "ImpactLaw",
     "ImpactResult",
+    "AngleDependentImpact",
+    "EnergyDependentImpact",
     "KaneLevinsonImpact",
+    "PointParticleImpact",
+    "PowerLawImpact",
+    "ViscoelasticImpact",
+    "WaltonImpact",
     "LowVelocityRule",
     "REGIME_RTOL",
     "impact_law",
+    "with_law",
 ]
 
 STICK = "stick"
@@ -139,6 +149,8 @@ class KaneLevinsonImpact:
         mass, radius, inertia_factor: the ball (kg, m, I / (m r^2)).
         restitution, mu_static, mu_kinetic: contact coefficients.
         elastic_below: threshold of the low-velocity rule (m/s); 0 disables it.
+        parameters: the law's own, by their ``[contact]`` keys
+            (:data:`billiard.scene.spec.LAW_PARAMETERS`; none for this law).
     """
 
     regimes: tuple[str, ...] = (STICK, SLIP, ELASTIC)
@@ -152,6 +164,22 @@ class KaneLevinsonImpact:
     mu_s = _slot("impact.mu_static", "static friction")
     mu_k = _slot("impact.mu_kinetic", "kinetic friction")
     elastic_below = _slot("impact.elastic_below", "threshold of the low-velocity rule (m/s)")
+    beta0 = _slot("impact.beta0", "Walton's tangential restitution")
+    e_ref = _slot("impact.e_ref", "power law: restitution at v_ref")
+    v_ref = _slot("impact.v_ref", "power law: reference normal speed (m/s)")
+    exponent = _slot("impact.exponent", "power law: exponent p")
+    viscous = _slot("impact.viscous", "viscoelastic A alpha^(2/5) ((s/m)^(1/5))")
+    energy_scale = _slot("impact.energy_scale", "energy-dependent E0 (J); 0: constant e")
+    angle_slope = _slot("impact.angle_slope", "rise of e with tan(incidence)")
+
+    #: the law's name in :data:`IMPACT_LAWS` (``contact.law``)
+    name = "kane-levinson"
+    #: the ``[contact]`` key that ``billiard calibrate --law`` fits: the law's main parameter
+    main = "restitution"
+    #: the range ``billiard calibrate --law`` scans the main parameter over
+    main_range: tuple[float, float] = (0.1, 0.95)
+    #: values of its other parameters where a scene has none (docs/impact-laws.md)
+    defaults: Mapping[str, float] = MappingProxyType({})
 
     def __init__(
         self,
@@ -162,6 +190,7 @@ class KaneLevinsonImpact:
         mu_static: float,
         mu_kinetic: float,
         elastic_below: float,
+        **parameters: float,
     ):
         #: the law's block of a state vector (slots up to the block's end; the rest unused)
         self.ctx = new_ctx("impact")
@@ -174,9 +203,22 @@ class KaneLevinsonImpact:
         self.mu_k = mu_kinetic
         self.elastic_below = elastic_below
         self.low_velocity = LowVelocityRule(elastic_below)
+        required, optional = LAW_PARAMETERS[self.name]
+        unknown = set(parameters) - set(required) - set(optional)
+        missing = set(required) - set(parameters)
+        if unknown or missing:
+            raise TypeError(
+                f"impact law {self.name!r} takes {', '.join(required + optional) or 'no'} "
+                f"parameters (needs {', '.join(required) or 'none'}); got {', '.join(parameters)}"
+            )
+        # absent optional parameters stay 0.0, which the kernels read as "none"
+        for key, value in parameters.items():
+            setattr(self, key, value)
 
     @classmethod
     def from_scene(cls, scene: Any) -> KaneLevinsonImpact:
+        required, optional = LAW_PARAMETERS[cls.name]
+        parameters = {key: getattr(scene.contact, key) for key in required + optional}
         return cls(
             scene.ball.mass,
             scene.ball.radius,
@@ -185,7 +227,13 @@ class KaneLevinsonImpact:
             scene.contact.mu_static,
             scene.contact.mu_kinetic,
             scene.contact.elastic_below,
+            **{key: value for key, value in parameters.items() if value is not None},
         )
+
+    def restitution(self, wt: float, wn: float) -> float:
+        """Newton's e of an impact whose contact point approaches the boundary with the
+        relative velocity (wt, wn) (m/s), before the low-velocity rule."""
+        return _impact.restitution(self.ctx, self.kind, wt, wn)
 
     def write(self, ctx: MutableSequence[float]) -> None:
         """Write the law's block (its kind and coefficients) into a state vector."""
@@ -202,14 +250,99 @@ class KaneLevinsonImpact:
         return ImpactResult(n1, n2, n3, rt, rn, _L.REGIMES[int(regime)], wt, wn, resting)
 
 
-#: Impact laws by name: classes built from a scene by their ``from_scene``.
+class WaltonImpact(KaneLevinsonImpact):
+    """Walton's three-parameter law (O. R. Walton, 1993; S. F. Foerster, M. Y. Louge,
+    H. Chang and K. Allia, Phys. Fluids 6, 1108, 1994): Newton's e, Coulomb's mu
+    (``contact.mu_kinetic``) and the tangential restitution ``beta0`` of the contact
+    point, wt+ = -beta0 wt-, in a sticking impact; an impact whose sticking impulse lies
+    outside mu Rn slides (Kane and Levinson's slip). Regime ``stick`` is the beta0
+    branch."""
+
+    kind: float = _L.WALTON
+    name = "walton"
+    #: within the 0.3-0.45 Foerster et al. measured for hard spheres
+    defaults = MappingProxyType({"beta0": 0.35})
+
+
+class PowerLawImpact(KaneLevinsonImpact):
+    """Kane and Levinson's law with e(v) = min(1, e_ref (v / v_ref)^-exponent), v the
+    contact point's normal speed (m/s) relative to the boundary."""
+
+    kind: float = _L.POWER_LAW
+    name = "power-law"
+    main = "e_ref"
+    #: e ~ v^(-1/4): Johnson's elastic-plastic impact (K. L. Johnson, Contact Mechanics,
+    #: 1985, section 11.4); e_ref at 1 m/s, the paper's e
+    defaults = MappingProxyType({"e_ref": 0.393, "v_ref": 1.0, "exponent": 0.25})
+
+
+class ViscoelasticImpact(KaneLevinsonImpact):
+    """Kane and Levinson's law with the viscoelastic e(v) of Brilliantov, Spahn,
+    Hertzsch and Poeschel (Phys. Rev. E 53, 5382, 1996) to second order (Ramirez et
+    al., Phys. Rev. E 60, 4465, 1999): e = 1 - C1 x + C2 x^2, x = viscous v^(1/5)
+    (:func:`billiard.kernels.impact.viscoelastic_restitution`)."""
+
+    kind: float = _L.VISCOELASTIC
+    name = "viscoelastic"
+    main = "viscous"
+    main_range = (0.02, 5.0)
+    defaults = MappingProxyType({"viscous": 0.5})
+
+
+class EnergyDependentImpact(KaneLevinsonImpact):
+    """Kane and Levinson's law with e falling from 1 for a slow impact to
+    ``restitution`` for an energetic one: e = restitution + (1 - restitution)
+    exp(-E / energy_scale), E = m wn^2 / 2 the impact's normal energy (J); the form
+    stands for Gorski and Srokowski's energy-dependent e (docs/impact-laws.md)."""
+
+    kind: float = _L.ENERGY_DEPENDENT
+    name = "energy-dependent"
+    #: E0 of the order of the ball's kinetic energy relative to the wall at the paper's
+    #: period-one orbit on the parabola (3e-4 J)
+    defaults = MappingProxyType({"energy_scale": 1e-4})
+
+
+class AngleDependentImpact(KaneLevinsonImpact):
+    """Kane and Levinson's law with e rising with the angle of incidence, as Louge and
+    Adams measured (Phys. Rev. E 65, 021303, 2002): e = min(1, restitution +
+    angle_slope |wt| / |wn|), |wt| / |wn| the tangent of the contact point's angle of
+    incidence."""
+
+    kind: float = _L.ANGLE_DEPENDENT
+    name = "angle-dependent"
+    defaults = MappingProxyType({"angle_slope": 0.1})
+
+
+class PointParticleImpact(KaneLevinsonImpact):
+    """A point particle: no friction, no change of spin; Newton's e on the normal
+    velocity relative to the boundary, constant (``restitution``) or energy-dependent
+    (with ``energy_scale``, as :class:`EnergyDependentImpact`). The model of Gorski
+    and Srokowski. Regime ``slip`` (frictionless) or ``elastic``."""
+
+    kind: float = _L.POINT_PARTICLE
+    name = "point-particle"
+
+
+#: Impact laws by name (``contact.law``): classes built from a scene by their ``from_scene``.
 IMPACT_LAWS: dict[str, type] = {
-    "kane-levinson": KaneLevinsonImpact,
+    cls.name: cls
+    for cls in (
+        KaneLevinsonImpact,
+        WaltonImpact,
+        PowerLawImpact,
+        ViscoelasticImpact,
+        EnergyDependentImpact,
+        AngleDependentImpact,
+        PointParticleImpact,
+    )
 }
 
 
-def impact_law(scene: Any, name: str = "kane-levinson") -> ImpactLaw:
-    """The impact law ``name`` (a key of :data:`IMPACT_LAWS`) for a scene."""
+def impact_law(scene: Any, name: str | None = None) -> ImpactLaw:
+    """The impact law ``name`` (a key of :data:`IMPACT_LAWS`; the scene's
+    ``contact.law`` by default) for a scene."""
+    if name is None:
+        name = scene.contact.law
     try:
         law = IMPACT_LAWS[name]
     except KeyError:
@@ -217,3 +350,19 @@ def impact_law(scene: Any, name: str = "kane-levinson") -> ImpactLaw:
             f"unknown impact law {name!r}: choose from {', '.join(IMPACT_LAWS)}"
         ) from None
     return law.from_scene(scene)
+
+
+def with_law(scene: Any, name: str) -> Any:
+    """The scene under the impact law ``name``: ``contact.law`` set, and each parameter
+    the law needs that the scene lacks at the law's default (its class's ``defaults``).
+
+    Raises:
+        SceneError: ``name`` is no law (one line naming the choices).
+    """
+    changes: dict[str, Any] = {"contact.law": name}
+    law = IMPACT_LAWS.get(name)
+    if law is not None:
+        for key, value in law.defaults.items():
+            if getattr(scene.contact, key) is None:
+                changes[f"contact.{key}"] = value
+    return with_values(scene, changes)

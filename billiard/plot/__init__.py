@@ -29,7 +29,8 @@ One module per figure:
 | ``animation`` | :func:`animate` (GIF) |
 | ``interactive`` | :func:`view`, :func:`write_view`: the interactive view, one HTML page |
 | ``run`` | :func:`plot_run` (``billiard plot DIR``), :func:`load_run`, :func:`load_sides` |
-| ``paper`` | :func:`paper_figure`, :func:`paper_phase_figure`, :func:`paper_models_figure` |
+| ``paper`` | :func:`paper_figure`, :func:`paper_phase_figure`, :func:`paper_models_figure`,
+  :func:`paper_laws_figure` |
 """
 
 from __future__ import annotations
@@ -41,7 +42,12 @@ from billiard.plot.inputs import parse_frame_interval, parse_window
 from billiard.plot.interactive import View, view, write_view
 from billiard.plot.maps import return_map, time_map
 from billiard.plot.outline import drive_offset
-from billiard.plot.paper import paper_figure, paper_models_figure, paper_phase_figure
+from billiard.plot.paper import (
+    paper_figure,
+    paper_laws_figure,
+    paper_models_figure,
+    paper_phase_figure,
+)
 from billiard.plot.phase import phase_coordinates, phase_plot
 from billiard.plot.run import FIGURE_NAMES, load_run, load_sides, plot_run, read_scene
 from billiard.plot.titles import scene_title
@@ -58,6 +64,7 @@ __all__ = [
     "load_run",
     "load_sides",
     "paper_figure",
+    "paper_laws_figure",
     "paper_models_figure",
     "paper_phase_figure",
     "parse_frame_interval",

@@ -9,10 +9,8 @@ centre's state at both ends) and, with ``--sample DT``, exact states every DT se
 * a **flight** starts at an impact (with the impact row's post-impact state) or at the end
   of a phase that the ball leaves flying (``lift-off``, ``wall-end``, ``release``: with
   the phase's end state, q and v at ``t_end``), and ends at the next impact or the next
-  phase's start. It follows the scene's flight model (:mod:`billiard.plot.flights`). The
-  engine gives a ball leaving a wall a normal speed of 1e-6 m/s
-  (:data:`billiard.kernels.machine.LIFT_OFF_SPEED`) that the end state does not hold: the
-  arc drawn differs from the flight by at most 1e-6 m per second of flight.
+  phase's start. It follows the scene's flight model (:mod:`billiard.plot.flights`) from
+  that state, as the engine's flight does (no speed is added at a lift-off).
 * a **contact stretch** is the centre's path over a phase, on the wall's offset curve. With
   samples, it joins the phase's start state, the samples inside the phase and its end
   state (all exact states). Without them, a rolling or sliding phase is integrated again

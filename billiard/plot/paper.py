@@ -29,7 +29,7 @@ from billiard.plot.run import load_run
 from billiard.plot.titles import short_label
 from billiard.scene.scene import Scene
 
-__all__ = ["paper_figure", "paper_models_figure", "paper_phase_figure"]
+__all__ = ["paper_figure", "paper_laws_figure", "paper_models_figure", "paper_phase_figure"]
 
 Panel = Callable[[Columns, Scene, Axes], object]
 
@@ -45,10 +45,12 @@ def _paper_grid(
     labels: tuple[str, str] | None = None,
     caption: str | None = None,
     lid_legend: bool = False,
+    titles: Sequence[str] | None = None,
 ) -> Path:
     """Panels in rows, one column per run; one shared legend (and ``caption``) at the
     bottom. ``labels`` replace the panels' own x and y labels (shorter ones that fit a
-    narrow panel). ``lid_legend``: the panels mark lid impacts (the return map)."""
+    narrow panel). ``lid_legend``: the panels mark lid impacts (the return map).
+    ``titles``: the columns' titles (default: each run's curve and drive frequency)."""
     if not run_dirs:
         raise RunDataError("no run directories given")
     runs = [load_run(d) for d in run_dirs]
@@ -73,7 +75,8 @@ def _paper_grid(
         count = f"{columns['t'].size} impacts"
         if frame_interval is not None:
             count += f", camera {camera_filter(columns, frame_interval)['t'].size}"
-        axes[0, j].set_title(f"{short_label(scene)}\n{count}", fontsize=9)
+        title_j = short_label(scene) if titles is None else titles[j]
+        axes[0, j].set_title(f"{title_j}\n{count}", fontsize=9)
     handles = [marker_handle("o", MODEL_COLOR, "model: every impact")]
     if frame_interval is not None:
         handles.append(camera_handle(frame_interval))
@@ -147,6 +150,36 @@ def paper_phase_figure(
             "$u_4/u_{4,max}$, $u_{4,max} = \\sqrt{2E_0/m}$ (m/s)",
             "$(q_2 - h_0)/q_{2,max}$, $q_{2,max} = E_0/(m\\,g)$ (m)",
         ),
+        caption=PHASE_CAPTION,
+    )
+
+
+def paper_laws_figure(
+    run_dirs: Sequence[str | os.PathLike[str]],
+    titles: Sequence[str],
+    path: str | os.PathLike[str],
+    title: str,
+) -> Path:
+    """One scene under several impact laws, one column per law (titled ``titles``): the
+    return map of impact heights (mm), the map of times of flight (s) and the phase
+    plot (q2/q2max vs u4/u4max) in three rows.
+
+    Returns:
+        The path written.
+    """
+    return _paper_grid(
+        run_dirs,
+        path,
+        [
+            lambda c, s, ax: return_map(c, ax),
+            lambda c, s, ax: time_map(c, ax),
+            lambda c, s, ax: phase_plot(c, s, ax),
+        ],
+        title,
+        None,
+        "diagonals; phase: all energy in $q_2$ and $u_4$",
+        lid_legend=True,
+        titles=titles,
         caption=PHASE_CAPTION,
     )
 

@@ -19,7 +19,7 @@ from billiard.analysis.phase import (
 from billiard.run.simulate import simulate
 from billiard.runfile.record import LID_WALL
 from billiard.runfile.tables import read_collisions
-from billiard.scene.scene import load_scene, scene_to_toml, with_values
+from billiard.scene.scene import Scene, load_scene, scene_to_toml, with_values
 
 FIG2_SCENES = ("wedge-6.6hz", "hyperbola-5.8hz", "hyperbola-4.5hz")
 # The paper does not give the experiment's camera rate; a standard video frame interval.
@@ -93,11 +93,13 @@ def run_scene(
     *,
     model: str = "impacts",
     duration: float | None = None,
+    scene: Scene | None = None,
 ) -> RunStats:
     """Run a paper scene under ``contact.model = model`` for ``collisions`` impacts (or
     until the simulated time ``duration``, s, whichever comes first), streamed to
-    ``runs_dir / name``, and measure it."""
-    scene = load_scene(name)
+    ``runs_dir / name``, and measure it. ``scene``: the scene to run (default: the
+    built-in scene ``name``)."""
+    scene = load_scene(name) if scene is None else scene
     if scene.contact.model != model:
         scene = with_values(scene, {"contact.model": model})
     out = runs_dir / name

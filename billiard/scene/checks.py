@@ -90,6 +90,17 @@ LIMITS: dict[str, Limit] = {
     # the low-velocity rule is for micro-bounces (mm/s to cm/s); at 1 m/s and above it
     # would make ordinary impacts elastic
     "contact.elastic_below": Limit(0.0, 1.0, "m/s"),
+    # the impact laws' own parameters (docs/impact-laws.md): Walton's beta0 runs from a
+    # smooth sphere (-1) to a perfectly rough one (1); a power law's exponent is 1/4 and
+    # less for metals (0 is constant e); the viscoelastic A alpha^(2/5) of steel is about
+    # 0.1 (s/m)^(1/5); a 3 mm steel ball at 1 m/s carries 6.5e-5 J
+    "contact.beta0": Limit(-1.0, 1.0, ""),
+    "contact.e_ref": Limit(0.0, 1.0, ""),
+    "contact.v_ref": Limit(0.0, 100.0, "m/s", low_open=True),
+    "contact.exponent": Limit(0.0, 1.0, ""),
+    "contact.viscous": Limit(0.0, 10.0, "(s/m)^(1/5)"),
+    "contact.energy_scale": Limit(0.0, 1.0, "J", low_open=True),
+    "contact.angle_slope": Limit(0.0, 10.0, ""),
     # Fowles' coefficients of a 0.2 m sphere are c_lin 3e-5 N s/m and c_quad 9e-3
     # N s^2/m^2 and its Magnus coefficient (~ air density r^3) 1e-3 kg: 1 allows a
     # hundred times more (a denser fluid) and catches unit slips

@@ -221,6 +221,13 @@ _ABSENT_NOTES = {
     "initial.q1": "q1: absent, resolved by the engine",
     "initial.q2": "q2: absent, resolved by the engine",
     "run.duration": "duration: absent, no limit on simulated time",
+    "contact.beta0": "beta0: absent (contact.law = 'walton' needs it)",
+    "contact.e_ref": "e_ref: absent (contact.law = 'power-law' needs it)",
+    "contact.v_ref": "v_ref: absent, m/s (contact.law = 'power-law' needs it)",
+    "contact.exponent": "exponent: absent (contact.law = 'power-law' needs it)",
+    "contact.viscous": "viscous: absent, (s/m)^(1/5) (contact.law = 'viscoelastic' needs it)",
+    "contact.energy_scale": "energy_scale: absent, J (contact.law = 'energy-dependent' needs it)",
+    "contact.angle_slope": "angle_slope: absent (contact.law = 'angle-dependent' needs it)",
 }
 
 

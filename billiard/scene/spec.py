@@ -31,6 +31,7 @@ from billiard.derivation.expr import (
     parse_curve,
 )
 from billiard.scene.checks import (
+    LIMITS,
     check_choice,
     check_number,
     check_optional_number,
@@ -43,6 +44,8 @@ __all__ = [
     "BUILTIN_CURVES",
     "DRAG_MODELS",
     "DRIVE_DIRECTIONS",
+    "LAW_KEYS",
+    "LAW_PARAMETERS",
     "MAX_COLLISIONS",
     "METHODS",
     "SECTIONS",
@@ -291,9 +294,13 @@ class ContactSpec:
     """Impact law parameters.
 
     Attributes:
-        restitution: Newton's coefficient of restitution e (dimensionless, in [0, 1]).
+        restitution: Newton's coefficient of restitution e (dimensionless, in [0, 1]);
+            for the energy-dependent laws e at high impact energy, for the angle-dependent
+            law e at normal incidence; the e of the landing test and of the chatter sum
+            (``model = "phases"``) under every law.
         mu_static: static friction coefficient (dimensionless).
-        mu_kinetic: kinetic friction coefficient (dimensionless, <= mu_static).
+        mu_kinetic: kinetic friction coefficient (dimensionless, <= mu_static); Walton's
+            mu (both his cone and his sliding impulse).
         elastic_below: relative normal speed (m/s) below which impacts are elastic (e = 1),
             which prevents inelastic collapse. With ``model = "phases"`` it is also the
             landing speed: an impact on a wall that presses the ball, whose rebound
@@ -303,6 +310,23 @@ class ContactSpec:
         model: ``"impacts"`` (impacts only, with the paper's low-velocity rule) or
             ``"phases"`` (impacts plus rolling and sliding phases on a wall, see
             :mod:`billiard.models.contact`).
+        law: the impact law, a key of :data:`LAW_PARAMETERS` (docs/impact-laws.md);
+            ``"kane-levinson"``, the paper's, by default.
+        beta0: Walton's tangential restitution of the contact point in a sticking
+            impact, in [-1, 1] (``law = "walton"``).
+        e_ref: the power law's restitution at the speed v_ref (dimensionless): e(v) =
+            min(1, e_ref (v / v_ref)^-exponent), v the normal impact speed
+            (``law = "power-law"``).
+        v_ref: the power law's reference speed (m/s).
+        exponent: the power law's exponent (dimensionless).
+        viscous: ((s/m)^(1/5)) the viscoelastic dissipation A alpha^(2/5)
+            (``law = "viscoelastic"``).
+        energy_scale: E0 (J) of the energy-dependent restitution
+            e = restitution + (1 - restitution) exp(-E / E0), E = m wn^2 / 2
+            (``law = "energy-dependent"``; optional for ``"point-particle"``).
+        angle_slope: the rise of e with the tangent of the angle of incidence,
+            e = min(1, restitution + angle_slope |wt| / |wn|) (``law = "angle-dependent"``).
+        The parameters of a law other than the scene's are kept and unused.
     """
 
     restitution: float = 0.393
@@ -310,6 +334,14 @@ class ContactSpec:
     mu_kinetic: float = 0.47
     elastic_below: float = 0.01
     model: str = "phases"
+    law: str = "kane-levinson"
+    beta0: float | None = None
+    e_ref: float | None = None
+    v_ref: float | None = None
+    exponent: float | None = None
+    viscous: float | None = None
+    energy_scale: float | None = None
+    angle_slope: float | None = None
 
     def __post_init__(self) -> None:
         _set(self, "restitution", limited("contact.restitution", self.restitution))
@@ -322,10 +354,41 @@ class ContactSpec:
             )
         _set(self, "elastic_below", limited("contact.elastic_below", self.elastic_below))
         check_choice("contact.model", self.model, CONTACT_MODELS)
+        check_choice("contact.law", self.law, tuple(LAW_PARAMETERS))
+        for key in LAW_KEYS:
+            _set(self, key, check_optional_number(f"contact.{key}", getattr(self, key)))
+        required, _ = LAW_PARAMETERS[self.law]
+        missing = [key for key in required if getattr(self, key) is None]
+        if missing:
+            needs = ", ".join(_law_key(key) for key in required)
+            raise error(
+                f"scene key 'contact.law' = {self.law!r} needs {needs}: "
+                f"missing {', '.join(f'contact.{key}' for key in missing)}"
+            )
+
+
+def _law_key(key: str) -> str:
+    unit = LIMITS[f"contact.{key}"].unit
+    return f"contact.{key} ({unit})" if unit else f"contact.{key}"
 
 
 #: Contact models (``contact.model``).
 CONTACT_MODELS = ("impacts", "phases")
+
+#: Impact laws (``contact.law``, docs/impact-laws.md): the [contact] keys each needs
+#: and those it may take, beyond restitution, friction and elastic_below
+LAW_PARAMETERS: dict[str, tuple[tuple[str, ...], tuple[str, ...]]] = {
+    "kane-levinson": ((), ()),
+    "walton": (("beta0",), ()),
+    "power-law": (("e_ref", "v_ref", "exponent"), ()),
+    "viscoelastic": (("viscous",), ()),
+    "energy-dependent": (("energy_scale",), ()),
+    "angle-dependent": (("angle_slope",), ()),
+    "point-particle": ((), ("energy_scale",)),
+}
+#: every law's own keys, in their order in ContactSpec
+LAW_KEYS = ("beta0", "e_ref", "v_ref", "exponent", "viscous", "energy_scale", "angle_slope")
+
 
 _DEFAULT_C_LIN, _DEFAULT_C_QUAD = fowles_coefficients(_DEFAULT_RADIUS)
 

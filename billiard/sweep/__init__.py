@@ -1,5 +1,14 @@
 """Parameter sweeps: many scenes, one varied key or more, measured in parallel.
 
+The package is also the sweep's one-call function, ``billiard.sweep(scene, vary=...)``
+(:func:`billiard.sweep.api.sweep`)::
+
+    import billiard
+
+    outcome = billiard.sweep("parabola-5.4hz", vary={"drive.frequency": (4, 7, 31)})
+
+The steps it takes, one by one:
+
 >>> from billiard import load_scene
 >>> from billiard.sweep import Sweep, parse_vary, run_sweep
 >>> sweep = Sweep(load_scene("parabola-5.4hz"), (parse_vary("drive.frequency=4:7:31"),),
@@ -18,6 +27,11 @@ resume, interruption), :mod:`~billiard.sweep.netcdf` (the result file),
 docs/sweeps.md; ``run_sweep(...).dataset`` is the result as an ``xarray.Dataset``.
 """
 
+import sys
+import types
+from typing import Any
+
+from billiard.sweep.api import axis_of, sweep
 from billiard.sweep.definition import Axis, Sweep, SweepError, parse_vary, read_sweep_file
 from billiard.sweep.execute import (
     StopSweep,
@@ -36,9 +50,27 @@ __all__ = [
     "SweepError",
     "SweepInterrupted",
     "SweepOutcome",
+    "axis_of",
     "load_sweep_dir",
     "parse_vary",
     "read_result",
     "read_sweep_file",
     "run_sweep",
+    "sweep",
 ]
+
+
+class _SweepPackage(types.ModuleType):
+    """This package, callable: ``billiard.sweep(...)`` is :func:`billiard.sweep.api.sweep`.
+
+    Importing any ``billiard.sweep.*`` module binds the name ``billiard.sweep`` to this
+    package, so the one-call function cannot be a separate attribute of ``billiard``; a
+    module's ``__class__`` may be set to a subclass of ``ModuleType`` (the language
+    reference, "Customizing module attribute access") to give it a ``__call__``.
+    """
+
+    def __call__(self, *args: Any, **kwargs: Any) -> SweepOutcome:
+        return sweep(*args, **kwargs)
+
+
+sys.modules[__name__].__class__ = _SweepPackage

@@ -140,6 +140,23 @@ class EnsembleResult:
         shape = " x ".join(str(n) for n in self.shape) + " starts" if self.shape else "1 start"
         return f"<EnsembleResult {self.scene.name!r}: {shape} on {self.device}: {classes}>"
 
+    def _repr_html_(self) -> str:
+        """The scene, the starts and the share of each attractor class as an HTML table."""
+        from billiard.scene.display import html_table, scene_rows
+
+        names, counts = np.unique(self.attractor, return_counts=True)
+        total = int(counts.sum())
+        shares = ", ".join(
+            f"{c} {k} ({100.0 * k / total:.3g} %)" for c, k in zip(names, counts, strict=True)
+        )
+        starts = " x ".join(str(n) for n in self.shape) if self.shape else "1"
+        rows = scene_rows(self.scene) + [
+            ("starts", f"{starts} ({total} trajectories) on {self.device}"),
+            ("attractors", shares or "none"),
+            ("wall-clock time", f"{self.seconds:.3g} s"),
+        ]
+        return html_table(rows, f"EnsembleResult of {self.scene.name!r}")
+
     def to_pandas(self) -> Any:
         """One row per start, the measured columns.
 
@@ -287,8 +304,11 @@ def measured_columns(
     rest_height: Any,
     rest_band: float,
     scene: Any,
+    frequency: Any = None,
 ) -> dict[str, np.ndarray]:
-    """The sweep's measurements of each trajectory from the kernel's ``stats``."""
+    """The sweep's measurements of each trajectory from the kernel's ``stats``
+    (``rest_height`` in m and ``frequency`` in Hz per trajectory or one for all; the
+    frequency by default ``scene``'s drive frequency)."""
     from billiard.kernels import ensemble as E
 
     measured = stats[:, E.ST_MEASURED]
@@ -302,13 +322,12 @@ def measured_columns(
     ok = (codes != CLASSES.index("failed")) & (codes != CLASSES.index("invalid"))
     # a run that ended on the boundary is classed by that, without a period
     period = np.where(ok & (contact_codes(stats) < 0), stats[:, E.ST_PERIOD], 0).astype(np.int64)
-    frequency = scene.drive.frequency
-    drive_periods = np.zeros_like(period)
-    if frequency > 0.0:
-        # as the sweep rounds it: the period's time over the drive period
-        # (Python's round and numpy's rint both round half to even)
+    frequency = np.asarray(scene.drive.frequency if frequency is None else frequency, float)
+    # as the sweep rounds it: the period's time over the drive period (Python's round
+    # and numpy's rint both round half to even); none without a drive
+    with np.errstate(invalid="ignore"):  # no period found: its time is not a number
         cycles = np.rint(stats[:, E.ST_PERIOD_TIME] * frequency)
-        drive_periods = np.where(period > 0, cycles, 0).astype(np.int64)
+    drive_periods = np.where((period > 0) & (frequency > 0.0), cycles, 0).astype(np.int64)
     nan = np.where(has & ok, 1.0, math.nan)
     status = stats[:, E.ST_STATUS]
     # the run's Status, lower case, as a run reports it ("": stopped)

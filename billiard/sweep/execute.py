@@ -45,7 +45,7 @@ from billiard.sweep.columns import STATUSES, ChunkResult, empty_columns, record_
 from billiard.sweep.definition import Sweep, SweepError, read_sweep_file, sweep_to_toml
 from billiard.sweep.ensemble import check_device
 from billiard.sweep.measure import ChunkTask, measure_chunk
-from billiard.sweep.netcdf import RESULT_NAME, write_result
+from billiard.sweep.netcdf import RESULT_NAME, open_result, write_result
 from billiard.sweep.progress import SweepProgress
 from billiard.sweep.store import (
     CHECKSUMS_NAME,
@@ -168,18 +168,20 @@ class SweepOutcome:
     def dataset(self) -> Any:
         """The result file as an ``xarray.Dataset`` (opened lazily: arrays are read when
         used), coordinates the swept keys' values, missing values masked, units in each
-        variable's ``attrs``; e.g. ``outcome.dataset.height_mean.sel(drive_amplitude=0.027)``.
+        variable's ``attrs``, ``attractor`` as class names
+        (:func:`~billiard.sweep.netcdf.open_result`); e.g.
+        ``outcome.dataset.height_mean.sel(drive_amplitude=0.027)``.
 
         Raises:
             ModuleNotFoundError: xarray is not installed (one line naming the extra).
         """
         try:
-            import xarray
+            import xarray  # noqa: F401
         except ImportError:
             raise ModuleNotFoundError(
                 f"SweepOutcome.dataset needs xarray: {DATA_HINT}", name="xarray"
             ) from None
-        return xarray.open_dataset(self.result)
+        return open_result(self.result)
 
     def _summary(self) -> dict[str, str]:
         """The outcome in a few short lines (for its repr and its HTML table)."""
@@ -208,18 +210,10 @@ class SweepOutcome:
         )
 
     def _repr_html_(self) -> str:
-        from html import escape
+        from billiard.scene.display import html_table
 
-        rows = "".join(
-            f"<tr><th style='text-align:left'>{escape(name)}</th><td style='text-align:left'>"
-            f"{escape(text)}</td></tr>"
-            for name, text in self._summary().items()
-        )
-        return (
-            "<table><caption style='text-align:left'><b>SweepOutcome</b> "
-            "(<code>.dataset</code>: the result as an xarray.Dataset)</caption>"
-            f"{rows}</table>"
-        )
+        caption = "SweepOutcome (.dataset: the result as an xarray.Dataset)"
+        return html_table(list(self._summary().items()), caption)
 
 
 # ----------------------------------------------------------------------------------------
@@ -535,6 +529,11 @@ class Workers:
     executor: Executor
     where: str
     present: Callable[[], dict[str, int]]
+    #: the answer of the last look at the workers (the sweep looks every
+    #: WORKERS_INTERVAL s), which sizes the chunks still to hand out
+    seen: dict[str, int] = field(default_factory=dict)
+    #: workers missing from the last answer alone (not yet said to have left)
+    missing: dict[str, int] = field(default_factory=dict)
 
     def threads(self, present: dict[str, int] | None = None) -> int:
         return max(1, sum((self.present() if present is None else present).values()))
@@ -898,11 +897,20 @@ def run_sweep(
             progress = SweepProgress(sweep.size, done=store.count)
         if todo and pool is not None:
             started = time.perf_counter()
-            size = chunk or (
-                min(todo, GPU_CHUNK) if device == "gpu" else chunk_size(todo, pool.threads())
+            pool.seen = pool.present()
+            size: int | Callable[[int], int] = chunk or (
+                min(todo, GPU_CHUNK)
+                if device == "gpu"
+                # sized again at each hand-out from the points left and the workers seen
+                # then: workers that join a cluster late find chunks left to take
+                else lambda left: chunk_size(left, pool.threads(pool.seen))
             )
+            first = size if isinstance(size, int) else size(todo)
             on = f"{where} (trajectories on the GPU)" if device == "gpu" else where
-            store.log(f"start: {todo} of {sweep.size} points on {on}, {size} per chunk")
+            store.log(
+                f"start: {todo} of {sweep.size} points on {on}, {first} per chunk"
+                + ("" if isinstance(size, int) else " (resized as workers come and go)")
+            )
             try:
                 tasks = _chunks(sweep, store.done, size, device)
                 _drive(pool, tasks, store, progress, on_point, computed, sweep)
@@ -999,26 +1007,38 @@ def _records(directory: Path, sweep: Sweep) -> list[dict[str, Any]]:
     ]
 
 
-def _chunks(sweep: Sweep, done: bytearray, size: int, device: str = "cpu") -> Iterator[ChunkTask]:
-    """The points still to compute, in index order, ``size`` at a time, each chunk made
-    when a worker can take it (nothing is held per point beyond the chunk's indices)."""
+def _chunks(
+    sweep: Sweep, done: bytearray, size: int | Callable[[int], int], device: str = "cpu"
+) -> Iterator[ChunkTask]:
+    """The points still to compute, in index order, each chunk made when a worker can
+    take it (nothing is held per point beyond the chunk's indices). ``size``: points per
+    chunk, or a function of the points not yet handed out that gives the next chunk's
+    size (asked as each chunk begins)."""
     flags = np.frombuffer(done, dtype=np.uint8)
+    left = sweep.size - int(np.count_nonzero(flags[: sweep.size]))
+
+    def next_size() -> int:
+        return max(1, int(size if isinstance(size, int) else size(left)))
+
     start = 0
-    block = max(size, 1 << 16)
+    block = 1 << 16
     pending: list[np.ndarray] = []
     count = 0
+    want = next_size()
     while start < sweep.size:
-        stop = min(start + block, sweep.size)
+        stop = min(start + max(block, want), sweep.size)
         free = np.flatnonzero(flags[start:stop] == 0) + start
         start = stop
         while len(free):
-            take = free[: size - count]
+            take = free[: want - count]
             free = free[len(take) :]
             pending.append(take)
             count += len(take)
-            if count == size:
+            if count == want:
+                left -= count
                 yield _task(sweep, np.concatenate(pending), device)
                 pending, count = [], 0
+                want = next_size()
     if count:
         yield _task(sweep, np.concatenate(pending), device)
 
@@ -1040,7 +1060,8 @@ def _drive(
 ) -> None:
     pending: dict[Future, ChunkTask] = {}
     submitted_at: dict[int, float] = {}
-    present = pool.present()
+    present = pool.seen or pool.present()
+    pool.seen = present
     looked = time.monotonic()
 
     def fill() -> None:
@@ -1065,6 +1086,7 @@ def _drive(
                     raise SweepError(
                         f"points {task.start} to {task.stop - 1}: the worker running them "
                         f"failed ({message}); finished points are kept: continue with --resume"
+                        + _script_hint(computed)
                     ) from None
                 store.append(chunk)
                 indices = chunk.columns["index"]
@@ -1081,6 +1103,7 @@ def _drive(
                     _call_per_point(on_point, chunk, sweep)
             if time.monotonic() - looked >= WORKERS_INTERVAL:
                 present = _look_at_workers(pool, present, store)
+                pool.seen = present
                 looked = time.monotonic()
             fill()
             progress.tick()
@@ -1089,17 +1112,40 @@ def _drive(
             future.cancel()
 
 
+def _script_hint(computed: array.array) -> str:
+    """Why a local pool may break before its first chunk: a Python script that starts a
+    sweep at its top level. Each spawned worker imports the script again (as
+    multiprocessing's "spawn" does), starts a sweep of its own and dies."""
+    main = sys.modules.get("__main__")
+    if computed or main is None or getattr(main, "__spec__", None) is not None:
+        return ""
+    if not getattr(main, "__file__", None):
+        return ""  # a notebook or an interactive session: nothing is imported again
+    return (
+        f" (if {os.path.basename(main.__file__)} starts the sweep at its top level, put "
+        'that under `if __name__ == "__main__":`: each worker imports the script again)'
+    )
+
+
 def _look_at_workers(pool: Workers, before: dict[str, int], store: ChunkStore) -> dict[str, int]:
-    """The workers present now; those that left or joined since ``before`` are logged."""
+    """The workers present now; those that left or joined since ``before`` are logged.
+
+    A worker is said to have left once it is missing from two answers in a row: a
+    scheduler's answer can omit a worker that is there (one such answer wrote a false
+    "left" line, and a "joined" line for the same worker a look later). Until then it
+    stays among the workers present."""
     try:
-        now = pool.present()
+        now = dict(pool.present())
     except Exception:  # the scheduler did not answer this time: keep the last count
         return before
-    for name in sorted(set(before) - set(now)):
-        store.log(f"worker {name} left; its chunks are recomputed")
+    gone = {name: before[name] for name in set(before) - set(now)}
+    for name in sorted(gone):
+        if name in pool.missing:
+            store.log(f"worker {name} left; its chunks are recomputed")
+    pool.missing = {name: n for name, n in gone.items() if name not in pool.missing}
     for name in sorted(set(now) - set(before)):
         store.log(f"worker {name} joined ({now[name]} threads)")
-    return now
+    return {**pool.missing, **now}
 
 
 def _call_per_point(

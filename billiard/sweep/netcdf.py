@@ -44,9 +44,16 @@ from scipy.io import netcdf_file
 from billiard.sweep.attractor import CLASSES
 from billiard.sweep.columns import CODES, share
 from billiard.sweep.definition import Sweep, sweep_to_toml
-from billiard.sweep.units import key_unit, variable_name
+from billiard.sweep.units import key_long_name, key_unit, variable_name
 
-__all__ = ["CONVENTIONS", "INT_FILL", "RESULT_NAME", "read_result", "write_result"]
+__all__ = [
+    "CONVENTIONS",
+    "INT_FILL",
+    "RESULT_NAME",
+    "open_result",
+    "read_result",
+    "write_result",
+]
 
 RESULT_NAME = "sweep.nc"
 DISTRIBUTION = "realworld-billiard"
@@ -230,7 +237,7 @@ def write_result(
                 var[:] = chars
                 var._Encoding = "utf-8"
             var.units = key_unit(axis.key)
-            var.long_name = f"scene key {axis.key}"
+            var.long_name = key_long_name(axis.key)
             var.scene_key = axis.key
         f.createDimension("impact", keep)
         var = f.createVariable("impact", "i4", ("impact",))
@@ -346,6 +353,34 @@ def _decode(var: Any) -> np.ndarray:
     elif fill is not None and data.dtype.kind in "iu":
         data = np.where(data == fill, np.nan, data.astype(float))
     return data
+
+
+def open_result(path: str | os.PathLike[str]) -> Any:
+    """The result file as an ``xarray.Dataset`` for notebooks: opened lazily as
+    ``xarray.open_dataset`` opens it, except ``attractor``, which holds the class names
+    (strings, read through ``flag_meanings``; the codes stay in ``attractor_code``), so
+    that a plot or a ``groupby`` shows "period-1", not 1.0.
+
+    Raises:
+        ModuleNotFoundError: xarray is not installed.
+    """
+    import xarray
+
+    ds = xarray.open_dataset(path)
+    if "attractor" not in ds or "flag_meanings" not in ds["attractor"].attrs:
+        return ds  # a file written before the attractor was coded holds the names
+    coded = ds["attractor"]
+    names = np.array(str(coded.attrs["flag_meanings"]).split(), dtype=object)
+    codes = np.ravel(coded.attrs["flag_values"]).astype(int)
+    lookup = np.empty(int(codes.max()) + 1, dtype=object)
+    lookup[codes] = names
+    decoded = xarray.DataArray(
+        lookup[coded.values.astype(int)],
+        dims=coded.dims,
+        coords=coded.coords,
+        attrs={"long_name": "attractor class"},
+    )
+    return ds.rename_vars({"attractor": "attractor_code"}).assign(attractor=decoded)
 
 
 def read_result(path: Path, names: Iterable[str] | None = None) -> dict[str, Any]:

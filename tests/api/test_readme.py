@@ -42,7 +42,7 @@ def test_readme_python_example_runs(index, capsys):
 
 def test_readme_shows_the_notebook_result():
     """The notebook example's comment is checked above (a Result's repr)."""
-    [first] = [b for b in python_blocks() if "to_pandas" in b]
+    first = next(b for b in python_blocks() if "to_pandas" in b)
     assert shown_prints(first) and shown_prints(first)[0].startswith("<Result ")
 
 

@@ -84,3 +84,23 @@ def test_a_summed_chatter_landing_is_an_audited_transition():
     moved = dataclasses.replace(before, t=before.t + 1e-9, q2=before.q2 + 1e-6)
     fresh.chatter(before, moved)
     assert fresh.transition_jumps == 1
+
+
+@pytest.mark.parametrize("law", ["walton", "power-law", "viscoelastic", "point-particle"])
+def test_the_soak_draws_and_audits_every_impact_law(law):
+    import random
+
+    from bench.soak import LAWS, Job, random_draw, run_job, scene_from_draw
+    from billiard.scene.spec import LAW_PARAMETERS
+
+    assert set(LAWS) == set(LAW_PARAMETERS)
+    rng = random.Random(11)
+    draw = {**random_draw(rng), "law": law, "model": "impacts", "start": "inside"}
+    draw.update(elastic_below=0.0, lid=True, amplitude=0.0, drag="none")
+    scene = scene_from_draw(draw)
+    assert scene.contact.law == law
+    for key in sum(LAW_PARAMETERS[law], ()):
+        assert getattr(scene.contact, key) == draw[key]
+    report = run_job(Job(f"random-{law}", 200, draw=draw))
+    assert report["law"] == law and report["impacts"] >= 1
+    assert report["energy_created"] == 0 and report["penetrations"] == 0

@@ -70,6 +70,60 @@ def test_run_refuses_a_scene_name_that_is_not_one_folder(in_tmp, capsys, name):
     assert not (in_tmp.parent / "escaped").exists()
 
 
+@pytest.mark.parametrize(
+    "sets, fragment",
+    [
+        (
+            ["contact.law=walten"],
+            "scene key 'contact.law' = 'walten' must be one of 'kane-levinson', 'walton', "
+            "'power-law', 'viscoelastic', 'energy-dependent', 'angle-dependent', "
+            "'point-particle'; did you mean 'walton'?",
+        ),
+        (
+            ["contact.law=power-law", "contact.e_ref=0.5"],
+            "scene key 'contact.law' = 'power-law' needs contact.e_ref, contact.v_ref (m/s), "
+            "contact.exponent: missing contact.v_ref, contact.exponent",
+        ),
+        (
+            ["contact.law=walton", "contact.beta0=1.5"],
+            "scene key 'contact.beta0' = 1.5 is out of range [-1, 1]",
+        ),
+    ],
+)
+def test_run_refuses_an_impact_law_misspelled_or_missing_a_parameter(
+    in_tmp, capsys, sets, fragment
+):
+    args = ["run", "parabola-5.4hz", "--collisions", "5", "--no-plot"]
+    code = main([*args, *(a for key in sets for a in ("--set", key))])
+    assert code == 2
+    assert fragment in one_error_line(capsys)
+    assert not (in_tmp / "runs").exists()
+
+
+#: a value of every law's parameters (docs/impact-laws.md)
+LAW_SETS = {
+    "kane-levinson": [],
+    "walton": ["contact.beta0=0.35"],
+    "power-law": ["contact.e_ref=0.4", "contact.v_ref=0.5", "contact.exponent=0.2"],
+    "viscoelastic": ["contact.viscous=0.5"],
+    "energy-dependent": ["contact.energy_scale=2e-5"],
+    "angle-dependent": ["contact.angle_slope=0.05"],
+    "point-particle": [],
+}
+
+
+@pytest.mark.parametrize("model", ["impacts", "phases"])
+@pytest.mark.parametrize("law", LAW_SETS)
+def test_run_takes_every_impact_law_under_every_contact_model(in_tmp, capsys, law, model):
+    sets = [f"contact.law={law}", f"contact.model={model}", *LAW_SETS[law]]
+    out = in_tmp / "out"
+    args = ["run", "parabola-5.4hz", "--collisions", "40", "--no-plot", "--out", str(out)]
+    assert main([*args, *(a for key in sets for a in ("--set", key))]) == 0
+    rows = (out / CSV_NAME).read_text().splitlines()
+    assert len(rows) == 41
+    assert f'law = "{law}"' in (out / "scene.toml").read_text()
+
+
 def test_run_refuses_to_replace_a_run_unless_overwrite(in_tmp, capsys):
     args = ["run", "parabola-5.4hz", "--no-plot"]
     assert main([*args, "--collisions", "30"]) == 0

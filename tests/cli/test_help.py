@@ -72,6 +72,7 @@ def test_every_command_is_walked():
         "sweep",
         "hysteresis",
         "uncertainty",
+        "orbits",
         "view",
     ]
     for _, parser in commands(build_parser()):

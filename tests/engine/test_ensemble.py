@@ -326,3 +326,18 @@ def test_phases_start_is_the_vector_a_run_hands_the_state_machine(monkeypatch) -
     ctx = EN.start_at_rest(EN.prepare(kicked), 1, v1=0.3, omega=-5.0, duration=5.0)[0]
     ctx[per_call] = 0.0
     np.testing.assert_array_equal(ctx, first_call(kicked))
+
+
+def test_starts_set_up_in_slices_on_threads_are_the_starts_set_up_at_once(monkeypatch):
+    from billiard.engine import ensemble as EN
+    from billiard.scene.scene import load_scene
+
+    setup = EN.prepare(load_scene("wedge-6.6hz"))
+    q1, q2 = np.meshgrid(np.linspace(-0.04, 0.04, 9), np.linspace(0.02, 0.12, 7))
+    whole, ok = EN.start(setup, q1.ravel(), q2.ravel(), v1=0.1)
+    monkeypatch.setattr(EN, "START_SLICE", 5)
+    monkeypatch.setattr(EN, "threads_default", lambda: 3)
+    sliced, ok_sliced = EN.start(setup, q1.ravel(), q2.ravel(), v1=0.1)
+    assert not ok.all() and ok.any()  # the grid reaches outside the wedge
+    np.testing.assert_array_equal(ok_sliced, ok)
+    np.testing.assert_array_equal(sliced, whole)

@@ -29,7 +29,15 @@ compiled = pytest.mark.skipif(not jit.ENABLED, reason=f"numba unavailable: {jit.
 
 #: each kind's code, as the kernels' layout declares it
 KINDS = {
-    "impact law": {"kane-levinson": L.KANE_LEVINSON},
+    "impact law": {
+        "kane-levinson": L.KANE_LEVINSON,
+        "walton": L.WALTON,
+        "power-law": L.POWER_LAW,
+        "viscoelastic": L.VISCOELASTIC,
+        "energy-dependent": L.ENERGY_DEPENDENT,
+        "angle-dependent": L.ANGLE_DEPENDENT,
+        "point-particle": L.POINT_PARTICLE,
+    },
     "flight model": {
         "exact": L.FLIGHT_EXACT,
         "adaptive": L.FLIGHT_ADAPTIVE,
@@ -37,6 +45,8 @@ KINDS = {
     },
     "locator": {"event": L.LOC_EVENT, "rk4": L.LOC_RK4},
 }
+#: the registered laws, as the refusal of a law without a kernel lists them
+LAW_NAMES = ", ".join(KINDS["impact law"])
 #: the slot each kind is written to
 SLOTS = {"impact law": L.IM_KIND, "flight model": L.FL_KIND, "locator": L.LOC_KIND}
 
@@ -61,6 +71,23 @@ CASES = {
         200,
         {"impact law": "kane-levinson", "flight model": "rk4", "locator": "rk4"},
     ),
+    # the other impact laws, each with its parameters (docs/impact-laws.md)
+    **{
+        f"{law}-exact": (
+            "wedge-6.6hz",
+            {"air.drag": "none", "contact.law": law, **values},
+            300,
+            {"impact law": law, "flight model": "exact", "locator": "event"},
+        )
+        for law, values in {
+            "walton": {"contact.beta0": 0.35},
+            "power-law": {"contact.e_ref": 0.4, "contact.v_ref": 0.5, "contact.exponent": 0.2},
+            "viscoelastic": {"contact.viscous": 0.5},
+            "energy-dependent": {"contact.energy_scale": 2e-5},
+            "angle-dependent": {"contact.angle_slope": 0.05},
+            "point-particle": {"contact.energy_scale": 2e-5},
+        }.items()
+    },
 }
 
 
@@ -209,7 +236,7 @@ def test_a_law_without_a_kernel_kind_is_refused_in_one_line(monkeypatch):
     with pytest.raises(SceneError) as caught:
         require_kernel(_Elastic(), "impact law")
     assert str(caught.value) == (
-        "impact law _Elastic has no compiled kernel: choose from kane-levinson"
+        "impact law _Elastic has no compiled kernel: choose from " + LAW_NAMES
     )
     monkeypatch.setitem(IMPACT_LAWS, "elastic", _Elastic)
     with pytest.raises(SceneError, match="^impact law 'elastic' has no compiled kernel: "):
@@ -226,7 +253,7 @@ def test_a_simulation_with_a_law_without_a_kernel_is_refused():
     with pytest.raises(SceneError) as caught:
         Simulation(scene, law=_Elastic())
     message = str(caught.value)
-    assert message == "impact law _Elastic has no compiled kernel: choose from kane-levinson"
+    assert message == "impact law _Elastic has no compiled kernel: choose from " + LAW_NAMES
     assert "\n" not in message
 
 

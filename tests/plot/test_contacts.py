@@ -167,7 +167,7 @@ def test_no_flight_is_drawn_across_a_contact_phase(phases_run):
         begin = impacts.get(t0) if piece.source.startswith("impact") else ends[t0]
         assert (piece.x[0], piece.y[0]) == pytest.approx(begin, abs=1e-15)
         lift_offs += piece.source in ("lift-off", "release", "wall-end")
-        # and ends at the next impact or phase start (1e-6 m/s lift-off speed aside)
+        # and ends at the next impact or phase start
         target = impacts.get(t1, starts.get(t1))
         assert target is not None
         assert math.hypot(piece.x[-1] - target[0], piece.y[-1] - target[1]) < 1e-6

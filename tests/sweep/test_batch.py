@@ -135,3 +135,45 @@ def test_points_the_kernel_does_not_take_are_left_to_the_per_point_path() -> Non
             escaping.scene, escaping.point_values(rest[0])), escaping.settings())
     )  # fmt: skip
     assert record["status"] == "failed" and "escaped" in record["reason"]
+
+
+def test_a_parameter_map_is_one_set_up_and_matches_the_per_point_path(monkeypatch) -> None:
+    """Drive, contact and ball keys varied together: one Simulation for the whole map
+    (the other parameter sets are patched from it), the per-point path's results."""
+    from billiard.engine import ensemble as EN
+    from billiard.sweep import batch
+
+    prepared: list = []
+    real = EN.prepare
+    monkeypatch.setattr(EN, "prepare", lambda scene: prepared.append(scene) or real(scene))
+    monkeypatch.setattr(batch, "_SETUPS", type(batch._SETUPS)())
+    sweep = Sweep(
+        with_values(load_scene("parabola-5.4hz"), {"drive.direction": "vertical"}),
+        (
+            parse_vary("drive.frequency=5.0:5.8:3"),
+            parse_vary("drive.amplitude=0.002,0.004"),
+            parse_vary("contact.restitution=0.393,0.6"),
+            parse_vary("ball.mass=1.3e-4,2e-4"),
+        ),
+        impacts=100,
+        transient=80,
+        keep=5,
+    )
+    assert _compare(sweep) == 0
+    assert len(prepared) == 1
+
+
+def test_starts_and_parameters_vary_together() -> None:
+    """A basin map at two drive amplitudes of the wedge: placed starts, patched set-ups."""
+    sweep = Sweep(
+        load_scene("wedge-6.6hz"),
+        (
+            parse_vary("drive.amplitude=0.02,0.03"),
+            parse_vary("initial.q1=-0.02:0.02:3"),
+            parse_vary("initial.q2=0.07,0.09"),
+        ),
+        impacts=100,
+        transient=100,
+        keep=5,
+    )
+    assert _compare(sweep) == 0

@@ -459,3 +459,94 @@ def test_basin_map_starts_are_checked_as_the_engine_checks_them():
     for index, message in expected.items():
         assert invalid[index] == re.sub(r"puts the ball \S+ m into", "puts the ball into", message)
     assert 0 < len(invalid) < sweep.size
+
+
+def test_chunks_are_sized_again_as_workers_come():
+    from billiard.sweep.execute import _chunks, chunk_size
+
+    sweep = Sweep(load_scene("parabola-5.4hz"), (parse_vary("drive.frequency=4:7:200"),))
+    threads = [1]
+    asked: list[int] = []
+
+    def size(left: int) -> int:
+        asked.append(left)
+        return chunk_size(left, threads[0])
+
+    tasks = _chunks(sweep, bytearray(200), size)
+    first = next(tasks)
+    threads[0] = 10  # nine more threads join while the first chunk runs
+    rest = list(tasks)
+    sizes = [len(first), *(len(t) for t in rest)]
+    assert sizes[0] == 50 and max(sizes[1:]) == 4  # 150 points left for 10 threads, 4 each
+    assert sum(sizes) == 200 and asked[:2] == [200, 150]
+    covered = np.concatenate([first.points(), *(t.points() for t in rest)])
+    assert covered.tolist() == list(range(200))
+
+
+def test_a_worker_missing_from_one_answer_is_not_said_to_have_left(tmp_path):
+    from concurrent.futures import ThreadPoolExecutor
+
+    from billiard.sweep import execute
+    from billiard.sweep.store import ChunkStore
+
+    sweep = Sweep(load_scene("parabola-5.4hz"), (parse_vary("drive.frequency=4:7:4"),), keep=2)
+    answers = iter([{"a": 1}, {"a": 1, "b": 2}, {"b": 2}, {"a": 1, "b": 2}, {"b": 2}, {"b": 2}])
+    with ThreadPoolExecutor(1) as pool, ChunkStore(tmp_path, sweep.size, sweep.keep) as store:
+        workers = execute.Workers(pool, "test", lambda: next(answers))
+        present = workers.present()
+        seen = []
+        for _ in range(5):
+            present = execute._look_at_workers(workers, present, store)
+            seen.append(sorted(present))
+    log = (tmp_path / "sweep.log").read_text()
+    assert log.count("worker a left") == 1 and log.count("worker b joined") == 1
+    assert "worker a joined" not in log  # the answer that omitted it once was not believed
+    assert seen == [["a", "b"], ["a", "b"], ["a", "b"], ["a", "b"], ["b"]]
+
+
+def test_a_cluster_that_grows_and_loses_a_worker_gives_the_same_bytes(tmp_path, monkeypatch):
+    """Started on one worker; two more join after the first chunk and one of the first
+    two is closed mid-way: the late workers take chunks, and the result is the local
+    run's, byte for byte."""
+    distributed = pytest.importorskip("distributed")
+    from billiard.sweep import execute
+
+    monkeypatch.setattr(execute, "WORKERS_INTERVAL", 0.0)  # look after every chunk
+    axes = (parse_vary("drive.amplitude=0.015:0.03:4"), parse_vary("drive.frequency=5.0:5.6:6"))
+    sweep = Sweep(load_scene("parabola-5.4hz"), axes, impacts=40, transient=60, keep=4)
+    local = run_sweep(sweep, tmp_path / "local", workers=1, progress=_quiet(sweep), plots=False)
+    with distributed.LocalCluster(
+        n_workers=1, processes=False, threads_per_worker=1, dashboard_address=None
+    ) as cluster:
+        events: list[str] = []
+
+        def on_point(record):
+            if not events:
+                events.append("grow")
+                cluster.scale(3)
+                cluster.wait_for_workers(3, timeout=30)
+            elif len(events) == 1 and record["index"] >= 12:
+                events.append("lose")
+                name = sorted(cluster.workers)[0]
+                cluster.sync(cluster.workers[name].close)
+
+        grown = run_sweep(
+            sweep,
+            tmp_path / "dask",
+            dask=cluster.scheduler_address,
+            on_point=on_point,
+            progress=_quiet(sweep),
+            plots=False,
+        )
+    assert events == ["grow", "lose"]
+    log = (tmp_path / "dask" / "sweep.log").read_text()
+    assert log.count(" joined (1 threads)") == 2, log
+    assert "resized as workers come and go" in log
+    # in the order handed out (chunks are made in index order), not as they finished
+    chunks = sorted((int(a), int(n)) for a, n in re.findall(r"chunk (\d+)-\d+: (\d+) points", log))
+    sizes = [n for _, n in chunks]
+    # two chunks handed to the one worker (24 and 18 points left: a quarter each), then
+    # 13 left among three workers: 4 chunks each, of 2 points (not 13 / 4 = 4)
+    assert sizes[:3] == [6, 5, 2], sizes
+    assert "left; its chunks are recomputed" in log
+    assert grown.result.read_bytes() == local.result.read_bytes()

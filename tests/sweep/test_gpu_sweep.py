@@ -70,6 +70,25 @@ def test_a_gpu_sweep_under_the_simulator_writes_the_cpu_sweeps_bytes(tmp_path, c
     assert (gpu_out / "sweep.nc").read_bytes() == (cpu_out / "sweep.nc").read_bytes()
 
 
+#: a parameter map: every trajectory of a chunk with its own drive and restitution
+MAP = [
+    "sweep", "wedge-6.6hz", "--vary", "drive.frequency=6.2:6.8:3", "--vary",
+    "drive.amplitude=0.02,0.03", "--vary", "contact.restitution=0.35,0.45", "--impacts", "12",
+    "--transient", "6", "--keep", "4", "--no-plot", "--workers", "1",
+]  # fmt: skip
+
+
+@needs_numba_cuda
+def test_a_gpu_parameter_map_under_the_simulator_writes_the_cpu_maps_bytes(tmp_path):
+    gpu_out, cpu_out = tmp_path / "gpu", tmp_path / "cpu"
+    done = _simulated(
+        ["-m", "billiard.cli", *MAP, "--device", "gpu", "--out", str(gpu_out)], tmp_path
+    )
+    assert done.returncode == 0, done.stderr[-3000:]
+    assert main([*MAP, "--out", str(cpu_out)]) == 0
+    assert (gpu_out / "sweep.nc").read_bytes() == (cpu_out / "sweep.nc").read_bytes()
+
+
 def test_device_gpu_without_a_gpu_is_one_line(tmp_path, capsys, monkeypatch):
     monkeypatch.setattr(gpu, "available", lambda: "no CUDA GPU: numba-cuda found no CUDA GPU")
     code = main([*SWEEP, "--device", "gpu", "--out", str(tmp_path / "out")])

@@ -32,7 +32,8 @@ NUMERIC_KEYS = [
     if _is_number(str(f.type))
 ]
 #: a unit as the docs write it: "m", "Hz", "m/s^2", "N s/m", "N s^2/m^2"
-UNIT = re.compile(r"[A-Za-z]+(\^\d)?([ /][A-Za-z]+(\^\d)?)*")
+# "m", "N s^2/m^2", or a quotient to a fractional power: "(s/m)^(1/5)"
+UNIT = re.compile(r"[A-Za-z]+(\^\d)?([ /][A-Za-z]+(\^\d)?)*|\([A-Za-z /]+\)\^\(\d+/\d+\)")
 
 
 def _documented_units() -> dict[str, str]:
@@ -47,7 +48,7 @@ def _documented_units() -> dict[str, str]:
         # "    name: text" or "    q1, q2: text", continued on deeper-indented lines
         for match in re.finditer(r"^ {8}([\w, ]+): (.*(?:\n {12}.*)*)", attributes, re.M):
             text = " ".join(match.group(2).split())
-            first = re.search(r"\(([^)]*)\)", text)
+            first = re.search(r"\(((?:[^()]|\([^()]*\))*)\)", text)  # one nesting
             unit = re.split(r"[,;]", first.group(1))[0].strip() if first else ""
             if unit == "dimensionless" or not UNIT.fullmatch(unit):
                 unit = "1"

@@ -283,7 +283,9 @@ def shaken_wedge_draw(seed: int) -> dict:
     from bench.soak import random_draw
 
     draw = random_draw(random.Random(seed))
-    draw.update(curve="wedge", direction="vertical", model="phases")
+    # the draws named below were found under Kane and Levinson's law; the soak's draws
+    # now also pick an impact law, which would change these scenes
+    draw.update(curve="wedge", direction="vertical", model="phases", law="kane-levinson")
     draw["amplitude"] = draw["amplitude"] or 0.01
     draw["elastic_below"] = draw["elastic_below"] or 0.01
     return draw

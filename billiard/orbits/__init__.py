@@ -1,0 +1,3 @@
+"""Periodic orbits: the impacts' return map, its exact Jacobian, Newton's method for a
+fixed point, its Floquet multipliers, and the continuation of a branch of orbits through
+a scene key (docs/orbits.md)."""

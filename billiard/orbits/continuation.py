@@ -1,0 +1,511 @@
+"""Pseudo-arclength continuation of a branch of periodic orbits through a scene key, with
+step control, and the exact location of the bifurcations met on the way
+(:mod:`billiard.orbits.bifurcation`).
+
+The unknowns are the orbit's varied coordinates x and the key's value lam, both scaled
+to order one. Each step predicts along the branch's unit tangent (the null vector of
+[d F/dx, dF/dlam], F = P^N(x; lam) - x - m T(lam) e_t) and corrects by Newton's method on
+F = 0 together with the hyperplane through the prediction orthogonal to the tangent.
+dF/dx is the exact Jacobian (:mod:`billiard.orbits.jacobian`); dF/dlam, one column that
+only steers the corrector and the tangent, is a one-sided difference of the engine's map in
+lam (the scene rebuilt at lam + h), renewed every few steps. Away from a fold the
+corrector holds lam at its predicted value (the hyperplane lam = const crosses the branch
+steeply there, and every iteration runs one engine); near a fold it corrects on the
+pseudo-arclength hyperplane. A step whose corrector fails is halved; an easy one lengthens
+the next.
+
+Between two points a test function that changes sign, or an impact sequence that differs,
+is located by bisection along the chord between them, each trial point corrected back
+onto the branch: a test function's zero by the Illinois method, a change of sequence by
+bisection, to about 1e-13 of the chord. A branch point (two branches crossing) is located
+less sharply, as the corrector's system is singular there (about 3e-5 of the key,
+measured on the parabola).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from billiard.orbits.bifurcation import (
+    BIFURCATIONS,
+    GRAZING,
+    NONE,
+    SMOOTH,
+    neimark_sacker_pair,
+    test_functions,
+)
+from billiard.orbits.jacobian import map_jacobian
+from billiard.orbits.newton import NEWTON_TOL, Orbit, free_indices, stable
+from billiard.orbits.returnmap import STATE, OrbitError, ReturnMap
+from billiard.scene.scene import SceneError, with_values
+
+__all__ = [
+    "Branch",
+    "check_span",
+    "continue_branch",
+    "continue_orbit",
+    "scene_value",
+    "variable_name",
+]
+
+#: Corrector iterations before a step counts as failed (and is halved).
+MAX_CORRECTOR = 10
+#: Bisection steps locating a bifurcation: 2^-42 of the chord, ~2e-13.
+BISECTIONS = 42
+#: Relative step of the difference dF/dlam.
+LAMBDA_STEP = 1e-6
+#: Steps a dF/dlam column is used for before it is taken afresh (it only steers the
+#: corrector and the tangent; a step that needed more than 3 iterations renews it).
+COLUMN_AGE = 5
+#: The key's part of the unit tangent (scaled) below which the corrector leaves the key
+#: free, on the pseudo-arclength hyperplane (near a fold), rather than holding it.
+STEEP = 0.05
+#: Shortest step, relative to the first, before a direction is given up.
+MIN_STEP = 1e-6
+
+
+@dataclass
+class Branch:
+    """A continued branch: one entry per point, in the order along the branch.
+
+    ``key`` the scene key varied, ``values`` its values, ``orbits`` the orbits,
+    ``bifurcation`` a code of :data:`~billiard.orbits.bifurcation.BIFURCATIONS` per point
+    (``none`` for a regular point), ``period`` N impacts."""
+
+    key: str
+    period: int
+    values: list[float] = field(default_factory=list)
+    orbits: list[Orbit] = field(default_factory=list)
+    bifurcation: list[int] = field(default_factory=list)
+
+    def points(self, code: str) -> list[float]:
+        """The key's values at the points of bifurcation ``code``."""
+        want = BIFURCATIONS.index(code)
+        return [v for v, b in zip(self.values, self.bifurcation, strict=True) if b == want]
+
+    def arrays(self) -> dict[str, np.ndarray]:
+        """The branch as arrays by the names of branch.nc (docs/orbits.md)."""
+        rows = [o.as_dict() for o in self.orbits]
+        width = max((len(o.multipliers) for o in self.orbits), default=0)
+        mults = np.full((len(rows), width), np.nan, dtype=complex)
+        for i, o in enumerate(self.orbits):
+            mults[i, : len(o.multipliers)] = o.multipliers
+        out = {variable_name(self.key): np.array(self.values, dtype=float)}
+        for name in ("t_phase", "s", "q1", "q2", "v1", "v2", "omega"):
+            out[name] = np.array([r[name] for r in rows], dtype=float)
+        out["multipliers_real"] = mults.real
+        out["multipliers_imag"] = mults.imag
+        out["stable"] = np.array([o.stable for o in self.orbits], dtype=np.int8)
+        out["bifurcation"] = np.array(self.bifurcation, dtype=np.int8)
+        return out
+
+    def to_xarray(self) -> Any:
+        """The branch as an ``xarray.Dataset`` (needs xarray: the ``data`` extra)."""
+        import xarray as xr
+
+        from billiard.orbits.netcdf import attributes
+
+        arrays = self.arrays()
+        attrs = attributes(self.key)
+        data = {}
+        for name, values in arrays.items():
+            dims = ("point", "multiplier") if values.ndim == 2 else ("point",)
+            data[name] = (dims, values, attrs.get(name, {}))
+        ds = xr.Dataset(data)
+        ds.attrs.update({"key": self.key, "period_impacts": self.period})
+        return ds
+
+
+def variable_name(key: str) -> str:
+    """A scene key as a variable name: ``drive.amplitude`` -> ``drive_amplitude``."""
+    return key.replace(".", "_")
+
+
+class SequenceChange(OrbitError):
+    """The orbit's impacts hit other walls than the branch's: past a grazing."""
+
+
+class _Problem:
+    """The branch's equations F(x, lam) = 0 over the varied coordinates ``idx``, the
+    impacts hitting the walls ``walls`` in turn."""
+
+    def __init__(self, scene, period, key, idx, wall, periods, scale, walls):
+        self.scene, self.period, self.key = scene, period, key
+        self.idx, self.wall, self.periods = idx, wall, periods
+        self.scale = scale  # of (x[idx], lam)
+        self.walls = walls
+        self.x_full: np.ndarray | None = None
+        self._maps: dict[float, ReturnMap] = {}
+
+    def rmap(self, lam: float) -> ReturnMap:
+        rm = self._maps.get(lam)
+        if rm is None:
+            try:
+                scene = with_values(self.scene, {self.key: lam})
+            except SceneError as exc:
+                raise OrbitError(f"{self.key} = {lam:.10g}: {exc}") from None
+            rm = ReturnMap(scene, self.period)
+            if len(self._maps) > 8:
+                self._maps.clear()
+            self._maps[lam] = rm
+        return rm
+
+    def full(self, z: np.ndarray) -> tuple[np.ndarray, float]:
+        y = z * self.scale
+        x = self.x_full.copy()
+        x[self.idx] = y[:-1]
+        return x, float(y[-1])
+
+    def residual(self, x: np.ndarray, lam: float) -> tuple[np.ndarray, Any, ReturnMap]:
+        rm = self.rmap(lam)
+        landing, records = rm(x, self.wall)
+        if tuple(int(r.wall) for r in records) != self.walls:
+            raise SequenceChange("the orbit left its wall sequence")
+        res = landing.x - x
+        res[0] -= self.periods * rm.period
+        return res, records, rm
+
+    def lambda_column(self, z: np.ndarray) -> np.ndarray:
+        """dF/dlam (scaled) at z, a difference of the engine's map."""
+        x, lam = self.full(z)
+        h = LAMBDA_STEP * max(abs(lam), self.scale[-1])
+        # one-sided: the value at lam is the current point's, whose engine is built
+        # already; a difference to 1e-6 steers as well as a central one
+        ends = []
+        for offset in (0.0, h, -h):
+            try:
+                ends.append((offset, self.residual(x, lam + offset)[0]))
+            except SequenceChange:
+                continue
+            if len(ends) == 2:
+                break
+        if len(ends) < 2:
+            raise SequenceChange("the orbit leaves its wall sequence within the key's step")
+        (a, fa), (b, fb) = ends
+        return (fa - fb)[self.idx] / (a - b) * self.scale[-1] / self.scale[:-1]
+
+    def system(self, z: np.ndarray, column: np.ndarray):
+        """(F scaled, [dF/dx dF/dlam] scaled, records, rm, full Jacobian) at z, with the
+        lam column given."""
+        x, lam = self.full(z)
+        res, records, rm = self.residual(x, lam)
+        jac = map_jacobian(rm, x, self.wall, records)
+        sx = self.scale[:-1]
+        dfx = (jac[np.ix_(self.idx, self.idx)] - np.eye(len(self.idx))) * sx[None, :]
+        big = np.hstack([dfx / sx[:, None], column[:, None]])
+        return res[self.idx] / sx, big, records, rm, jac
+
+    def correct(self, z0: np.ndarray, normal: np.ndarray, column: np.ndarray | None = None):
+        """Newton's method on F = 0 and normal . (z - z0) = 0; returns (point,
+        iterations) or raises OrbitError. The lam column (taken at z0 unless given) is
+        held through the iterations: it only steers them, and each costs two engines.
+        A normal along lam alone holds lam at z0's, bit for bit: every iteration then
+        runs the one engine built for that value."""
+        z = z0.copy()
+        held = bool(np.all(normal[:-1] == 0.0))
+        if column is None:
+            column = self.lambda_column(z)
+        for it in range(1, MAX_CORRECTOR + 1):
+            f, big, records, rm, jac = self.system(z, column)
+            a = np.vstack([big, normal])
+            b = np.concatenate([f, [normal @ (z - z0)]])
+            try:
+                dz = -np.linalg.solve(a, b)
+            except np.linalg.LinAlgError:
+                raise OrbitError("the corrector's system is singular") from None
+            z = z + dz
+            if held:
+                z[-1] = z0[-1]
+            y = z * self.scale
+            if np.max(np.abs(dz * self.scale) / (1.0 + np.abs(y))) <= NEWTON_TOL:
+                # the last step moved z by 1e-12 of itself: the records and Jacobian of
+                # the point before it stand for it (the Jacobian to 1e-12, the impact
+                # sequence exactly) without another engine
+                return _Point(z, records, jac, rm, big), it
+        raise OrbitError("the corrector did not converge")
+
+
+def _tangent(big: np.ndarray, previous: np.ndarray | None) -> np.ndarray:
+    """The branch's unit tangent: the null vector of ``big``, oriented along
+    ``previous``."""
+    if previous is None:
+        tau = np.linalg.svd(big)[2][-1]
+    else:
+        a = np.vstack([big, previous])
+        rhs = np.zeros(big.shape[1])
+        rhs[-1] = 1.0
+        tau = np.linalg.solve(a, rhs)
+    tau = tau / np.linalg.norm(tau)
+    if previous is not None and tau @ previous < 0:
+        tau = -tau
+    return tau
+
+
+@dataclass
+class _Point:
+    z: np.ndarray
+    records: list
+    jac: np.ndarray
+    rm: ReturnMap
+    big: np.ndarray
+
+    def sequence(self):
+        return tuple((int(r.wall), str(r.regime)) for r in self.records)
+
+
+def _orbit(problem: _Problem, p: _Point) -> tuple[float, Orbit]:
+    x, lam = problem.full(p.z)
+    x[0] %= p.rm.period
+    jac = p.jac[np.ix_(problem.idx, problem.idx)]
+    mults = np.linalg.eigvals(jac)
+    mults = mults[np.argsort(-np.abs(mults), kind="stable")]
+    ball = p.rm.ball(x, problem.wall)
+    orbit = Orbit(
+        x=x,
+        wall=problem.wall,
+        impacts=problem.period,
+        periods=problem.periods,
+        jacobian=jac,
+        multipliers=mults,
+        stable=stable(mults),
+        sequence=p.sequence(),
+        records=p.records,
+        lab=(ball.q1, ball.q2),
+        residual=math.nan,  # converged by the corrector: its step, not its residual
+        free=tuple(STATE[i] for i in problem.idx),
+    )
+    return lam, orbit
+
+
+def _on_chord(problem: _Problem, a: _Point, chord: np.ndarray, sigma: float) -> _Point | None:
+    """The branch's point on the hyperplane orthogonal to ``chord`` at a + sigma chord,
+    or None where the corrector finds no orbit of the branch's wall sequence."""
+    normal = chord / np.linalg.norm(chord)
+    if abs(normal[-1]) >= STEEP:  # as the steps: the key held where the chord is steep
+        normal = np.eye(len(normal))[-1]
+    try:
+        return problem.correct(a.z + sigma * chord, normal)[0]
+    except OrbitError:
+        return None
+
+
+def _bisect(problem: _Problem, a: _Point, b: _Point, side: Callable[[_Point], bool]) -> _Point:
+    """Bisect the chord a-b for where ``side`` (True at a, False at b) changes: the last
+    point on a's side, within 2^-42 of the chord."""
+    lo, hi = 0.0, 1.0
+    chord = b.z - a.z
+    best = a
+    for _ in range(BISECTIONS):
+        mid = 0.5 * (lo + hi)
+        point = _on_chord(problem, a, chord, mid)
+        if point is not None and side(point):
+            lo, best = mid, point
+        else:
+            hi = mid  # no smooth orbit of the branch there: beyond the change
+    return best
+
+
+def _zero(problem: _Problem, a: _Point, b: _Point, k: int) -> _Point:
+    """The zero of test function ``k`` on the chord a-b (its signs differ at a and b):
+    the Illinois variant of regula falsi, which keeps the zero bracketed and converges
+    superlinearly, to 1e-13 of the chord (or until its estimate stops moving, or the test
+    function is exactly zero); where a trial point has no orbit it bisects."""
+    idx = problem.idx
+
+    def value(p: _Point) -> float:
+        return float(test_functions(p.jac[np.ix_(idx, idx)])[k])
+
+    chord = b.z - a.z
+    lo, hi, f_lo, f_hi = 0.0, 1.0, value(a), value(b)
+    best, side, previous = a, 0, -1.0
+    for _ in range(BISECTIONS):
+        if hi - lo <= 1e-13:
+            break
+        sigma = (lo * f_hi - hi * f_lo) / (f_hi - f_lo)
+        if not lo < sigma < hi:
+            sigma = 0.5 * (lo + hi)
+        if abs(sigma - previous) <= 1e-14:
+            break  # the estimate has settled to rounding
+        previous = sigma
+        point = _on_chord(problem, a, chord, sigma)
+        if point is None:
+            sigma, point = 0.5 * (lo + hi), _on_chord(problem, a, chord, 0.5 * (lo + hi))
+            if point is None:
+                break
+        f = value(point)
+        best = point
+        if f == 0.0:
+            break
+        if np.sign(f) == np.sign(f_lo):
+            lo, f_lo = sigma, f
+            if side == -1:
+                f_hi /= 2  # Illinois: halve the end that stayed, so that it moves too
+            side = -1
+        else:
+            hi, f_hi = sigma, f
+            if side == 1:
+                f_lo /= 2
+            side = 1
+    return best
+
+
+def continue_branch(
+    scene: Any,
+    start: Orbit,
+    key: str,
+    span: tuple[float, float],
+    points: int = 200,
+    step: float | None = None,
+    progress: Callable[[int], None] | None = None,
+) -> Branch:
+    """Continue ``start`` (an orbit of ``scene``) through scene key ``key`` over ``span``,
+    in both directions from the scene's value, at most ``points`` points in all."""
+    lo, hi = float(span[0]), float(span[1])
+    lam0 = check_span(scene, key, (lo, hi))
+    idx = [STATE.index(n) for n in start.free]
+    floor = np.array([start_period(scene), 1e-3, 1e-2, 1e-2, 1.0])
+    scale = np.append(np.maximum(np.abs(start.x), floor)[idx], max(abs(lam0), hi - lo))
+    walls = tuple(w for w, _ in start.sequence)
+    problem = _Problem(scene, start.impacts, key, idx, start.wall, start.periods, scale, walls)
+    problem.x_full = start.x.copy()
+    z0 = np.append(start.x[idx], lam0) / scale
+    first = problem.correct(z0, np.eye(len(z0))[-1])[0]
+    h0 = (hi - lo) / scale[-1] / 40.0 if step is None else step / scale[-1]
+    tau0 = _tangent(first.big, None)
+    halves: list[tuple[_Point, int]] = []
+    for sign in (1.0, -1.0):
+        limit = max(points // 2, 1) if sign > 0 else max(points - len(halves), 1)
+        tau = sign * tau0
+        here: list[tuple[_Point, int]] = [(first, NONE)] if sign > 0 else []
+        current, h, grazed, column, age = first, h0, False, None, 0
+        while len(here) < limit:
+            if h < h0 * MIN_STEP:
+                if grazed:
+                    # the wall sequence ends here: a flight touches a wall (grazing)
+                    here[-1:] = [(here[-1][0] if here else current, GRAZING)]
+                break
+            try:
+                if column is None or age >= COLUMN_AGE:
+                    column, age = problem.lambda_column(current.z), 0
+                # away from a fold the corrector holds the key at the predicted value (on the
+                # hyperplane lam = const, which the branch crosses steeply there): one
+                # engine per step instead of one per iteration; near a fold (the key's part
+                # of the tangent under STEEP) it corrects on the pseudo-arclength hyperplane
+                normal = tau if abs(tau[-1]) < STEEP else np.eye(len(tau))[-1]
+                nxt, iterations = problem.correct(current.z + h * tau, normal, column)
+                if np.linalg.norm(nxt.z - current.z) > 3 * h:
+                    raise OrbitError("the step jumped to another branch")
+            except SequenceChange:
+                h, grazed, column = h / 2, True, None
+                continue
+            except OrbitError:
+                h, grazed, column = h / 2, False, None
+                continue
+            age += 1
+            if iterations > 4:
+                column = None  # a stale column slows the corrector: a fresh one next step
+            new_tau = _tangent(nxt.big, tau)
+            for code, point in _events(problem, current, nxt, tau, new_tau):
+                here.append((point, code))
+            if not lo <= nxt.z[-1] * scale[-1] <= hi:
+                break
+            here.append((nxt, NONE))
+            if progress is not None:
+                progress(len(halves) + len(here))
+            tau, current = new_tau, nxt
+            h = min(h * (1.5 if iterations <= 3 else 1.0), 4 * h0)
+        halves = here if sign > 0 else here[::-1] + halves
+    branch = Branch(key, start.impacts)
+    for point, code in halves:
+        lam, orbit = _orbit(problem, point)
+        if lo <= lam <= hi:
+            branch.values.append(lam)
+            branch.orbits.append(orbit)
+            branch.bifurcation.append(code)
+    return branch
+
+
+def _events(
+    problem: _Problem, a: _Point, b: _Point, tau_a: np.ndarray, tau_b: np.ndarray
+) -> list[tuple[int, _Point]]:
+    """The bifurcations between consecutive points a and b (tangents tau_a, tau_b),
+    located, in order along the branch."""
+    if a.sequence() != b.sequence():
+        seq = a.sequence()
+        # the map is not smooth across it: the test functions do not compare
+        return [(GRAZING, _bisect(problem, a, b, lambda p: p.sequence() == seq))]
+    idx = problem.idx
+    fa = test_functions(a.jac[np.ix_(idx, idx)])
+    fb = test_functions(b.jac[np.ix_(idx, idx)])
+    found = []
+    for k, name in enumerate(SMOOTH):
+        if fa[k] == 0.0 or np.sign(fa[k]) == np.sign(fb[k]):
+            continue
+        point = _zero(problem, a, b, k)
+        if name == "neimark_sacker":
+            mults = np.linalg.eigvals(point.jac[np.ix_(idx, idx)])
+            if not neimark_sacker_pair(mults):
+                continue  # a neutral saddle: two real multipliers with product 1
+        if name == "fold" and np.sign(tau_a[-1]) == np.sign(tau_b[-1]):
+            # a multiplier through +1 where the key goes on: no turning point but a
+            # branch point (a symmetric orbit's pitchfork, a transcritical crossing)
+            name = "branch_point"
+        found.append((BIFURCATIONS.index(name), point))
+    found.sort(key=lambda cp: float(np.linalg.norm(cp[1].z - a.z)))
+    return found
+
+
+def check_span(scene: Any, key: str, span: tuple[float, float]) -> float:
+    """The scene's value of ``key``, refused (OrbitError) outside ``span``."""
+    lo, hi = float(span[0]), float(span[1])
+    lam0 = scene_value(scene, key)
+    if not lo < hi or not lo <= lam0 <= hi:
+        raise OrbitError(
+            f"{key} = {lam0:.10g} (the starting orbit's) must lie in the span {lo:g}:{hi:g}"
+        )
+    return lam0
+
+
+def start_period(scene: Any) -> float:
+    """The drive period (s) of a scene, for scaling the time coordinate."""
+    f = float(scene.drive.frequency)
+    return 1.0 / f if f > 0 else 1.0
+
+
+def scene_value(scene: Any, key: str) -> float:
+    """The value of numeric scene key ``key`` (OrbitError for another)."""
+    section, _, name = key.partition(".")
+    try:
+        value = getattr(getattr(scene, section), name)
+    except AttributeError:
+        raise OrbitError(f"unknown scene key {key!r}") from None
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        raise OrbitError(f"scene key {key!r} is not a number, and cannot be continued")
+    return float(value)
+
+
+def continue_orbit(
+    scene: Any,
+    period: int = 1,
+    vary: str = "drive.amplitude",
+    span: tuple[float, float] = (0.0, 1.0),
+    guess: Sequence[float] | Any = None,
+    free: Sequence[str] | None = None,
+    points: int = 200,
+    step: float | None = None,
+) -> Any:
+    """Continue the period-``period`` orbit of ``scene`` through scene key ``vary`` over
+    ``span``: an ``xarray.Dataset`` over dimension ``point`` (docs/orbits.md).
+
+    The starting orbit is found by :func:`billiard.orbits.newton.find_orbit` from ``guess``
+    at the scene's own value of ``vary``, which must lie in ``span``."""
+    from billiard.orbits.newton import find_orbit
+
+    free_indices(free)
+    start = find_orbit(scene, period, guess=guess, free=free)
+    return continue_branch(scene, start, vary, span, points, step).to_xarray()

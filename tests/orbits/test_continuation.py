@@ -1,0 +1,131 @@
+"""continue_orbit: the bouncing ball's branch of period-one orbits through the drive
+amplitude, its fold and period doubling located against the closed forms
+(tests/orbits/table.py), and its points re-run by brute force."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from billiard.orbits.bifurcation import BIFURCATIONS
+from billiard.orbits.continuation import continue_branch, continue_orbit
+from billiard.orbits.newton import find_orbit
+from billiard.orbits.returnmap import OrbitError, ReturnMap
+from tests.orbits import table
+
+
+@pytest.fixture(autouse=True, scope="module")
+def billiard_home(tmp_path_factory):
+    """The flat curve "0.001" is derived on first use into a temporary BILLIARD_HOME."""
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setenv("BILLIARD_HOME", str(tmp_path_factory.mktemp("billiard_home")))
+        yield
+
+
+VERTICAL = ("t", "v2")
+E = 0.5
+
+
+@pytest.fixture(scope="module")
+def branch(billiard_home):
+    scene = table.scene(1.3, E)
+    t, v = table.orbit(1.3, E)
+    start = find_orbit(scene, 1, guess=(t, 0.0, 0.0, v, 0.0), free=VERTICAL)
+    span = (table.amplitude(1.0), table.amplitude(1.7))
+    return scene, continue_branch(scene, start, "drive.amplitude", span, points=100)
+
+
+def test_the_fold_and_the_period_doubling_are_located_to_1e_8(branch):
+    _, br = branch
+    unit = table.amplitude(1.0)  # A at Gamma = 1
+    folds = [a / unit for a in br.points("fold")]
+    doublings = [a / unit for a in br.points("period_doubling")]
+    assert len(folds) == 1 and len(doublings) == 1
+    assert folds[0] == pytest.approx(table.onset(E), rel=1e-8)
+    assert doublings[0] == pytest.approx(table.period_doubling(E), rel=1e-8)
+    assert br.points("neimark_sacker") == [] and br.points("grazing") == []
+
+
+def test_the_branch_is_stable_between_the_fold_and_the_period_doubling(branch):
+    _, br = branch
+    gamma = np.array(br.values) / table.amplitude(1.0)
+    stable = np.array([o.stable for o in br.orbits])
+    # the stable half: decelerating table at the impact, sin(theta) > 0
+    theta = np.array([o.x[0] for o in br.orbits]) * table.W
+    upper = np.sin(theta) > 0
+    inside = (gamma > table.onset(E) * (1 + 1e-6)) & (gamma < table.period_doubling(E) * (1 - 1e-6))
+    regular = np.array(br.bifurcation) == 0
+    assert np.array_equal(stable[regular], (upper & inside)[regular])
+    # both halves met: the fold joins them
+    assert upper.any() and (~upper).any()
+    # every point is the closed form's orbit at its Gamma
+    for g, o, up in zip(gamma, br.orbits, upper, strict=True):
+        t, v = table.orbit(g, E, 1, bool(up))
+        assert o.x[3] == pytest.approx(v, abs=1e-12)
+        phase = (o.x[0] - t + table.T / 2) % table.T - table.T / 2
+        assert abs(phase) < 1e-9  # s; the fold's phase is a square root of Gamma - Gamma_1
+
+
+def test_points_rerun_by_the_engine_stay_where_stable_and_leave_where_not(branch):
+    """Each point, nudged by 1e-10 of its phase and speed, run 1,000 periods. Unnudged,
+    even a saddle stays: its state is a fixed point of the engine's floating-point map,
+    bit for bit, so rounding never starts the departure."""
+    _, br = branch
+    checked = {True: 0, False: 0}
+    for value, o in zip(br.values, br.orbits, strict=True):
+        largest = np.max(np.abs(o.multipliers))
+        if 0.95 < largest < 1.05:
+            continue  # too close to a bifurcation for 1,000 periods to tell
+        rm = ReturnMap(table.scene(value / table.amplitude(1.0), E), 1)
+        try:
+            nudged = o.x + np.array([1e-10 * table.T, 0.0, 0.0, 1e-10 * o.x[3], 0.0])
+            end = rm.run(nudged, o.wall, impacts=1000)[-1]
+            # the phase too: a saddle's ball may settle on the stable orbit at the same
+            # Gamma, whose take-off speed is the same g T / 2
+            phase = (end.t - o.x[0] + table.T / 2) % table.T - table.T / 2
+            drift = max(abs(end.v2 - o.x[3]) / o.x[3], abs(phase) / table.T)
+        except OrbitError:
+            drift = np.inf  # it left so far that the run stopped
+        if o.stable:
+            assert drift < 1e-9
+        else:
+            assert drift > 1e-3
+        checked[bool(o.stable)] += 1
+    assert checked[True] >= 3 and checked[False] >= 3
+
+
+def test_continue_orbit_returns_the_dataset_of_the_issue():
+    scene = table.scene(1.3, E)
+    t, v = table.orbit(1.3, E)
+    ds = continue_orbit(
+        scene,
+        period=1,
+        vary="drive.amplitude",
+        span=(table.amplitude(1.2), table.amplitude(1.4)),
+        guess=(t, 0.0, 0.0, v, 0.0),
+        free=VERTICAL,
+        points=10,
+    )
+    assert set(ds.dims) == {"point", "multiplier"}
+    for name in ("drive_amplitude", "t_phase", "q1", "q2", "v1", "v2", "omega", "stable"):
+        assert ds[name].dims == ("point",)
+    assert ds["multipliers_real"].dims == ("point", "multiplier")
+    assert ds["bifurcation"].attrs["flag_meanings"] == " ".join(BIFURCATIONS)
+    assert ds["bifurcation"].attrs["flag_meanings"] == (
+        "none fold period_doubling neimark_sacker grazing branch_point"
+    )
+    assert ds["stable"].values.tolist() == [1] * ds.sizes["point"]
+    a = ds["drive_amplitude"].values
+    assert a.min() >= table.amplitude(1.2) and a.max() <= table.amplitude(1.4)
+    # the orbit's take-off speed is g T / 2 all along (the table returns to its height)
+    assert ds["v2"].values == pytest.approx(table.G * table.T / 2, abs=1e-12)
+
+
+def test_a_span_without_the_starting_value_is_refused():
+    scene = table.scene(1.3, E)
+    t, v = table.orbit(1.3, E)
+    start = find_orbit(scene, 1, guess=(t, 0.0, 0.0, v, 0.0), free=VERTICAL)
+    with pytest.raises(OrbitError, match="must lie in the span"):
+        continue_branch(scene, start, "drive.amplitude", (1.0, 2.0))
+    with pytest.raises(OrbitError, match="unknown scene key"):
+        continue_branch(scene, start, "drive.nothing", (0.0, 1.0))
