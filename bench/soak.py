@@ -37,6 +37,16 @@ energy created
 zero-impulse rows
     phases scenes: rows of collisions.csv with neither a normal nor a tangential
     impulse (a contact without impulse is no impact under contact phases).
+small-impulse rows
+    phases scenes: rows of collisions.csv whose impulse is below ``SMALL_IMPULSE``
+    (1e-20 N s) in both components, zero included: the tail of a series of impacts at
+    one instant followed impact by impact (a corner resolves it at once).
+event energy rises
+    phases scenes on a static boundary: events (an impact, a phase's or hold's start, a
+    landing after a summed chatter series) whose state just before has more mechanical
+    energy, m |v|^2 / 2 + I omega^2 / 2 + m g q2, than the state after the event before
+    it, by more than ``ENERGY_ROUNDING`` of the energies involved, with no allowance:
+    nothing on a still boundary adds energy (a flight conserves it, drag takes some).
 contact penetrations, contact detached
     contact phases at whose start or end the centre is off the wall's offset curve:
     clearance below -``GAP_LIMIT`` (in a wall or the lid) or above it (off the wall).
@@ -119,6 +129,7 @@ __all__ = [
     "ImpactAudit",
     "PhaseAudit",
     "audit_contact_rows",
+    "audit_impulses",
     "audit_rows",
     "random_draw",
     "scene_from_draw",
@@ -133,6 +144,9 @@ CURVES = ("parabola", "wedge", "hyperbola", "30*x**4 + 0.0063", "sqrt(0.0001 + 2
 GAP_LIMIT = 1e-9
 #: Relative rounding allowance of the energy audit.
 ENERGY_ROUNDING = 1e-12
+#: Impulse (N s) below which a row of collisions.csv of a phases scene counts as a
+#: small-impulse row (both components).
+SMALL_IMPULSE = 1e-20
 #: Contact models of the random scenes (``contact.model``).
 MODELS = ("impacts", "phases")
 #: the impact laws (``contact.law``), each drawn as often
@@ -443,6 +457,16 @@ def audit_rows(boundary: Boundary, drive: Any, columns: Mapping[str, np.ndarray]
     }
 
 
+def audit_impulses(columns: Mapping[str, np.ndarray]) -> dict[str, int]:
+    """Rows of a phases scene's collisions.csv without impulse (Rn = Rt = 0) and with an
+    impulse below ``SMALL_IMPULSE`` in both components (zero included)."""
+    rn, rt = np.abs(columns["Rn"]), np.abs(columns["Rt"])
+    return {
+        "zero_impulse_rows": int(((rn == 0.0) & (rt == 0.0)).sum()),
+        "small_impulse_rows": int((np.maximum(rn, rt) < SMALL_IMPULSE).sum()),
+    }
+
+
 #: Absolute error allowed per step of a contact phase on s (m) and s_dot (m/s), as in
 #: :mod:`billiard.models.contact` (its ``_ATOL``): the absolute part of the phase-energy
 #: tolerance.
@@ -530,6 +554,11 @@ class PhaseAudit:
     phase_energy_created: int = 0
     worst_transition: float = -math.inf
     worst_phase: float = -math.inf
+    #: static boundary: events checked for a rise of the mechanical energy, those that
+    #: rose beyond rounding, and the largest rise relative to the energies involved
+    event_checks: int = 0
+    event_energy_rises: int = 0
+    worst_event: float = -math.inf
     examples: list[str] = field(default_factory=list)
     #: the state after the last event: (what, t, q1, q2, v1, v2, omega)
     last: tuple[Any, ...] | None = None
@@ -553,8 +582,34 @@ class PhaseAudit:
         audit.last = ("start", b.t, b.q1, b.q2, b.u1, b.u2, b.u3)
         return audit
 
+    def mechanical(self, q2: float, v1: float, v2: float, omega: float) -> tuple[float, float]:
+        """(E, scale): the mechanical energy (J) of a state and the energies in it,
+        kinetic plus m g |q2|, to which rounding is relative."""
+        kinetic = 0.5 * self.m * (v1 * v1 + v2 * v2) + 0.5 * self.inertia * omega * omega
+        return kinetic + self.m * self.g * q2, kinetic + self.m * self.g * abs(q2)
+
+    def arrive(self, what: str, t: float, q2: float, v1: float, v2: float, omega: float) -> None:
+        """On a static boundary: the state just before an event (``what`` at t) has no
+        more mechanical energy than the state after the event before it, with no
+        allowance beyond rounding (``event_energy_rises``)."""
+        if not self.static or self.last is None:
+            return
+        self.event_checks += 1
+        before, scale_b = self.mechanical(*self.last[3:])
+        after, scale_a = self.mechanical(q2, v1, v2, omega)
+        scale = scale_a + scale_b
+        excess = (after - before) / scale if scale > 0.0 else 0.0
+        self.worst_event = max(self.worst_event, excess)
+        if excess > ENERGY_ROUNDING:
+            self.event_energy_rises += 1
+            self._note(
+                f"{what} at t = {t!r} s after the {self.last[0]} at t = {self.last[1]!r} s: "
+                f"mechanical energy {before!r} -> {after!r} J (+{excess:.2g} of {scale:.3g} J)"
+            )
+
     def impact(self, state: Any, res: ImpactResult) -> None:
         """After an impact at ``state`` with outcome ``res``."""
+        self.arrive("impact", state.t, state.q2, state.u1, state.u2, state.u3)
         self.last = ("impact", state.t, state.q1, state.q2, res.u1, res.u2, res.u3)
 
     def chatter(self, before: Any, after: Any) -> None:
@@ -578,6 +633,8 @@ class PhaseAudit:
             speeds = 0.5 * m * (b.u1**2 + b.u2**2 + vb1 * vb1 + vb2 * vb2)
             ends.append((px, py, ke, speeds))
         (x0, y0, ke0, s0), (x1, y1, ke1, s1) = ends
+        self.arrive("landing after a chatter series", before.t, before.q2, before.u1,
+                    before.u2, before.u3)  # fmt: skip
         scale = ke0 + s0 + s1 + 0.5 * inertia * (before.u3**2 + after.u3**2)
         excess = (ke1 - ke0) / scale if scale > 0.0 else 0.0
         self.worst_transition = max(self.worst_transition, excess)
@@ -600,6 +657,8 @@ class PhaseAudit:
         self.phases += 1
         self.ends[f"{rec.mode}/{rec.end}"] += 1
         m, inertia = self.m, self.inertia
+        self.arrive(f"{rec.mode} phase", rec.t_start, rec.q2_start, rec.v1_start,
+                    rec.v2_start, rec.omega_start)  # fmt: skip
         last = self.last
         self.last = ("phase", rec.t_end, rec.q1_end, rec.q2_end, rec.v1_end, rec.v2_end,
                      rec.omega_end)  # fmt: skip
@@ -690,6 +749,9 @@ class PhaseAudit:
             "phase_energy_created": self.phase_energy_created,
             "worst_transition_excess": self.worst_transition,
             "worst_phase_energy_ratio": self.worst_phase,
+            "event_checks": self.event_checks,
+            "event_energy_rises": self.event_energy_rises,
+            "worst_event_excess": self.worst_event,
             "phase_examples": list(self.examples),
         }
 
@@ -908,8 +970,7 @@ def run_job(job: Job) -> dict[str, Any]:
         report.update(audit_rows(sim.boundary, sim.drive, columns))
         if scene.contact.model == "phases":
             # under contact phases a row is an impact: a contact without impulse is none
-            no_impulse = (columns["Rn"] == 0.0) & (columns["Rt"] == 0.0)
-            report["zero_impulse_rows"] = int(no_impulse.sum())
+            report.update(audit_impulses(columns))
         report.update(
             impacts=len(result),
             events=len(result),
@@ -1086,6 +1147,10 @@ def _aggregate(reports: list[dict[str, Any]]) -> dict[str, Any]:
         "contact_detached": total("contact_detached"),
         "contact_non_finite_rows": total("contact_non_finite_rows"),
         "zero_impulse_rows": total("zero_impulse_rows"),
+        "small_impulse_rows": total("small_impulse_rows"),
+        "event_energy_rises": total("event_energy_rises"),
+        "event_checks": total("event_checks"),
+        "worst_event_excess": extreme("worst_event_excess", max, -math.inf),
         "transition_energy_created": total("transition_energy_created"),
         "transition_jumps": total("transition_jumps"),
         "unlinked_phases": total("unlinked_phases"),
@@ -1156,6 +1221,8 @@ MUST_BE_ZERO = (
     "contact_detached",
     "contact_non_finite_rows",
     "zero_impulse_rows",
+    "small_impulse_rows",
+    "event_energy_rises",
     "transition_energy_created",
     "transition_jumps",
     "unlinked_phases",
@@ -1192,6 +1259,8 @@ def format_summary(s: dict[str, Any]) -> str:
         f"{s['worst_snap']:.3g})",
         f"  phases on a static boundary audited: {s['static_phases']:,}, worst energy "
         f"growth {s['worst_phase_energy_ratio']:.3g} of the tolerance",
+        f"  events on a static boundary audited for a rise of the mechanical energy: "
+        f"{s['event_checks']:,}, worst relative rise {s['worst_event_excess']:.3g}",
         f"  lifts of a lying ball (designed energy input, audited): {s['lifts']:,}",
         f"  impacts at a separating contact (w_n >= 0, no lift): {s['separating']:,} "
         f"({s['separating_rule_on']:,} with elastic_below > 0)",

@@ -86,8 +86,11 @@ RING = COLLAPSE_COUNT + 1
 #: EN_SETTLES after an impact, the sum of the landing criteria it meets: the rebound is
 #: below the landing speed (or the low-velocity rule applied) ...
 SETTLES_SLOW = 1.0
-#: ... and the chatter's tail may be summed (``impact.chatter_tail``)
+#: ... and the chatter's tail may be summed (``impact.chatter_tail``); plus SETTLES_CORNER
+#: times (i + 1) when the impact came at the instant of one with another surface i, the
+#: ball touching both (a corner: the machine resolves the series of impacts there)
 SETTLES_TAIL = 2.0
+SETTLES_CORNER = 4.0
 #: EN_FAULT of a ball that meets a surface without impulse again and again at one time
 #: (:func:`no_impulse`); 1.0 is an inelastic collapse, 2.0 phases of zero duration
 FAULT_PRESSED = 3.0
@@ -179,6 +182,9 @@ def impact(ctx, p, walls, out, row, tau, j, q1, q2, u1, u2, theta, s, z):
     ):  # fmt: skip
         ctx[EN_STOP] = E_NON_FINITE
         raise KernelError(E_NON_FINITE)
+    # the previous impact was at this instant (a flight of zero or no resolved time) on
+    # another surface: the ball may touch both (machine.corner looks)
+    corner = ctx[MC_LAST_IMPACT] == t and ctx[EN_LAST_J] != j
     if ctx[EN_LAND_ON] != 0.0 and rn == 0.0 and rt == 0.0:
         # under contact phases a contact without impulse is no impact: no row, nothing
         # counted; the ball goes on from it, or lands
@@ -200,7 +206,10 @@ def impact(ctx, p, walls, out, row, tau, j, q1, q2, u1, u2, theta, s, z):
     if int(ctx[EN_RCOUNT]) > COLLAPSE_COUNT or ctx[EN_ZERO] >= ZERO_FLIGHT_LIMIT:
         ctx[EN_FAULT] = 1.0
     if ctx[EN_LAND_ON] != 0.0:
+        i = ctx[EN_LAST_J]
         settles(ctx, j, kind, s, wn, regime, accel)
+        if corner:
+            ctx[EN_SETTLES] += SETTLES_CORNER * (i + 1.0)
     return True
 
 

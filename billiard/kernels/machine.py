@@ -159,6 +159,7 @@ from .layout import (
     S_SLOPE_AT,
     S_WALL,
     S_WS,
+    S_WSLOPE,
     SAMPLES_FULL,
     SLIDE,
     SM_AFTER,
@@ -190,6 +191,7 @@ from .layout import (
     KernelError,
 )
 from .loop import (
+    SETTLES_CORNER,
     compensated_add,
     remember_impact,
     run_flights,
@@ -207,10 +209,26 @@ from .samples import (
     start_flight_samples,
     write_sample,
 )
-from .surfaces import contact
+from .surfaces import contact, gap_rate
 from .vertex import forces as hold_forces
 from .vertex import held_spin, run_hold, sign
 
+#: Impacts of a series at one instant in a corner (:func:`corner`) followed at most: each
+#: shrinks the speed relative to the boundary by a fixed factor (about 0.55 an impact in
+#: the paper's wedge), so that the series reaches its limit within some 50.
+CORNER_SERIES = 1000
+#: The speed relative to the boundary, as a fraction of that at the series' start, at
+#: which a series at one instant that has not ended is at its limit: rest relative to
+#: the boundary (the two normals span the plane), where the rest is rounding.
+CORNER_LIMIT = 1e-12
+#: |distance| (m) between the centre and a wall's offset curve within which a ball
+#: touches the wall at a corner
+CORNER_GAP = 1e-9
+#: :func:`corner`'s answers: no series (the ball leaves the first wall), a series that
+#: ends (the ball leaves both walls), a series that does not end (at rest in the corner)
+CORNER_NONE = -1
+CORNER_ENDS = 1
+CORNER_REST = 0
 #: accepted steps of a phase between two returns to Python (a stop request is looked
 #: at, progress reported): some milliseconds
 PAUSE_STEPS = 1000.0
@@ -617,8 +635,9 @@ def hold_after(ctx, p, walls, index, j, theta, u3, wn, elastic, t, impulse, inst
     skips would carry the ball's velocity relative to the boundary, at most v, to
     zero: it is dropped (never energy created), the spin is kept. Without them a
     ball pressed into a vertex with ``elastic_below = 0`` meets one wall and the
-    other at one instant, again and again, until the collapse stop."""
-    if not is_wall(ctx, j):
+    other at one instant, again and again, until the collapse stop. Wall j may be the
+    lid: a ball on a wall that meets the lid at their corner is held by both alike."""
+    if ctx[SURF + j * SURF_STRIDE + S_KIND] == ESCAPE:
         return False
     e = ctx[IM_E]
     slow = rebound_settles(e, ctx[IM_EB], wn, elastic)
@@ -651,6 +670,135 @@ def continue_on(ctx, p, walls, j, px, theta, u3, t):
     mode, sgn = mode_for(ctx, p, walls, w, theta, s, 0.0, u3)
     if normal_force(ctx, p, walls, w, mode, sgn, theta, s, 0.0) > 0.0:
         set_contact(ctx, mode, float(j), s, 0.0, sgn, t, t)
+
+
+@inline
+def touches(ctx, p, walls, j, px, py):
+    """(touching, z): is the centre, at (px, py) in the boundary's frame, on surface j's
+    offset (a wall's or the lid's; within CORNER_GAP of it, measured vertically), and the
+    tangent angle (rad) there. Surface j's warm start is left as it was."""
+    base = SURF + j * SURF_STRIDE
+    ws, slope = ctx[base + S_WS], ctx[base + S_WSLOPE]
+    gap = gap_rate(ctx, p, walls, j, px, py, 0.0, 0.0)[0]
+    ctx[base + S_WS] = ws
+    ctx[base + S_WSLOPE] = slope
+    return abs(gap) <= CORNER_GAP, contact_kept(ctx, p, walls, j, px)[1]
+
+
+@jit
+def corner(ctx, p, walls, out, row, i, j):
+    """The ball, touching surfaces i and j at one instant (two walls, or a wall and the
+    lid), has just met wall j (the impact of
+    row ``row``; the state after it in EN_*). Where it still approaches wall i, a series
+    of impacts at this instant follows, with i and j in turn (each of the impact law,
+    each losing energy): resolved here as one impact with both normals. Followed until
+    the ball leaves both (CORNER_ENDS: its velocity after the series), or until the
+    speed relative to the boundary is CORNER_LIMIT of that at its start or
+    CORNER_SERIES impacts were made: a series that does not end, whose limit is rest
+    relative to the boundary (CORNER_REST: the ball moves with the boundary, the spin
+    the series left). Row ``row`` then records the whole series: the velocities after
+    it, the energy, and the total impulse in wall j's frame. CORNER_NONE (nothing
+    changed) where the ball leaves wall i, or touches it not.
+
+    Returns (answer, the surface of the series' last impact, the normal speed (m/s)
+    before that impact, whether the low-velocity rule made it elastic)."""
+    kind_i, kind_j = ctx[SURF + i * SURF_STRIDE + S_KIND], ctx[SURF + j * SURF_STRIDE + S_KIND]
+    if i == j or kind_i == ESCAPE or kind_j == ESCAPE:
+        return CORNER_NONE, j, 0.0, False
+    theta = ctx[EN_THETA]
+    px, py, _, _ = boundary_frame(ctx, theta, ctx[EN_Q1], ctx[EN_Q2], 0.0, 0.0)
+    at_i, z_i = touches(ctx, p, walls, i, px, py)
+    at_j, z_j = touches(ctx, p, walls, j, px, py)
+    if not (at_i and at_j):
+        return CORNER_NONE, j, 0.0, False
+    u1, u2, u3 = ctx[EN_U1], ctx[EN_U2], ctx[EN_U3]
+    vb1, vb2, _, _ = boundary(ctx, theta)
+    if (u2 - vb2) * math.cos(z_i) - (u1 - vb1) * math.sin(z_i) >= 0.0:
+        return CORNER_NONE, j, 0.0, False
+    start = math.sqrt((u1 - vb1) ** 2 + (u2 - vb2) ** 2)
+    v1, v2, v3 = u1, u2, u3
+    z, other = z_i, z_j
+    quiet = 0
+    answer = CORNER_REST
+    # the surface of the series' last impact, its normal speed before it and whether
+    # the low-velocity rule made it elastic (the landing test's inputs)
+    at, last, last_wn, last_elastic = i, j, 0.0, False
+    for _ in range(CORNER_SERIES):
+        n1, n2, n3, rt, rn, regime, _, _, wn = impact_law(ctx, v1, v2, v3, z, vb1, vb2, False)
+        if rn == 0.0 and rt == 0.0:
+            quiet += 1
+            if quiet == 2:
+                answer = CORNER_ENDS
+                break
+        else:
+            quiet = 0
+            v1, v2, v3 = n1, n2, n3
+            last, last_wn, last_elastic = at, wn, regime == ELASTIC
+            if math.sqrt((v1 - vb1) ** 2 + (v2 - vb2) ** 2) <= CORNER_LIMIT * start:
+                break
+        z, other = other, z
+        at = j if at == i else i
+    if answer == CORNER_REST:
+        v1, v2 = vb1, vb2
+    m = ctx[IM_M]
+    c, sn = math.cos(z_j), math.sin(z_j)
+    o = row * NCOL
+    d1, d2 = v1 - u1, v2 - u2
+    u4, un = frame_velocity(v1, v2, z_j)
+    out[o + 4] = v1
+    out[o + 5] = v2
+    out[o + 6] = v3
+    out[o + 7] = u4
+    out[o + 8] = un
+    out[o + 12] = energy(ctx[EN_Q2], v1, v2, v3, m, ctx[IM_R], ctx[IM_K], ctx[G])
+    out[o + 14] = out[o + 14] + m * (c * d1 + sn * d2)
+    out[o + 15] = out[o + 15] + m * (c * d2 - sn * d1)
+    ctx[EN_U1] = v1
+    ctx[EN_U2] = v2
+    ctx[EN_U3] = v3
+    return answer, last, last_wn, last_elastic
+
+
+@inline
+def after_corner(ctx, p, walls, i, j, last, wn, elastic, t):
+    """After a series at one instant in the corner of surfaces i and j that ended
+    (:func:`corner`), its last impact on surface ``last`` with normal speed wn before
+    it: held by both or landed on ``last`` as after any impact there (the rebound below
+    the landing speed, or its chatter summed), else the ball flies on."""
+    theta = ctx[EN_THETA]
+    px, _, _, _ = boundary_frame(ctx, theta, ctx[EN_Q1], ctx[EN_Q2], 0.0, 0.0)
+    other = j if last == i else i
+    u1, u2, u3 = ctx[EN_U1], ctx[EN_U2], ctx[EN_U3]
+    if hold_after(ctx, p, walls, other, last, theta, u3, wn, elastic, t, True, False):
+        return
+    s = contact_kept(ctx, p, walls, last, px)[0]
+    land(ctx, p, walls, last, s, theta, u1, u2, u3, wn, elastic, -1, t)
+
+
+@inline
+def corner_rest(ctx, p, walls, i, j, t):
+    """After a series at one instant that does not end (:func:`corner`), the ball at rest
+    relative to the boundary in the corner of walls i and j: held by both where they
+    press it (:func:`~billiard.kernels.vertex.held_spin`), else on the one that presses
+    it (the spin's kinetic friction pulls it off the other, or the drive does), else it
+    leaves both."""
+    theta = ctx[EN_THETA]
+    u3 = ctx[EN_U3]
+    px, _, _, _ = boundary_frame(ctx, theta, ctx[EN_Q1], ctx[EN_Q2], 0.0, 0.0)
+    z_i = contact_kept(ctx, p, walls, i, px)[1]
+    z_j = contact_kept(ctx, p, walls, j, px)[1]
+    spin = held_spin(ctx, z_i, z_j, theta, u3)
+    if not math.isnan(spin):
+        # by two walls, or by a wall and the lid (hold_step's kernel takes any two)
+        enter_hold(ctx, i, j, t, t, spin)
+        return
+    to_flight(ctx)
+    n_i, n_j = hold_forces(ctx, z_i, z_j, theta, sign(u3))
+    on = i if n_i >= n_j else j
+    if is_wall(ctx, on):
+        continue_on(ctx, p, walls, on, px, theta, u3, t)
+    # left in flight, at rest relative to both surfaces: its acceleration relative to the
+    # boundary takes it off both (a grazing start of the flight's locator)
 
 
 @inline
@@ -743,10 +891,13 @@ def hold_step(ctx, p, walls, cout, until, sout, srows):
     end_phase(ctx, M_HELD, t_start, tau, total, error)
     to_flight(ctx)
     keeps = int(ctx[VX_KEEPS])
-    if keeps >= 0:
-        continue_on(ctx, p, walls, a if keeps == 0 else b, px, theta, u3, t)
-    # a ball released by both walls (mode flight) flies on at the boundary's velocity:
-    # its acceleration relative to the boundary takes it off both (a grazing start)
+    kept = a if keeps == 0 else b
+    # on the lid (of a wall-lid corner) no contact phase: the ball leaves it
+    if keeps >= 0 and is_wall(ctx, kept):
+        continue_on(ctx, p, walls, kept, px, theta, u3, t)
+    # a ball released by both surfaces (mode flight) flies on at the boundary's
+    # velocity: its acceleration relative to the boundary takes it off both (a grazing
+    # start)
     return -1
 
 
@@ -794,6 +945,16 @@ def impact_from_contact(ctx, p, walls, out, other, index, t, tau, theta, q3):
     remember_impact(ctx, t)
     collapsed = int(ctx[EN_RCOUNT]) > COLLAPSE_COUNT or ctx[EN_ZERO] >= ZERO_FLIGHT_LIMIT
     ctx[EN_FAULT] = 1.0 if collapsed else 0.0
+    # the surface of this impact, for one with another at this instant (loop.impact)
+    ctx[EN_LAST_J] = float(j)
+    series, last, last_wn, last_elastic = corner(ctx, p, walls, out, int(ctx[MC_ROW]) - 1,
+                                                 index, j)  # fmt: skip
+    if series == CORNER_REST:
+        corner_rest(ctx, p, walls, index, j, t)
+        return True
+    if series == CORNER_ENDS:
+        after_corner(ctx, p, walls, index, j, last, last_wn, last_elastic, t)
+        return True
     if not hold_after(ctx, p, walls, index, j, theta, n3, wn, elastic, t, True, tau == 0.0):
         land(ctx, p, walls, j, s_o, theta, n1, n2, n3, wn, elastic, -1, t)
     return True
@@ -1094,7 +1255,19 @@ def run_machine(ctx, p, walls, nears, out, rows, cout, crows, sctx, sout, srows)
                 # at the last impact (its time in MC_LAST_IMPACT: loop.impact) or at a
                 # contact without impulse after it
                 ctx[MC_FINAL] = ctx[EN_T]
-            if ctx[EN_SETTLES] != 0.0:
+            series = CORNER_NONE
+            if ctx[EN_SETTLES] >= SETTLES_CORNER:
+                # an impact at the instant of one with another wall (loop.impact)
+                i = int(ctx[EN_SETTLES] // SETTLES_CORNER) - 1
+                j = int(ctx[EN_LAST_J])
+                series, last, last_wn, last_elastic = corner(
+                    ctx, p, walls, out, int(ctx[MC_ROW]) - 1, i, j
+                )
+                if series == CORNER_REST:
+                    corner_rest(ctx, p, walls, i, j, ctx[EN_T])
+                elif series == CORNER_ENDS:
+                    after_corner(ctx, p, walls, i, j, last, last_wn, last_elastic, ctx[EN_T])
+            if ctx[EN_SETTLES] != 0.0 and series == CORNER_NONE:
                 j = int(ctx[EN_LAST_J])
                 # the free flight's test of the chatter's tail (loop.SETTLES_TAIL)
                 tail = 1 if int(ctx[EN_SETTLES]) & 2 != 0 else 0
