@@ -111,8 +111,9 @@ def rows_sink(recorder: Any) -> Callable[[np.ndarray], None] | None:
 def pressed_stop(lid: bool, n: int, t: float) -> SimulationError:
     """The stop of a ball that meets a surface (``lid``: the lid) without impulse again
     and again while the clock no longer advances (``loop.no_impulse``): pressed against
-    a surface that cannot hold it, the run would turn for ever at time t."""
-    where = "the lid (which cannot hold a ball)" if lid else "a wall"
+    a surface that does not hold it (the lid holds a ball only where a vertical drive
+    presses it against it: kernels/lid.py), the run would turn for ever at time t."""
+    where = "the lid" if lid else "a wall"
     return SimulationError(
         f"no progress in simulated time: the ball is pressed against {where} and meets "
         f"it without impulse again and again ({COLLAPSE_COUNT} contacts within "

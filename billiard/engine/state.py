@@ -58,7 +58,9 @@ class EngineState:
         mode: the ball's motion state (one of :data:`MOTION_STATES`).
         contact: in contact (``roll`` or ``slide``): the wall's surface index, the contact
             abscissa s (m), ds/dt (m/s), the slip sign while sliding, the phase's start
-            time and its settle time (s); held (``held``): the two walls' surface
+            time and its settle time (s); on the lid, its surface index and, for s and
+            ds/dt, the centre's x in the boundary's frame and its velocity along x
+            relative to the boundary; held (``held``): the two walls' surface
             indices, the centre (m) in the boundary's frame, the start and settle
             times (s); empty in flight.
         samples: trajectory samples reported so far (``--sample``).

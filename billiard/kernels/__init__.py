@@ -21,6 +21,7 @@ One concept per module:
   at sample times;
 * :mod:`~billiard.kernels.vertex`: a hold by two walls (the ball in a vertex), resumable
   at sample times;
+* :mod:`~billiard.kernels.lid`: the ball pressed against the lid, in closed form;
 * :mod:`~billiard.kernels.loop`: one impact, and ``run_chunk`` (up to N impacts into a
   preallocated array; ``run_chunk_fixed`` for method ``rk4``).
 

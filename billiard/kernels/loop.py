@@ -189,7 +189,7 @@ def impact(ctx, p, walls, out, row, tau, j, q1, q2, u1, u2, theta, s, z):
         # under contact phases a contact without impulse is no impact: no row, nothing
         # counted; the ball goes on from it, or lands
         no_impulse(ctx, t, theta, q1, q2, n1, n2, n3, q3, total, error, tau, j)
-        settles(ctx, j, kind, s, wn, regime, accel)
+        settles(ctx, j, s, wn, regime, accel)
         return True
     # commit
     ctx[EN_NO_ROW] = 0.0
@@ -207,7 +207,7 @@ def impact(ctx, p, walls, out, row, tau, j, q1, q2, u1, u2, theta, s, z):
         ctx[EN_FAULT] = 1.0
     if ctx[EN_LAND_ON] != 0.0:
         i = ctx[EN_LAST_J]
-        settles(ctx, j, kind, s, wn, regime, accel)
+        settles(ctx, j, s, wn, regime, accel)
         if corner:
             ctx[EN_SETTLES] += SETTLES_CORNER * (i + 1.0)
     return True
@@ -272,7 +272,7 @@ def no_impulse(ctx, t, theta, q1, q2, u1, u2, u3, q3, total, error, tau, j):
     """The state at a flight's contact without impulse (contact phases) with surface j:
     the ball there, no impact counted, EN_NO_ROW set. Such contacts enter the collapse
     window as impacts do, and those at one instant count as zero flights: a ball
-    pressed against a surface that cannot hold it (the lid) meets it again and again
+    pressed against a surface that does not hold it meets it again and again
     at times that no longer advance the clock (flights of 1e-18 s at t ~ 1 s), which
     stops the run (EN_FAULT = FAULT_PRESSED, the surface in EN_ERR_VALUE) instead of
     turning for ever."""
@@ -288,11 +288,11 @@ def no_impulse(ctx, t, theta, q1, q2, u1, u2, u3, q3, total, error, tau, j):
 
 
 @inline
-def settles(ctx, j, kind, s, wn, regime, accel):
+def settles(ctx, j, s, wn, regime, accel):
     """After an impact on surface j at s with the normal velocity wn (m/s) of the
     contact point relative to the boundary before it: does the
     chattering it starts settle (an inelastic contact with a
-    wall whose rebound speed e |wn| is at most the landing speed, or the low-velocity
+    wall or the lid whose rebound speed e |wn| is at most the landing speed, or the low-velocity
     rule applied; e and the landing speed are the impact law's IM_E and IM_EB), or may
     its tail be summed (``chatter_tail``, ``accel`` the free flight's acceleration into
     the wall, m/s^2)? Sets EN_SETTLES (SETTLES_SLOW plus SETTLES_TAIL, the criteria met)
@@ -302,14 +302,12 @@ def settles(ctx, j, kind, s, wn, regime, accel):
     ctx[EN_LAST_S] = s
     ctx[EN_LAST_WN] = wn
     ctx[EN_LAST_REGIME] = regime
-    ctx[EN_SETTLES] = 0.0
-    if kind != LID:
-        flags = 0.0
-        if rebound_settles(e, ctx[IM_EB], wn, regime == ELASTIC):
-            flags += SETTLES_SLOW
-        if chatter_tail(e, wn, accel, ctx[OMEGA]):
-            flags += SETTLES_TAIL
-        ctx[EN_SETTLES] = flags
+    flags = 0.0
+    if rebound_settles(e, ctx[IM_EB], wn, regime == ELASTIC):
+        flags += SETTLES_SLOW
+    if chatter_tail(e, wn, accel, ctx[OMEGA]):
+        flags += SETTLES_TAIL
+    ctx[EN_SETTLES] = flags
 
 
 @jit

@@ -152,6 +152,7 @@ from .layout import (
     PHASE_PAUSE,
     PHASE_SAMPLE,
     ROLL,
+    S_A,
     S_FIRST,
     S_KIND,
     S_LAST,
@@ -189,6 +190,15 @@ from .layout import (
     VX_ZB,
     G,
     KernelError,
+)
+from .lid import (
+    lid_holds,
+    lid_motion,
+    lid_press,
+    lid_release,
+    lid_slip_end,
+    lid_wall_reach,
+    wall_gap,
 )
 from .loop import (
     SETTLES_CORNER,
@@ -258,6 +268,19 @@ def lab_state(ctx, p, walls, w, theta, s, sd, u3, roll):
     q1, q2, u1, u2 = centre_state(s, sd, f0, fp, f2, d1, d2, vb1, vb2, ctx[PH_R])
     spin = roll_spin(sd, fp, f2, ctx[PH_R]) if roll else u3
     return q1, q2, u1, u2, spin
+
+
+@jit
+def contact_lab(ctx, p, walls, j, theta, s, sd, u3, roll):
+    """:func:`lab_state` of a ball in contact with surface j: a wall, or the lid (s the
+    centre's x and sd its velocity relative to the boundary; the spin u3 as it is: a
+    ball rolls on the flat lid with no force, its slip within rounding of zero)."""
+    base = SURF + j * SURF_STRIDE
+    if ctx[base + S_KIND] != LID:
+        return lab_state(ctx, p, walls, wall_of(ctx, j), theta, s, sd, u3, roll)
+    q1, q2 = to_lab_frame(ctx, theta, s, ctx[base + S_A])
+    vb1, vb2, _, _ = boundary(ctx, theta)
+    return q1, q2, sd + vb1, vb2, u3
 
 
 @inline
@@ -392,7 +415,7 @@ def chatter_samples(ctx, p, walls, sout, srows):
     """The pending samples in [SM_FROM, SM_TO] of a ball that landed at the end of a
     summed chatter series, before the phase starts: the state at the impact, carried by
     the boundary, its spin kept (mode flight). True when all are written."""
-    w = wall_of(ctx, int(ctx[MC_CONTACT]))
+    j = int(ctx[MC_CONTACT])
     s, sd = ctx[MC_CONTACT + 1], ctx[MC_CONTACT + 2]
     roll = ctx[MC_MODE] == M_ROLL
     t, theta, u3 = ctx[EN_T], ctx[EN_THETA], ctx[EN_U3]
@@ -401,7 +424,7 @@ def chatter_samples(ctx, p, walls, sout, srows):
         if status != EMIT:
             return status == EMITTED
         angle = theta + ctx[OMEGA] * (ts - t)
-        q1, q2, u1, u2, _ = lab_state(ctx, p, walls, w, angle, s, sd, u3, roll)
+        q1, q2, u1, u2, _ = contact_lab(ctx, p, walls, j, angle, s, sd, u3, roll)
         write_sample(ctx, sout, ts, q1, q2, u1, u2, u3, M_FLIGHT)
 
 
@@ -427,7 +450,9 @@ def pending_samples(ctx, p, walls, sctx, sout, srows):
 @inline
 def chatter_accel(ctx, p, walls, w, mode, sgn, theta, s, sd, tau):
     """The acceleration (m/s^2) with which wall w presses the ball in contact mode
-    ``mode`` tau seconds after the impact."""
+    ``mode`` tau seconds after the impact (w < 0: the lid)."""
+    if w < 0:
+        return lid_press(ctx, theta + ctx[OMEGA] * tau)
     y0 = s + sd * tau
     return forces_of(ctx, p, walls, w, mode, sgn, theta + ctx[OMEGA] * tau, y0, sd)[2] / ctx[PH_M]
 
@@ -486,9 +511,14 @@ def land(ctx, p, walls, j, s, theta, u1, u2, u3, wn, elastic, tail, t):
     not met, -1 not made: after a contact phase's impact)."""
     e = ctx[IM_E]
     slow = rebound_settles(e, ctx[IM_EB], wn, elastic)
-    if not is_wall(ctx, j) or e >= 1.0 or not (slow or tail != 0):
+    if e >= 1.0 or not (slow or tail != 0):
         return
     rebound = e * abs(wn)
+    if ctx[SURF + j * SURF_STRIDE + S_KIND] == LID:
+        land_lid(ctx, p, walls, j, theta, u1, u3, rebound, e, slow, tail, t)
+        return
+    if not is_wall(ctx, j):
+        return
     w = wall_of(ctx, j)
     sd = s_dot(ctx, p, walls, w, theta, s, u1, u2)
     mode, sgn = mode_for(ctx, p, walls, w, theta, s, sd, u3)
@@ -509,6 +539,42 @@ def land(ctx, p, walls, j, s, theta, u1, u2, u3, wn, elastic, tail, t):
     set_contact(ctx, mode, float(j), s, sd, sgn, t, settle)
 
 
+@inline
+def lid_mode(ctx, vx, u3):
+    """(mode, slip sign) of a ball on the lid moving at vx (m/s) relative to it with spin
+    u3: the slip of its top is vx - r u3; rolling when it vanishes (to rounding: flat,
+    static friction holds it with no force)."""
+    r = ctx[IM_R]
+    slip = vx - r * u3
+    if abs(slip) <= 1e-12 + 1e-9 * (abs(vx) + r * abs(u3)):
+        return M_ROLL, 0.0
+    return M_SLIDE, (1.0 if slip > 0.0 else -1.0)
+
+
+@jit
+def land_lid(ctx, p, walls, j, theta, u1, u3, rebound, e, slow, tail, t):
+    """:func:`land` on the lid (surface j), where it presses the ball
+    (:mod:`billiard.kernels.lid`): the contact's s is the centre's x in the boundary's
+    frame, its s_dot the velocity along x relative to the boundary."""
+    if not lid_holds(ctx):
+        return
+    a = lid_press(ctx, theta)
+    if not a > 0.0:
+        return
+    px, _, _, _ = boundary_frame(ctx, theta, ctx[EN_Q1], ctx[EN_Q2], 0.0, 0.0)
+    vx = u1 - boundary(ctx, theta)[0]
+    mode, sgn = lid_mode(ctx, vx, u3)
+    if tail != 0:
+        tau = summed(ctx, p, walls, -1, mode, sgn, theta, px, vx, rebound, e)
+        if tau != NOT_SUMMED:
+            total, error = compensated_add(ctx[EN_CLOCK], ctx[EN_CLOCK_ERR], tau)
+            set_contact(ctx, mode, float(j), px, vx, sgn, total + error, total + error)
+            return
+    if not slow:
+        return
+    set_contact(ctx, mode, float(j), px, vx, sgn, t, t + 2.0 * rebound / (a * (1.0 - e)))
+
+
 @jit
 def end_chatter(ctx, p, walls, until):
     """A ball that landed at the end of a summed chatter series (its phase starts later
@@ -519,13 +585,13 @@ def end_chatter(ctx, p, walls, until):
     t_start = ctx[MC_CONTACT + 4]
     if t_start > until:
         return False
-    w = wall_of(ctx, int(ctx[MC_CONTACT]))
+    j = int(ctx[MC_CONTACT])
     tau = t_start - ctx[EN_T]
     theta = (ctx[EN_THETA] + ctx[OMEGA] * tau) % (2.0 * math.pi)
     u3 = ctx[EN_U3]
     roll = ctx[MC_MODE] == M_ROLL
-    q1, q2, u1, u2, _ = lab_state(
-        ctx, p, walls, w, theta, ctx[MC_CONTACT + 1], ctx[MC_CONTACT + 2], u3, roll
+    q1, q2, u1, u2, _ = contact_lab(
+        ctx, p, walls, j, theta, ctx[MC_CONTACT + 1], ctx[MC_CONTACT + 2], u3, roll
     )
     set_ball(ctx, t_start, theta, q1, q2, u1, u2, u3, ctx[EN_Q3] + u3 * tau)
     ctx[EN_CLOCK] = t_start
@@ -961,9 +1027,9 @@ def impact_from_contact(ctx, p, walls, out, other, index, t, tau, theta, q3):
 
 
 @jit
-def start_phase(ctx, p, walls, until, sout, srows):
-    """Set up the phase of the ball in contact (up to ``run_phase``): -1, or the status
-    that ends the run first."""
+def reach_start(ctx, p, walls, until, sout, srows):
+    """Take the ball in contact to its phase's start (the end of a summed chatter
+    series, its samples): -1, or the status that ends the run first."""
     if ctx[EN_T] < ctx[MC_CONTACT + 4]:
         if sampling(ctx) and ctx[SM_DONE] == 0.0:
             # the samples up to the phase's start (see chatter_samples)
@@ -980,10 +1046,21 @@ def start_phase(ctx, p, walls, until, sout, srows):
                 ctx[SM_K] = ctx[SM_MARK]
             return TIME_LIMIT
     t0 = ctx[EN_T]
-    end_at = deadline(ctx, until)
-    if t0 >= end_at:
+    if t0 >= deadline(ctx, until):
         ctx[MC_FINAL] = t0
         return IN_CONTACT
+    return -1
+
+
+@jit
+def start_phase(ctx, p, walls, until, sout, srows):
+    """Set up the phase of the ball in contact (up to ``run_phase``): -1, or the status
+    that ends the run first."""
+    code = reach_start(ctx, p, walls, until, sout, srows)
+    if code >= 0:
+        return code
+    t0 = ctx[EN_T]
+    end_at = deadline(ctx, until)
     j = int(ctx[MC_CONTACT])
     w = wall_of(ctx, j)
     roll = ctx[MC_MODE] == M_ROLL
@@ -1207,6 +1284,114 @@ def contact_step(ctx, p, walls, out, cout, until, sout, srows):
     return finish_phase(ctx, p, walls, out, cout, until, status)
 
 
+# ---------------------------------------------------------------------- the lid
+
+
+@inline
+def lid_start(ctx):
+    """(px0, vx0, spin, slip sign) at the start of the phase on the lid."""
+    return ctx[MC_CONTACT + 1], ctx[MC_CONTACT + 2], ctx[EN_U3], ctx[MC_CONTACT + 3]
+
+
+@inline
+def lid_row(ctx, p, walls, cout, kind, tau, reason):
+    """The row of the phase on the lid tau after its start (``kind`` 1.0: cut), the
+    surface the lid, no other; returns the state at its end (q1, q2, u1, u2, u3, the
+    angle turned, theta)."""
+    j = int(ctx[MC_CONTACT])
+    px0, vx0, w0, sgn = lid_start(ctx)
+    theta0 = ctx[EN_THETA]
+    theta = (theta0 + ctx[OMEGA] * tau) % (2.0 * math.pi)
+    px, vx, u3, turned = lid_motion(ctx, theta0, px0, vx0, w0, sgn, tau)
+    o = contact_row(ctx, cout, kind, ctx[MC_CONTACT + 4], ctx[EN_T] + tau, j, -1.0, ctx[MC_MODE],
+                    reason, ctx[MC_CONTACT + 5])  # fmt: skip
+    q1, q2, u1, u2, _ = contact_lab(ctx, p, walls, j, theta0, px0, vx0, w0, False)
+    row_state(cout, o + 9, q1, q2, u1, u2, w0)
+    q1, q2, u1, u2, _ = contact_lab(ctx, p, walls, j, theta, px, vx, u3, False)
+    row_state(cout, o + 14, q1, q2, u1, u2, u3)
+    return q1, q2, u1, u2, u3, turned, theta
+
+
+@inline
+def lid_cut(ctx, p, walls, cout, tau):
+    """The row of the phase on the lid cut tau after its start (``end`` = ``cut``); the
+    engine's state and sample count stay at its start."""
+    lid_row(ctx, p, walls, cout, 1.0, tau, END_CUT)
+    ctx[MC_PHASE_ON] = PHASE_OFF
+    if sampling(ctx):
+        ctx[SM_K] = ctx[SM_MARK]
+
+
+@jit
+def lid_step(ctx, p, walls, out, cout, until, sout, srows):
+    """The ball pressed against the lid (:mod:`billiard.kernels.lid`), to the phase's
+    end in closed form: the lid releases it (N = 0: ``lift-off``, a grazing start), it
+    stops slipping (``roll``, a rolling phase follows), or it reaches a wall (an impact
+    from contact, the wall-lid corner's hold). -1 when the run goes on, else the status
+    that ends this call (SAMPLES_FULL: on from its next sample at the next call; PAUSED
+    after a cut asked for by MC_PHASE_ON = PHASE_CUT, at its last sample)."""
+    on = ctx[MC_PHASE_ON]
+    if on == PHASE_CUT:
+        lid_cut(ctx, p, walls, cout, ctx[PH_TAU])
+        return PAUSED
+    if on == PHASE_OFF:
+        code = reach_start(ctx, p, walls, until, sout, srows)
+        if code >= 0:
+            return code
+        ctx[PH_TAU] = 0.0
+        ctx[PH_NEXT] = first_sample(ctx, ctx[EN_T], until)
+        ctx[MC_PHASE_ON] = PHASE_ON
+    j = int(ctx[MC_CONTACT])
+    t0, theta0 = ctx[EN_T], ctx[EN_THETA]
+    px0, vx0, w0, sgn = lid_start(ctx)
+    # the phase's end, each event in closed form (the wall's by bisection of its gap)
+    end = lid_release(ctx, theta0)
+    reason = END_LIFT_OFF
+    if sgn != 0.0:
+        tau = lid_slip_end(ctx, theta0, vx0 - ctx[IM_R] * w0, end)
+        if tau < end:
+            end, reason = tau, END_ROLL
+    tau = lid_wall_reach(ctx, p, walls, j, theta0, px0, vx0, w0, sgn, end)
+    if tau <= end:
+        end, reason = tau, END_IMPACT
+    limit = until - t0
+    while ctx[PH_NEXT] <= pmin(end, limit):
+        tau = ctx[PH_NEXT]
+        px, vx, u3, _ = lid_motion(ctx, theta0, px0, vx0, w0, sgn, tau)
+        q1, q2, u1, u2, _ = contact_lab(ctx, p, walls, j, theta0 + ctx[OMEGA] * tau, px, vx, u3,
+                                        False)  # fmt: skip
+        write_sample(ctx, sout, t0 + tau, q1, q2, u1, u2, u3, ctx[MC_MODE])
+        ctx[PH_TAU] = tau
+        ctx[PH_NEXT] = next_sample(ctx, t0, until)
+        if int(ctx[SM_ROW]) == srows:
+            return SAMPLES_FULL
+    if end > limit:
+        lid_cut(ctx, p, walls, cout, limit)
+        return TIME_LIMIT
+    ctx[MC_PHASE_ON] = PHASE_OFF
+    mode, t_start = ctx[MC_MODE], ctx[MC_CONTACT + 4]
+    total, error = compensated_add(ctx[EN_CLOCK], ctx[EN_CLOCK_ERR], end)
+    q1, q2, u1, u2, u3, turned, theta = lid_row(ctx, p, walls, cout, 0.0, end, reason)
+    t = total + error
+    cout[int(ctx[MC_CROW] - 1.0) * CCOL + 3] = t  # the compensated clock's end
+    q3 = ctx[EN_Q3] + turned
+    set_ball(ctx, t, theta, q1, q2, u1, u2, u3, q3)
+    end_phase(ctx, mode, t_start, end, total, error)
+    to_flight(ctx)
+    if reason == END_ROLL:
+        px, _, _, _ = boundary_frame(ctx, theta, q1, q2, 0.0, 0.0)
+        vx = u1 - boundary(ctx, theta)[0]
+        set_contact(ctx, M_ROLL, float(j), px, vx, 0.0, t, t)
+    elif reason == END_IMPACT:
+        px, py, _, _ = boundary_frame(ctx, theta, q1, q2, 0.0, 0.0)
+        wall = wall_gap(ctx, p, walls, px, py)[1]
+        impact_from_contact(ctx, p, walls, out, wall if wall < j else wall - 1, j, t, end,
+                            theta, q3)  # fmt: skip
+    # released (lift-off): in flight at the lid with no normal speed relative to it, its
+    # acceleration away from the lid opens the gap (a grazing start)
+    return -1
+
+
 @jit
 def run_machine(ctx, p, walls, nears, out, rows, cout, crows, sctx, sout, srows):
     """Advance the trajectory until impact number ``ctx[EN_TARGET]``: ``rows`` impact
@@ -1288,6 +1473,8 @@ def run_machine(ctx, p, walls, nears, out, rows, cout, crows, sctx, sout, srows)
             continue
         if mode == M_HELD:
             code = hold_step(ctx, p, walls, cout, until, sout, srows)
+        elif ctx[SURF + int(ctx[MC_CONTACT]) * SURF_STRIDE + S_KIND] == LID:
+            code = lid_step(ctx, p, walls, out, cout, until, sout, srows)
         else:
             code = contact_step(ctx, p, walls, out, cout, until, sout, srows)
         if code >= 0:

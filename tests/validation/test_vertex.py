@@ -368,8 +368,9 @@ def vertex_family_draw(seed: int) -> dict:
 
 @pytest.mark.parametrize("seed", range(120))
 def test_a_random_vertically_shaken_wedge_never_collapses_in_its_vertex(seed):
-    """Every draw runs to its 2 s limit or out of the open wedge; a ball pressed against
-    the lid alone (which holds no ball) stops with that reason. A ball that meets one
+    """Every draw runs to its 2 s limit or out of the open wedge, none stopped as a
+    collapse: a ball pressed against the lid alone is held by it (seeds 2, 20, 65 and 78
+    stopped there before, "pressed against the lid"). A ball that meets one
     wall and the other at one instant makes one impact with both normals (the series
     of impacts there, resolved at once): before, the series was followed impact by
     impact, up to 47 rows at one instant with impulses down to 1e-20 N s, and one draw
@@ -378,10 +379,7 @@ def test_a_random_vertically_shaken_wedge_never_collapses_in_its_vertex(seed):
 
     sc = with_values(scene_from_draw(vertex_family_draw(seed)), {"run.duration": 2.0})
     result = simulate(sc, collisions=100_000)
-    if result.status is Status.COLLAPSE:
-        assert "pressed against the lid" in result.stop_reason, result.stop_reason
-    else:
-        assert result.status.finished or result.status is Status.ESCAPED, result.message
+    assert result.status.finished or result.status is Status.ESCAPED, result.message
     columns = result.columns
     assert same_time_runs(columns["t"]) <= 3
     impulse = np.maximum(np.abs(columns["Rn"]), np.abs(columns["Rt"]))
