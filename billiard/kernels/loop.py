@@ -74,6 +74,7 @@ from .layout import (
     G,
     KernelError,
 )
+from .lid import lid_holds
 from .locate import locate
 from .rules import COLLAPSE_COUNT, COLLAPSE_SPAN, ZERO_FLIGHT_LIMIT
 from .rules import compensated_add as _compensated_add
@@ -189,7 +190,7 @@ def impact(ctx, p, walls, out, row, tau, j, q1, q2, u1, u2, theta, s, z):
         # under contact phases a contact without impulse is no impact: no row, nothing
         # counted; the ball goes on from it, or lands
         no_impulse(ctx, t, theta, q1, q2, n1, n2, n3, q3, total, error, tau, j)
-        settles(ctx, j, s, wn, regime, accel)
+        settles(ctx, j, kind, s, wn, regime, accel)
         return True
     # commit
     ctx[EN_NO_ROW] = 0.0
@@ -207,7 +208,7 @@ def impact(ctx, p, walls, out, row, tau, j, q1, q2, u1, u2, theta, s, z):
         ctx[EN_FAULT] = 1.0
     if ctx[EN_LAND_ON] != 0.0:
         i = ctx[EN_LAST_J]
-        settles(ctx, j, s, wn, regime, accel)
+        settles(ctx, j, kind, s, wn, regime, accel)
         if corner:
             ctx[EN_SETTLES] += SETTLES_CORNER * (i + 1.0)
     return True
@@ -288,7 +289,7 @@ def no_impulse(ctx, t, theta, q1, q2, u1, u2, u3, q3, total, error, tau, j):
 
 
 @inline
-def settles(ctx, j, s, wn, regime, accel):
+def settles(ctx, j, kind, s, wn, regime, accel):
     """After an impact on surface j at s with the normal velocity wn (m/s) of the
     contact point relative to the boundary before it: does the
     chattering it starts settle (an inelastic contact with a
@@ -302,6 +303,10 @@ def settles(ctx, j, s, wn, regime, accel):
     ctx[EN_LAST_S] = s
     ctx[EN_LAST_WN] = wn
     ctx[EN_LAST_REGIME] = regime
+    ctx[EN_SETTLES] = 0.0
+    if kind == LID and not lid_holds(ctx):
+        # the lid holds no ball in this scene (machine.land_lid): the flight goes on
+        return
     flags = 0.0
     if rebound_settles(e, ctx[IM_EB], wn, regime == ELASTIC):
         flags += SETTLES_SLOW
