@@ -541,6 +541,13 @@ def _walk(
         age += 1
         if iterations > 4:
             column = None  # a stale column slows the corrector: a fresh one next step
+        if _through_one(problem, current, nxt):
+            # a multiplier passed +1: beside a branch point dF/dx is near singular and the
+            # tangent, -(dF/dx)^-1 dF/dlam, takes any error of a column taken elsewhere
+            # over that vanishing singular value (the parabola's second branch point:
+            # a fold, the walk turned back); so the tangent here gets its own column
+            column, age = problem.lambda_column(nxt.z), 0
+            nxt.big[:, -1] = column
         new_tau = _tangent(nxt.big, tau)
         for code, point in _events(problem, current, nxt, tau, new_tau):
             here.append((point, code))
@@ -552,6 +559,13 @@ def _walk(
         tau, current = new_tau, nxt
         h = min(h * (1.5 if iterations <= 3 else 1.0), 4 * h0)
     return here
+
+
+def _through_one(problem: _Problem, a: _Point, b: _Point) -> bool:
+    """Has a multiplier passed +1 between a and b (det(J - I) changed sign)?"""
+    idx = problem.idx
+    fa, fb = (test_functions(p.jac[np.ix_(idx, idx)])[0] for p in (a, b))
+    return bool(np.sign(fa) != np.sign(fb))
 
 
 def _events(

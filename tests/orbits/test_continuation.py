@@ -11,6 +11,7 @@ from billiard.orbits.bifurcation import BIFURCATIONS
 from billiard.orbits.continuation import continue_branch, continue_orbit
 from billiard.orbits.newton import find_orbit
 from billiard.orbits.returnmap import OrbitError, ReturnMap
+from billiard.scene.scene import load_scene
 from tests.orbits import table
 
 
@@ -238,3 +239,23 @@ def test_continue_orbit_switch_gives_each_point_its_period():
     assert np.array_equal(period, np.where(branch == 0, 1, 2))
     gamma = ds["drive_amplitude"].values / table.amplitude(1.0)
     assert gamma[branch == 1].min() == pytest.approx(table.period_doubling(E), rel=1e-8)
+
+
+@pytest.fixture(scope="module")
+def parabola():
+    """The parabola's period-one orbit (two impacts) continued from 5.4 Hz down to 4.75."""
+    scene = load_scene("parabola-5.4hz")
+    start = find_orbit(scene, 2)
+    return scene, start, continue_branch(scene, start, "drive.frequency", (4.75, 5.4), points=200)
+
+
+def test_the_parabolas_branch_goes_on_through_both_branch_points(parabola):
+    """The mirror-symmetric orbit loses its stability through a multiplier +1 near 5.146 Hz
+    and regains it near 4.793 Hz, the branch going on downwards through both (branch
+    points, not folds), to the span's end."""
+    _, _, br = parabola
+    assert [round(f, 3) for f in br.points("branch_point")] == [5.146, 4.793]
+    assert br.points("fold") == []
+    assert min(br.values) < 4.76
+    steps = np.diff(br.values)
+    assert np.all(steps < 0) or np.all(steps > 0)  # it never turned back in the key
