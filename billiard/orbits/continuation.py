@@ -17,9 +17,9 @@ the next.
 Between two points a test function that changes sign, or an impact sequence that differs,
 is located by bisection along the chord between them, each trial point corrected back
 onto the branch: a test function's zero by the Illinois method, a change of sequence by
-bisection, to about 1e-13 of the chord. A branch point (two branches crossing) is located
-less sharply, as the corrector's system is singular there (about 3e-5 of the key,
-measured on the parabola).
+bisection, to about 1e-13 of the chord. At a branch point (two branches crossing) the
+corrector's system is singular; :func:`_zero` says how a symmetric orbit's is located
+all the same (to 2e-10 of the key, measured on the parabola).
 
 At a period doubling the branch of period 2N born there can be switched onto
 (``switch``; :func:`_switch` says how) and continued in turn.
@@ -70,6 +70,11 @@ COLUMN_AGE = 5
 STEEP = 0.05
 #: Shortest step, relative to the first, before a direction is given up.
 MIN_STEP = 1e-6
+#: The residual |F| (relative to 1 + |x|, as NEWTON_TOL) at which a point beside a branch
+#: point counts as on the branch: the engine's map repeats itself to about 1e-15, and
+#: there the corrector's steps stall at that noise over the vanishing singular value of
+#: its system while F stays at it (measured on the parabola: 3e-16 to 7e-14).
+RESIDUAL_FLOOR = 1e-13
 #: Offsets along the doubling's eigenvector (halved each time) tried for the first point
 #: of the period-2N branch.
 SWITCH_TRIES = 8
@@ -222,22 +227,34 @@ class _Problem:
         big = np.hstack([dfx / sx[:, None], column[:, None]])
         return res[self.idx] / sx, big, records, rm, jac
 
-    def correct(self, z0: np.ndarray, normal: np.ndarray, column: np.ndarray | None = None):
+    def correct(
+        self,
+        z0: np.ndarray,
+        normal: np.ndarray,
+        column: np.ndarray | None = None,
+        floor: bool = False,
+    ):
         """Newton's method on F = 0 and normal . (z - z0) = 0; returns (point,
         iterations) or raises OrbitError. The lam column (taken at z0 unless given) is
         held through the iterations: it only steers them, and each costs two engines.
         A normal along lam alone holds lam at z0's, bit for bit: every iteration then
-        runs the one engine built for that value."""
+        runs the one engine built for that value. With ``floor``, an iterate whose
+        residual is down to :data:`RESIDUAL_FLOOR` is taken too, its step unfinished:
+        beside a branch point (see :func:`_zero`)."""
         z = z0.copy()
         held = bool(np.all(normal[:-1] == 0.0))
         if column is None:
             column = self.lambda_column(z)
         for it in range(1, MAX_CORRECTOR + 1):
             f, big, records, rm, jac = self.system(z, column)
+            if floor and it > 1:
+                y = z[:-1] * self.scale[:-1]
+                if np.max(np.abs(f * self.scale[:-1]) / (1.0 + np.abs(y))) <= RESIDUAL_FLOOR:
+                    return _Point(z, records, jac, rm, big), it
             a = np.vstack([big, normal])
             b = np.concatenate([f, [normal @ (z - z0)]])
             try:
-                dz = -np.linalg.solve(a, b)
+                dz = -(_solve_to_floor(a, b) if floor else np.linalg.solve(a, b))
             except np.linalg.LinAlgError:
                 raise OrbitError("the corrector's system is singular") from None
             z = z + dz
@@ -250,6 +267,17 @@ class _Problem:
                 # sequence exactly) without another engine
                 return _Point(z, records, jac, rm, big), it
         raise OrbitError("the corrector did not converge")
+
+
+def _solve_to_floor(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """The solution of a x = b without the parts of b (along a's left singular vectors)
+    already at :data:`RESIDUAL_FLOOR`: beside a branch point such a part, over a
+    vanishing singular value, would throw x off the branch (a symmetric orbit off its
+    symmetry) by rounding alone; elsewhere it is a step below rounding."""
+    u, sv, vt = np.linalg.svd(a)
+    c = u.T @ b
+    keep = np.abs(c) > RESIDUAL_FLOOR
+    return vt.T[:, keep] @ (c[keep] / sv[keep])
 
 
 def _tangent(big: np.ndarray, previous: np.ndarray | None) -> np.ndarray:
@@ -304,14 +332,17 @@ def _orbit(problem: _Problem, p: _Point) -> tuple[float, Orbit]:
     return lam, orbit
 
 
-def _on_chord(problem: _Problem, a: _Point, chord: np.ndarray, sigma: float) -> _Point | None:
+def _on_chord(
+    problem: _Problem, a: _Point, chord: np.ndarray, sigma: float, floor: bool = False
+) -> _Point | None:
     """The branch's point on the hyperplane orthogonal to ``chord`` at a + sigma chord,
-    or None where the corrector finds no orbit of the branch's wall sequence."""
+    or None where the corrector finds no orbit of the branch's wall sequence. ``floor``:
+    as :meth:`_Problem.correct`'s."""
     normal = chord / np.linalg.norm(chord)
     if abs(normal[-1]) >= STEEP:  # as the steps: the key held where the chord is steep
         normal = np.eye(len(normal))[-1]
     try:
-        return problem.correct(a.z + sigma * chord, normal)[0]
+        return problem.correct(a.z + sigma * chord, normal, floor=floor)[0]
     except OrbitError:
         return None
 
@@ -336,15 +367,29 @@ def _zero(problem: _Problem, a: _Point, b: _Point, k: int) -> _Point:
     """The zero of test function ``k`` on the chord a-b (its signs differ at a and b):
     the Illinois variant of regula falsi, which keeps the zero bracketed and converges
     superlinearly, to 1e-13 of the chord (or until its estimate stops moving, or the test
-    function is exactly zero); where a trial point has no orbit it bisects."""
+    function is exactly zero); where a trial point has no orbit it bisects.
+
+    A multiplier +1 (``k`` 0) may be a branch point, where two branches cross and the
+    corrector's system, on either hyperplane, is singular. Beside it the residual's part
+    along the vanishing singular direction is the map's rounding (about 1e-15), and
+    Newton's steps, that rounding over the singular value, stall at 1e-10 to 1e-7
+    (measured at 1e-9 of the key from the parabola's) and never pass the step test. So
+    for k 0 the corrector leaves out of its steps the parts of the residual already at
+    rounding (:func:`_solve_to_floor`), and takes a point once its residual is there
+    (``floor``): a symmetric orbit stays symmetric, and the parabola's two branch points
+    come out within 5e-13 to 2e-10 (relative) of the period doublings of its half-period
+    map, where Newton's method is regular (5e-5 without). Where the crossing is not
+    forced by a symmetry (a transcritical crossing) the chord's own error along that
+    direction is no rounding, is kept, and the zero is located less sharply."""
     idx = problem.idx
+    floor = k == 0
 
     def value(p: _Point) -> float:
         return float(test_functions(p.jac[np.ix_(idx, idx)])[k])
 
     chord = b.z - a.z
     lo, hi, f_lo, f_hi = 0.0, 1.0, value(a), value(b)
-    best, side, previous = a, 0, -1.0
+    best, best_f, side, previous = a, abs(f_lo), 0, -1.0
     for _ in range(BISECTIONS):
         if hi - lo <= 1e-13:
             break
@@ -354,13 +399,15 @@ def _zero(problem: _Problem, a: _Point, b: _Point, k: int) -> _Point:
         if abs(sigma - previous) <= 1e-14:
             break  # the estimate has settled to rounding
         previous = sigma
-        point = _on_chord(problem, a, chord, sigma)
+        point = _on_chord(problem, a, chord, sigma, floor)
         if point is None:
-            sigma, point = 0.5 * (lo + hi), _on_chord(problem, a, chord, 0.5 * (lo + hi))
+            sigma = 0.5 * (lo + hi)
+            point = _on_chord(problem, a, chord, sigma, floor)
             if point is None:
                 break
         f = value(point)
-        best = point
+        if abs(f) <= best_f:  # the point nearest the zero, should a trial point fail
+            best, best_f = point, abs(f)
         if f == 0.0:
             break
         if np.sign(f) == np.sign(f_lo):

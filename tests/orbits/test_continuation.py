@@ -6,12 +6,14 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from scipy.optimize import brentq
 
 from billiard.orbits.bifurcation import BIFURCATIONS
 from billiard.orbits.continuation import continue_branch, continue_orbit
+from billiard.orbits.jacobian import map_jacobian
 from billiard.orbits.newton import find_orbit
 from billiard.orbits.returnmap import OrbitError, ReturnMap
-from billiard.scene.scene import load_scene
+from billiard.scene.scene import load_scene, with_values
 from tests.orbits import table
 
 
@@ -259,3 +261,63 @@ def test_the_parabolas_branch_goes_on_through_both_branch_points(parabola):
     assert min(br.values) < 4.76
     steps = np.diff(br.values)
     assert np.all(steps < 0) or np.all(steps > 0)  # it never turned back in the key
+
+
+#: (t, s, v1, v2, omega) mirrored in the parabola's axis
+MIRROR = np.diag([1.0, -1.0, -1.0, 1.0, -1.0])
+
+
+def _half_period_orbit(scene, x: np.ndarray) -> tuple[np.ndarray, float]:
+    """The parabola's mirror-symmetric orbit as a fixed point of its half-period map, by
+    Newton's method from ``x``: (its state, det(J_H + I)).
+
+    Driven horizontally, the parabola is symmetric under the mirror M (q1 -> -q1) with
+    half a drive period's shift (D(t + T/2) = -D(t)): H(x) = M P(x) - (T/2) e_t maps the
+    symmetric orbit's first impact onto itself, P^2 = (M H)^2 = H^2 there, and P^2's
+    multipliers are the squares of H's. A multiplier +1 of P^2 with the branch going on
+    is a multiplier -1 of H: a period doubling of H, where det(J_H + I) has a simple
+    zero and Newton's method on H(x) = x stays regular."""
+    rm = ReturnMap(scene, 1)
+    for _ in range(30):
+        landing, records = rm(x, 0)
+        image = landing.x.copy()
+        image[0] -= rm.period / 2
+        jac = MIRROR @ map_jacobian(rm, x, 0, records)
+        step = -np.linalg.solve(jac - np.eye(5), MIRROR @ image - x)
+        x = x + step
+        if np.max(np.abs(step) / (1 + np.abs(x))) < 1e-14:
+            break
+    landing, records = rm(x, 0)
+    jac = MIRROR @ map_jacobian(rm, x, 0, records)
+    return x, float(np.linalg.det(jac + np.eye(5)))
+
+
+def _half_period_doubling(scene, x: np.ndarray, lo: float, hi: float) -> float:
+    """The drive frequency in (lo, hi) (Hz) where H has the multiplier -1, its orbit
+    walked there from ``x`` (at ``hi``) in steps of 0.01 Hz."""
+    for f in np.arange(hi, lo, -0.01):
+        x, _ = _half_period_orbit(with_values(scene, {"drive.frequency": f}), x)
+    walked = {"x": x}
+
+    def det(f: float) -> float:
+        walked["x"], value = _half_period_orbit(
+            with_values(scene, {"drive.frequency": f}), walked["x"]
+        )
+        return value
+
+    return brentq(det, lo, lo + 0.02, xtol=1e-14, rtol=1e-15)
+
+
+def test_the_parabolas_branch_points_are_located_to_1e_8(parabola):
+    """The two branch points, where the corrector's system is singular, against the
+    period doublings of the half-period map (regular there), and their multiplier 1."""
+    scene, start, br = parabola
+    found = br.points("branch_point")
+    assert len(found) == 2
+    for f in found:
+        assert f == pytest.approx(
+            _half_period_doubling(scene, start.x, round(f, 2) - 0.01, 5.4), rel=1e-8
+        )
+    for o, code in zip(br.orbits, br.bifurcation, strict=True):
+        if code == BIFURCATIONS.index("branch_point"):
+            assert np.min(np.abs(o.multipliers - 1.0)) < 1e-8
