@@ -478,7 +478,9 @@ def _cluster_sweep(side: int, grow_after: float | None, workers: int = 4) -> dic
 def growing_cluster(quick: bool) -> dict:
     """A sweep on a cluster that starts with one worker and gains three after 10 s,
     against the same sweep on one worker throughout."""
-    side = 40 if quick else 70
+    # one worker runs some 2e6 impacts/s: the map takes 15-30 s on it, well beyond the
+    # 10 s after which the cluster grows
+    side = 180 if quick else 250
     one = _cluster_sweep(side, None)
     grown = _cluster_sweep(side, 10.0)
     return {"one": one, "grown": grown, "ratio": grown["wall"] / one["wall"],

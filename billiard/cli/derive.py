@@ -49,8 +49,8 @@ def cmd_derive(args: argparse.Namespace) -> int:
                 derived=derived,
             )
         except (CurveExpressionError, CurveDerivationError) as exc:
-            if derived:
-                _print_chain(derived[0])
+            # a refusal is one line on stderr and nothing on stdout: the chain derived so
+            # far goes to the report, when one is asked for
             if report is not None and derived:
                 _write_report(derived[0], args, report, refusal=str(exc))
             raise UserError(str(exc)) from None

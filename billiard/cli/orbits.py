@@ -95,7 +95,7 @@ def cmd_orbits(args: argparse.Namespace) -> int:
         f"{'stable' if start.stable else 'unstable'}, multipliers "
         + ", ".join(_complex(m) for m in start.multipliers)
     )
-    branch = continue_branch(scene, start, key, (lo, hi), points=args.points)
+    branch = continue_branch(scene, start, key, (lo, hi), points=args.points, switch=args.switch)
     arrays = branch.arrays()
     out.mkdir(parents=True, exist_ok=True)
     unit = key_unit(key)
@@ -114,6 +114,16 @@ def cmd_orbits(args: argparse.Namespace) -> int:
     for name in BIFURCATIONS[1:]:
         for v in branch.points(name):
             print(f"orbits: {name.replace('_', ' ')} at {key} = {v:.12g} {unit}")
+    for k in sorted(set(branch.segment) - {0}):
+        rows = [i for i, s in enumerate(branch.segment) if s == k]
+        first, period = rows[0], branch.orbits[rows[0]].impacts
+        print(
+            f"orbits: switched onto the branch of {_impacts(period)} at {key} = "
+            f"{branch.values[first]:.12g} {unit}: {len(rows)} points"
+        )
+        for name in BIFURCATIONS[1:]:
+            for v in branch.points(name, k):
+                print(f"orbits:   {name.replace('_', ' ')} at {key} = {v:.12g} {unit}")
     print(f"orbits: wrote {nc} and {png}")
     return 0
 
@@ -150,7 +160,8 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
         description="Find the period-N orbit (N impacts) of a scene by Newton's method on "
         "its return map, with its Floquet multipliers, and continue it through a scene key "
         "by pseudo-arclength continuation, locating folds, period doublings, "
-        "Neimark-Sacker points and grazing. Writes DIR/branch.nc and DIR/branch.png. "
+        "Neimark-Sacker points and grazing (with --switch, continuing the period-2N branches "
+        "born at period doublings). Writes DIR/branch.nc and DIR/branch.png. "
         'Needs contact.model = "impacts". See docs/orbits.md.',
     )
     p.add_argument("scene", help="built-in scene name or a scene .toml file")
@@ -182,6 +193,12 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
         "(default all; e.g. t,v2 for a ball bouncing straight up)",
     )
     p.add_argument("--points", type=int, default=200, help="most points of the branch")
+    p.add_argument(
+        "--switch",
+        action="store_true",
+        help="at each period doubling, switch onto the branch of twice the period born "
+        "there and continue it too (branch.nc's period and branch tell them apart)",
+    )
     p.add_argument("--over", metavar="SWEEP_DIR", help="draw the branch over this sweep's diagram")
     p.add_argument("--out", metavar="DIR", help="output folder (default runs/orbits-SCENE)")
     add_set_argument(p, "override a key of the scene (repeatable)")

@@ -101,6 +101,8 @@ from .layout import (
     LID,
     LID_LABEL,
     LINE,
+    LOC_KIND,
+    LOC_RK4,
     M_FLIGHT,
     M_HELD,
     M_ROLL,
@@ -239,6 +241,14 @@ CORNER_GAP = 1e-9
 CORNER_NONE = -1
 CORNER_ENDS = 1
 CORNER_REST = 0
+#: Normal speed (m/s) given to a ball leaving a surface under the paper's fixed-step
+#: search alone (method "rk4", ``LOC_KIND`` = LOC_RK4). The event locator starts a flight
+#: that grazes the surface it leaves (:func:`billiard.kernels.locate.locate`); the
+#: fixed-step search has no such start: a ball leaving with no normal speed opens the gap
+#: as tau^2 or tau^3, within rounding of the search's distances over a step, and it met
+#: the surface again at once until the departures stop (the wedge under phases, rk4,
+#: impact 378). 1e-6 m/s moves it 1e-10 m in a step of 1e-4 s.
+RK4_DEPARTURE_SPEED = 1e-6
 #: accepted steps of a phase between two returns to Python (a stop request is looked
 #: at, progress reported): some milliseconds
 PAUSE_STEPS = 1000.0
@@ -473,6 +483,24 @@ def summed(ctx, p, walls, w, mode, sgn, theta, s, sd, v, e):
 
 
 @inline
+def departure_speed(ctx):
+    """The normal speed (m/s) a ball leaving a surface is given: none, except under the
+    fixed-step search (RK4_DEPARTURE_SPEED)."""
+    return RK4_DEPARTURE_SPEED if ctx[LOC_KIND] == LOC_RK4 else 0.0
+
+
+@inline
+def push_off(ctx, nx, ny):
+    """Under the fixed-step search, add :func:`departure_speed` along the unit vector
+    (nx, ny) to the ball's velocity (a departure from a surface or two)."""
+    kick = departure_speed(ctx)
+    if kick > 0.0:
+        norm = math.sqrt(nx * nx + ny * ny)
+        ctx[EN_U1] = ctx[EN_U1] + kick * nx / norm
+        ctx[EN_U2] = ctx[EN_U2] + kick * ny / norm
+
+
+@inline
 def leave_wall(ctx, p, walls, w, s, theta):
     """A settling impact where the wall does not press the ball (N <= 0): it flies on,
     with the relative normal speed the impact left, or none (after an impact with e = 0,
@@ -486,10 +514,11 @@ def leave_wall(ctx, p, walls, w, s, theta):
     nx, ny = -fp * c, c
     vb1, vb2, _, _ = boundary(ctx, theta)
     vn = (ctx[EN_U1] - vb1) * nx + (ctx[EN_U2] - vb2) * ny
-    if vn >= 0.0:
+    leave = departure_speed(ctx)  # 0 but under the fixed-step search
+    if vn >= leave:
         return
-    ctx[EN_U1] = ctx[EN_U1] - vn * nx
-    ctx[EN_U2] = ctx[EN_U2] - vn * ny
+    ctx[EN_U1] = ctx[EN_U1] + (leave - vn) * nx
+    ctx[EN_U2] = ctx[EN_U2] + (leave - vn) * ny
 
 
 @jit
@@ -865,6 +894,8 @@ def corner_rest(ctx, p, walls, i, j, t):
         continue_on(ctx, p, walls, on, px, theta, u3, t)
     # left in flight, at rest relative to both surfaces: its acceleration relative to the
     # boundary takes it off both (a grazing start of the flight's locator)
+    if ctx[MC_MODE] == M_FLIGHT:
+        push_off(ctx, -math.sin(z_i) - math.sin(z_j), math.cos(z_i) + math.cos(z_j))
 
 
 @inline
@@ -964,6 +995,8 @@ def hold_step(ctx, p, walls, cout, until, sout, srows):
     # a ball released by both surfaces (mode flight) flies on at the boundary's
     # velocity: its acceleration relative to the boundary takes it off both (a grazing
     # start)
+    if ctx[MC_MODE] == M_FLIGHT:
+        push_off(ctx, -math.sin(za) - math.sin(zb), math.cos(za) + math.cos(zb))
     return -1
 
 
@@ -1189,6 +1222,8 @@ def finish_phase(ctx, p, walls, out, cout, until, status):
     if reason == END_LIFT_OFF or reason == END_WALL_END:
         # the centre is on the offset curve with a tangent velocity, the wall no longer
         # pressing it: the flight starts grazing the wall, its own equations lift it off
+        fp = walls[1][w](s1, p)
+        push_off(ctx, -fp, 1.0)
         to_flight(ctx)
     elif reason == END_JOIN:
         base = SURF + j * SURF_STRIDE

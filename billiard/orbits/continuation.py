@@ -17,9 +17,12 @@ the next.
 Between two points a test function that changes sign, or an impact sequence that differs,
 is located by bisection along the chord between them, each trial point corrected back
 onto the branch: a test function's zero by the Illinois method, a change of sequence by
-bisection, to about 1e-13 of the chord. A branch point (two branches crossing) is located
-less sharply, as the corrector's system is singular there (about 3e-5 of the key,
-measured on the parabola).
+bisection, to about 1e-13 of the chord. At a branch point (two branches crossing) the
+corrector's system is singular; :func:`_zero` says how a symmetric orbit's is located
+all the same (to 2e-10 of the key, measured on the parabola).
+
+At a period doubling the branch of period 2N born there can be switched onto
+(``switch``; :func:`_switch` says how) and continued in turn.
 """
 
 from __future__ import annotations
@@ -41,7 +44,7 @@ from billiard.orbits.bifurcation import (
 )
 from billiard.orbits.jacobian import map_jacobian
 from billiard.orbits.newton import NEWTON_TOL, Orbit, free_indices, stable
-from billiard.orbits.returnmap import STATE, OrbitError, ReturnMap
+from billiard.orbits.returnmap import STATE, OrbitError, ReturnMap, landing
 from billiard.scene.scene import SceneError, with_values
 
 __all__ = [
@@ -67,6 +70,14 @@ COLUMN_AGE = 5
 STEEP = 0.05
 #: Shortest step, relative to the first, before a direction is given up.
 MIN_STEP = 1e-6
+#: The residual |F| (relative to 1 + |x|, as NEWTON_TOL) at which a point beside a branch
+#: point counts as on the branch: the engine's map repeats itself to about 1e-15, and
+#: there the corrector's steps stall at that noise over the vanishing singular value of
+#: its system while F stays at it (measured on the parabola: 3e-16 to 7e-14).
+RESIDUAL_FLOOR = 1e-13
+#: Offsets along the doubling's eigenvector (halved each time) tried for the first point
+#: of the period-2N branch.
+SWITCH_TRIES = 8
 
 
 @dataclass
@@ -75,18 +86,31 @@ class Branch:
 
     ``key`` the scene key varied, ``values`` its values, ``orbits`` the orbits,
     ``bifurcation`` a code of :data:`~billiard.orbits.bifurcation.BIFURCATIONS` per point
-    (``none`` for a regular point), ``period`` N impacts."""
+    (``none`` for a regular point), ``period`` N impacts of the branch continued,
+    ``segment`` per point the branch it lies on: 0 the one continued, k >= 1 the k-th
+    period-2N branch switched onto at a period doubling (its points, from the doubling
+    outwards, follow the continued branch's)."""
 
     key: str
     period: int
     values: list[float] = field(default_factory=list)
     orbits: list[Orbit] = field(default_factory=list)
     bifurcation: list[int] = field(default_factory=list)
+    segment: list[int] = field(default_factory=list)
 
-    def points(self, code: str) -> list[float]:
-        """The key's values at the points of bifurcation ``code``."""
+    def add(self, lam: float, orbit: Orbit, code: int, segment: int = 0) -> None:
+        """Append a point."""
+        self.values.append(lam)
+        self.orbits.append(orbit)
+        self.bifurcation.append(code)
+        self.segment.append(segment)
+
+    def points(self, code: str, segment: int = 0) -> list[float]:
+        """The key's values at the points of bifurcation ``code`` on branch ``segment``
+        (0 the one continued)."""
         want = BIFURCATIONS.index(code)
-        return [v for v, b in zip(self.values, self.bifurcation, strict=True) if b == want]
+        rows = zip(self.values, self.bifurcation, self.segment, strict=True)
+        return [v for v, b, k in rows if b == want and k == segment]
 
     def arrays(self) -> dict[str, np.ndarray]:
         """The branch as arrays by the names of branch.nc (docs/orbits.md)."""
@@ -102,6 +126,9 @@ class Branch:
         out["multipliers_imag"] = mults.imag
         out["stable"] = np.array([o.stable for o in self.orbits], dtype=np.int8)
         out["bifurcation"] = np.array(self.bifurcation, dtype=np.int8)
+        # which branch a point lies on, and its period: a switched branch's are 2N
+        out["period"] = np.array([o.impacts for o in self.orbits], dtype=np.int32)
+        out["branch"] = np.array(self.segment, dtype=np.int32)
         return out
 
     def to_xarray(self) -> Any:
@@ -200,22 +227,34 @@ class _Problem:
         big = np.hstack([dfx / sx[:, None], column[:, None]])
         return res[self.idx] / sx, big, records, rm, jac
 
-    def correct(self, z0: np.ndarray, normal: np.ndarray, column: np.ndarray | None = None):
+    def correct(
+        self,
+        z0: np.ndarray,
+        normal: np.ndarray,
+        column: np.ndarray | None = None,
+        floor: bool = False,
+    ):
         """Newton's method on F = 0 and normal . (z - z0) = 0; returns (point,
         iterations) or raises OrbitError. The lam column (taken at z0 unless given) is
         held through the iterations: it only steers them, and each costs two engines.
         A normal along lam alone holds lam at z0's, bit for bit: every iteration then
-        runs the one engine built for that value."""
+        runs the one engine built for that value. With ``floor``, an iterate whose
+        residual is down to :data:`RESIDUAL_FLOOR` is taken too, its step unfinished:
+        beside a branch point (see :func:`_zero`)."""
         z = z0.copy()
         held = bool(np.all(normal[:-1] == 0.0))
         if column is None:
             column = self.lambda_column(z)
         for it in range(1, MAX_CORRECTOR + 1):
             f, big, records, rm, jac = self.system(z, column)
+            if floor and it > 1:
+                y = z[:-1] * self.scale[:-1]
+                if np.max(np.abs(f * self.scale[:-1]) / (1.0 + np.abs(y))) <= RESIDUAL_FLOOR:
+                    return _Point(z, records, jac, rm, big), it
             a = np.vstack([big, normal])
             b = np.concatenate([f, [normal @ (z - z0)]])
             try:
-                dz = -np.linalg.solve(a, b)
+                dz = -(_solve_to_floor(a, b) if floor else np.linalg.solve(a, b))
             except np.linalg.LinAlgError:
                 raise OrbitError("the corrector's system is singular") from None
             z = z + dz
@@ -228,6 +267,17 @@ class _Problem:
                 # sequence exactly) without another engine
                 return _Point(z, records, jac, rm, big), it
         raise OrbitError("the corrector did not converge")
+
+
+def _solve_to_floor(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """The solution of a x = b without the parts of b (along a's left singular vectors)
+    already at :data:`RESIDUAL_FLOOR`: beside a branch point such a part, over a
+    vanishing singular value, would throw x off the branch (a symmetric orbit off its
+    symmetry) by rounding alone; elsewhere it is a step below rounding."""
+    u, sv, vt = np.linalg.svd(a)
+    c = u.T @ b
+    keep = np.abs(c) > RESIDUAL_FLOOR
+    return vt.T[:, keep] @ (c[keep] / sv[keep])
 
 
 def _tangent(big: np.ndarray, previous: np.ndarray | None) -> np.ndarray:
@@ -282,14 +332,17 @@ def _orbit(problem: _Problem, p: _Point) -> tuple[float, Orbit]:
     return lam, orbit
 
 
-def _on_chord(problem: _Problem, a: _Point, chord: np.ndarray, sigma: float) -> _Point | None:
+def _on_chord(
+    problem: _Problem, a: _Point, chord: np.ndarray, sigma: float, floor: bool = False
+) -> _Point | None:
     """The branch's point on the hyperplane orthogonal to ``chord`` at a + sigma chord,
-    or None where the corrector finds no orbit of the branch's wall sequence."""
+    or None where the corrector finds no orbit of the branch's wall sequence. ``floor``:
+    as :meth:`_Problem.correct`'s."""
     normal = chord / np.linalg.norm(chord)
     if abs(normal[-1]) >= STEEP:  # as the steps: the key held where the chord is steep
         normal = np.eye(len(normal))[-1]
     try:
-        return problem.correct(a.z + sigma * chord, normal)[0]
+        return problem.correct(a.z + sigma * chord, normal, floor=floor)[0]
     except OrbitError:
         return None
 
@@ -314,15 +367,29 @@ def _zero(problem: _Problem, a: _Point, b: _Point, k: int) -> _Point:
     """The zero of test function ``k`` on the chord a-b (its signs differ at a and b):
     the Illinois variant of regula falsi, which keeps the zero bracketed and converges
     superlinearly, to 1e-13 of the chord (or until its estimate stops moving, or the test
-    function is exactly zero); where a trial point has no orbit it bisects."""
+    function is exactly zero); where a trial point has no orbit it bisects.
+
+    A multiplier +1 (``k`` 0) may be a branch point, where two branches cross and the
+    corrector's system, on either hyperplane, is singular. Beside it the residual's part
+    along the vanishing singular direction is the map's rounding (about 1e-15), and
+    Newton's steps, that rounding over the singular value, stall at 1e-10 to 1e-7
+    (measured at 1e-9 of the key from the parabola's) and never pass the step test. So
+    for k 0 the corrector leaves out of its steps the parts of the residual already at
+    rounding (:func:`_solve_to_floor`), and takes a point once its residual is there
+    (``floor``): a symmetric orbit stays symmetric, and the parabola's two branch points
+    come out within 5e-13 to 2e-10 (relative) of the period doublings of its half-period
+    map, where Newton's method is regular (5e-5 without). Where the crossing is not
+    forced by a symmetry (a transcritical crossing) the chord's own error along that
+    direction is no rounding, is kept, and the zero is located less sharply."""
     idx = problem.idx
+    floor = k == 0
 
     def value(p: _Point) -> float:
         return float(test_functions(p.jac[np.ix_(idx, idx)])[k])
 
     chord = b.z - a.z
     lo, hi, f_lo, f_hi = 0.0, 1.0, value(a), value(b)
-    best, side, previous = a, 0, -1.0
+    best, best_f, side, previous = a, abs(f_lo), 0, -1.0
     for _ in range(BISECTIONS):
         if hi - lo <= 1e-13:
             break
@@ -332,13 +399,15 @@ def _zero(problem: _Problem, a: _Point, b: _Point, k: int) -> _Point:
         if abs(sigma - previous) <= 1e-14:
             break  # the estimate has settled to rounding
         previous = sigma
-        point = _on_chord(problem, a, chord, sigma)
+        point = _on_chord(problem, a, chord, sigma, floor)
         if point is None:
-            sigma, point = 0.5 * (lo + hi), _on_chord(problem, a, chord, 0.5 * (lo + hi))
+            sigma = 0.5 * (lo + hi)
+            point = _on_chord(problem, a, chord, sigma, floor)
             if point is None:
                 break
         f = value(point)
-        best = point
+        if abs(f) <= best_f:  # the point nearest the zero, should a trial point fail
+            best, best_f = point, abs(f)
         if f == 0.0:
             break
         if np.sign(f) == np.sign(f_lo):
@@ -362,9 +431,14 @@ def continue_branch(
     points: int = 200,
     step: float | None = None,
     progress: Callable[[int], None] | None = None,
+    switch: bool = False,
 ) -> Branch:
     """Continue ``start`` (an orbit of ``scene``) through scene key ``key`` over ``span``,
-    in both directions from the scene's value, at most ``points`` points in all."""
+    in both directions from the scene's value, at most ``points`` points in all.
+
+    With ``switch``, at each period doubling located on it the branch of period 2N born
+    there is continued too (:func:`_switch`, at most ``points // 2`` points each), its
+    points appended as segments 1, 2, ... of the :class:`Branch`."""
     lo, hi = float(span[0]), float(span[1])
     lam0 = check_span(scene, key, (lo, hi))
     idx = [STATE.index(n) for n in start.free]
@@ -377,57 +451,168 @@ def continue_branch(
     first = problem.correct(z0, np.eye(len(z0))[-1])[0]
     h0 = (hi - lo) / scale[-1] / 40.0 if step is None else step / scale[-1]
     tau0 = _tangent(first.big, None)
-    halves: list[tuple[_Point, int]] = []
-    for sign in (1.0, -1.0):
-        limit = max(points // 2, 1) if sign > 0 else max(points - len(halves), 1)
-        tau = sign * tau0
-        here: list[tuple[_Point, int]] = [(first, NONE)] if sign > 0 else []
-        current, h, grazed, column, age = first, h0, False, None, 0
-        while len(here) < limit:
-            if h < h0 * MIN_STEP:
-                if grazed:
-                    # the wall sequence ends here: a flight touches a wall (grazing)
-                    here[-1:] = [(here[-1][0] if here else current, GRAZING)]
-                break
-            try:
-                if column is None or age >= COLUMN_AGE:
-                    column, age = problem.lambda_column(current.z), 0
-                # away from a fold the corrector holds the key at the predicted value (on the
-                # hyperplane lam = const, which the branch crosses steeply there): one
-                # engine per step instead of one per iteration; near a fold (the key's part
-                # of the tangent under STEEP) it corrects on the pseudo-arclength hyperplane
-                normal = tau if abs(tau[-1]) < STEEP else np.eye(len(tau))[-1]
-                nxt, iterations = problem.correct(current.z + h * tau, normal, column)
-                if np.linalg.norm(nxt.z - current.z) > 3 * h:
-                    raise OrbitError("the step jumped to another branch")
-            except SequenceChange:
-                h, grazed, column = h / 2, True, None
-                continue
-            except OrbitError:
-                h, grazed, column = h / 2, False, None
-                continue
-            age += 1
-            if iterations > 4:
-                column = None  # a stale column slows the corrector: a fresh one next step
-            new_tau = _tangent(nxt.big, tau)
-            for code, point in _events(problem, current, nxt, tau, new_tau):
-                here.append((point, code))
-            if not lo <= nxt.z[-1] * scale[-1] <= hi:
-                break
-            here.append((nxt, NONE))
-            if progress is not None:
-                progress(len(halves) + len(here))
-            tau, current = new_tau, nxt
-            h = min(h * (1.5 if iterations <= 3 else 1.0), 4 * h0)
-        halves = here if sign > 0 else here[::-1] + halves
+    ahead = _walk(problem, first, tau0, h0, (lo, hi), max(points // 2, 1), progress)
+    counted = None if progress is None else (lambda n: progress(len(ahead) + n - 1))
+    behind = _walk(problem, first, -tau0, h0, (lo, hi), max(points - len(ahead), 1) + 1, counted)
+    # the starting point is both walks' first: a grazing either walk met at once marks it
+    code = max(ahead[0][1], behind[0][1])
+    halves = behind[:0:-1] + [(first, code)] + ahead[1:]
     branch = Branch(key, start.impacts)
-    for point, code in halves:
-        lam, orbit = _orbit(problem, point)
-        if lo <= lam <= hi:
-            branch.values.append(lam)
-            branch.orbits.append(orbit)
-            branch.bifurcation.append(code)
+    _append(branch, problem, halves, (lo, hi), 0)
+    if switch:
+        doublings = [p for p, code in halves if code == BIFURCATIONS.index("period_doubling")]
+        for point in doublings:
+            done = len(branch.values)
+            counted = None if progress is None else (lambda n, done=done: progress(done + n))
+            doubled, found = _switch(problem, point, h0, (lo, hi), max(points // 2, 2), counted)
+            _append(branch, doubled, found, (lo, hi), max(branch.segment) + 1)
     return branch
+
+
+def _append(
+    branch: Branch,
+    problem: _Problem,
+    found: list[tuple[_Point, int]],
+    span: tuple[float, float],
+    segment: int,
+) -> None:
+    """Append the points ``found`` of ``problem``'s branch inside ``span`` to ``branch``."""
+    for point, code in found:
+        lam, orbit = _orbit(problem, point)
+        if span[0] <= lam <= span[1]:
+            branch.add(lam, orbit, code, segment)
+
+
+def _switch(
+    problem: _Problem,
+    doubling: _Point,
+    h0: float,
+    span: tuple[float, float],
+    limit: int,
+    progress: Callable[[int], None] | None = None,
+) -> tuple[_Problem, list[tuple[_Point, int]]]:
+    """The branch of period 2N born at the period doubling ``doubling`` of ``problem``'s
+    branch (period N), from the doubling outwards: (its problem, its points).
+
+    At the doubling x* the Jacobian has the multiplier -1 with eigenvector v; the period-N
+    orbit is a fixed point of P^2N too, where P^2N has the multiplier +1 along v, and the
+    doubled branch leaves it along v, orthogonally to the key (a pitchfork of P^2N, the
+    key going as the square of the offset). So the first point is corrected on the
+    hyperplane through x* + h v orthogonal to v, the key free: it lands on the side of the
+    doubling where the doubled orbit exists (beyond it for a supercritical doubling,
+    before it for a subcritical one) without having to know which. h starts at the
+    branch's first step and is halved while the corrector fails or finds the period-N
+    orbit again. The doubling itself is the doubled branch's first point."""
+    idx = problem.idx
+    mults, vectors = np.linalg.eig(doubling.jac[np.ix_(idx, idx)])
+    k = int(np.argmin(np.abs(mults + 1.0)))
+    v = np.append(vectors[:, k].real / problem.scale[:-1], 0.0)  # scaled, the key held
+    v /= np.linalg.norm(v)
+    doubled = _Problem(
+        problem.scene,
+        2 * problem.period,
+        problem.key,
+        idx,
+        problem.wall,
+        2 * problem.periods,
+        problem.scale,
+        problem.walls * 2,
+    )
+    doubled.x_full = problem.x_full
+    _, big, records, rm, jac = doubled.system(doubling.z, np.zeros(len(idx)))
+    found: list[tuple[_Point, int]] = [(_Point(doubling.z, records, jac, rm, big), NONE)]
+    h = h0
+    for _ in range(SWITCH_TRIES):
+        try:
+            point = doubled.correct(doubling.z + h * v, v)[0]
+        except OrbitError:
+            point = None
+        # the doubled orbit's two halves lie about 2 h apart; the period-N orbit's coincide
+        if point is not None and _split(problem, doubled, point) > h / 4:
+            break
+        h /= 2
+    else:
+        return doubled, found  # no doubled orbit beside it (a grazing there, say)
+    return doubled, found + _walk(doubled, point, _tangent(point.big, v), h0, span, limit, progress)
+
+
+def _split(problem: _Problem, doubled: _Problem, point: _Point) -> float:
+    """How far (scaled) the state N impacts after ``point``, an orbit of period 2N, lies
+    from its own: 0 for an orbit of period N."""
+    x, _ = doubled.full(point.z)
+    gap = landing(point.records[problem.period - 1]).x - x
+    gap[0] -= problem.periods * point.rm.period
+    return float(np.linalg.norm(gap[problem.idx] / problem.scale[:-1]))
+
+
+def _walk(
+    problem: _Problem,
+    first: _Point,
+    tau: np.ndarray,
+    h0: float,
+    span: tuple[float, float],
+    limit: int,
+    progress: Callable[[int], None] | None = None,
+) -> list[tuple[_Point, int]]:
+    """Follow the branch from ``first`` along ``tau`` with step control (first step
+    ``h0``, scaled) until the key leaves ``span``, the branch ends or ``limit`` points
+    are taken; returns ``first`` and the points after it, each with its bifurcation
+    code."""
+    lo, hi = span
+    scale = problem.scale
+    here: list[tuple[_Point, int]] = [(first, NONE)]
+    current, h, grazed, column, age = first, h0, False, None, 0
+    while len(here) < limit:
+        if h < h0 * MIN_STEP:
+            if grazed:
+                # the wall sequence ends here: a flight touches a wall (grazing)
+                here[-1] = (here[-1][0], GRAZING)
+            break
+        try:
+            if column is None or age >= COLUMN_AGE:
+                column, age = problem.lambda_column(current.z), 0
+            # away from a fold the corrector holds the key at the predicted value (on the
+            # hyperplane lam = const, which the branch crosses steeply there): one engine
+            # per step instead of one per iteration; near a fold (the key's part of the
+            # tangent under STEEP) it corrects on the pseudo-arclength hyperplane
+            normal = tau if abs(tau[-1]) < STEEP else np.eye(len(tau))[-1]
+            nxt, iterations = problem.correct(current.z + h * tau, normal, column)
+            if np.linalg.norm(nxt.z - current.z) > 3 * h:
+                raise OrbitError("the step jumped to another branch")
+        except SequenceChange:
+            h, grazed, column = h / 2, True, None
+            continue
+        except OrbitError:
+            h, grazed, column = h / 2, False, None
+            continue
+        age += 1
+        if iterations > 4:
+            column = None  # a stale column slows the corrector: a fresh one next step
+        if _through_one(problem, current, nxt):
+            # a multiplier passed +1: beside a branch point dF/dx is near singular and the
+            # tangent, -(dF/dx)^-1 dF/dlam, takes any error of a column taken elsewhere
+            # over that vanishing singular value (the parabola's second branch point:
+            # a fold, the walk turned back); so the tangent here gets its own column
+            column, age = problem.lambda_column(nxt.z), 0
+            nxt.big[:, -1] = column
+        new_tau = _tangent(nxt.big, tau)
+        for code, point in _events(problem, current, nxt, tau, new_tau):
+            here.append((point, code))
+        if not lo <= nxt.z[-1] * scale[-1] <= hi:
+            break
+        here.append((nxt, NONE))
+        if progress is not None:
+            progress(len(here))
+        tau, current = new_tau, nxt
+        h = min(h * (1.5 if iterations <= 3 else 1.0), 4 * h0)
+    return here
+
+
+def _through_one(problem: _Problem, a: _Point, b: _Point) -> bool:
+    """Has a multiplier passed +1 between a and b (det(J - I) changed sign)?"""
+    idx = problem.idx
+    fa, fb = (test_functions(p.jac[np.ix_(idx, idx)])[0] for p in (a, b))
+    return bool(np.sign(fa) != np.sign(fb))
 
 
 def _events(
@@ -498,14 +683,17 @@ def continue_orbit(
     free: Sequence[str] | None = None,
     points: int = 200,
     step: float | None = None,
+    switch: bool = False,
 ) -> Any:
     """Continue the period-``period`` orbit of ``scene`` through scene key ``vary`` over
     ``span``: an ``xarray.Dataset`` over dimension ``point`` (docs/orbits.md).
 
     The starting orbit is found by :func:`billiard.orbits.newton.find_orbit` from ``guess``
-    at the scene's own value of ``vary``, which must lie in ``span``."""
+    at the scene's own value of ``vary``, which must lie in ``span``. With ``switch`` the
+    branches of period 2N born at its period doublings are continued too (the
+    Dataset's ``period`` and ``branch`` tell them apart)."""
     from billiard.orbits.newton import find_orbit
 
     free_indices(free)
     start = find_orbit(scene, period, guess=guess, free=free)
-    return continue_branch(scene, start, vary, span, points, step).to_xarray()
+    return continue_branch(scene, start, vary, span, points, step, switch=switch).to_xarray()

@@ -5,7 +5,9 @@ Dimensions ``point`` (along the branch) and ``multiplier``; the varied key as a 
 named with underscores (``drive_amplitude``); the orbit's state just after its first
 impact (``t_phase``, ``s``, ``q1``, ``q2``, ``v1``, ``v2``, ``omega``); the Floquet
 multipliers as ``multipliers_real`` and ``multipliers_imag``; ``stable`` 0/1; and
-``bifurcation``, an int8 code with ``flag_values`` and ``flag_meanings``.
+``bifurcation``, an int8 code with ``flag_values`` and ``flag_meanings``; ``period``
+(impacts) and ``branch`` (0 the continued branch, k the k-th switched onto at a period
+doubling) as int32.
 """
 
 from __future__ import annotations
@@ -54,6 +56,12 @@ def attributes(key: str, units: str = "", long_name: str = "") -> dict[str, dict
         "flag_values": np.array([0, 1], dtype=np.int8),
         "flag_meanings": "unstable stable",
     }
+    out["period"] = {"long_name": "impacts per period of the orbit", "units": "1"}
+    out["branch"] = {
+        "long_name": "branch of the point: 0 the one continued, k >= 1 the k-th period-2N "
+        "branch switched onto at a period doubling",
+        "units": "1",
+    }
     out["bifurcation"] = {
         "long_name": "bifurcation located at this point",
         "flag_values": np.arange(len(BIFURCATIONS), dtype=np.int8),
@@ -88,7 +96,7 @@ def write_branch(
         f.createDimension("multiplier", width)
         for name, values in arrays.items():
             dims = ("point", "multiplier") if values.ndim == 2 else ("point",)
-            kind = "b" if values.dtype == np.int8 else "f8"
+            kind = {np.dtype(np.int8): "b", np.dtype(np.int32): "i"}.get(values.dtype, "f8")
             var = f.createVariable(name, kind, dims)
             var[:] = values
             for attr, value in attrs.get(name, {}).items():

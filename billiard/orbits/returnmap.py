@@ -29,7 +29,7 @@ from billiard.engine.state import BallState
 from billiard.errors import SimulationError
 from billiard.runfile.record import ImpactRecord
 
-__all__ = ["LID", "STATE", "Landing", "OrbitError", "ReturnMap"]
+__all__ = ["LID", "STATE", "Landing", "OrbitError", "ReturnMap", "landing"]
 
 #: The coordinates of a post-impact state, in order (units: s, m, m/s, m/s, rad/s).
 STATE: tuple[str, ...] = ("t", "s", "v1", "v2", "omega")

@@ -1,6 +1,7 @@
 """A continued branch of periodic orbits (``billiard orbits``, DIR/branch.png): the height
 q2 just after the orbit's first impact against the continued key, solid where the orbit
-is stable, dashed where not, its bifurcations marked; optionally over a sweep's
+is stable, dashed where not, its bifurcations marked, the period-2N branches switched
+onto at period doublings in their own colours; optionally over a sweep's
 brute-force bifurcation diagram (the last impact heights of each swept value)."""
 
 from __future__ import annotations
@@ -24,6 +25,8 @@ _MARKERS = {
     "grazing": "^",
     "branch_point": "v",
 }
+#: line colour of each branch (0 the continued one, then those switched onto)
+_COLOURS = ("tab:blue", "tab:orange", "tab:green", "tab:purple")
 
 
 def plot_branch(
@@ -56,22 +59,32 @@ def plot_branch(
             linewidths=0,
             label="sweep: last impact heights",
         )
-    # one line piece per run of equal stability, joined at the shared point
-    start = 0
+    # each branch its own colour (a period-2N branch switched onto at a period doubling
+    # after the one continued), one line piece per run of equal stability, joined at the
+    # shared point
+    segments = np.asarray(arrays.get("branch", np.zeros(len(x), dtype=int)))
+    periods = np.asarray(arrays.get("period", np.ones(len(x), dtype=int)))
     labelled = set()
-    for i in range(1, len(x) + 1):
-        if i == len(x) or stable[i] != stable[start]:
-            end = min(i + 1, len(x))
-            kind = "stable" if stable[start] else "unstable"
-            ax.plot(
-                x[start:end],
-                y[start:end],
-                linestyle="-" if stable[start] else "--",
-                color="tab:blue",
-                label=None if kind in labelled else f"{kind} orbit",
-            )
-            labelled.add(kind)
-            start = i
+    for k in np.unique(segments):
+        rows = np.flatnonzero(segments == k)
+        colour = _COLOURS[int(k) % len(_COLOURS)]
+        named = f"period {int(periods[rows[0]])}" if len(np.unique(segments)) > 1 else ""
+        start = 0
+        for i in range(1, len(rows) + 1):
+            if i == len(rows) or stable[rows[i]] != stable[rows[start]]:
+                piece = rows[start : min(i + 1, len(rows))]
+                kind = " ".join(
+                    filter(None, ["stable" if stable[rows[start]] else "unstable", named])
+                )
+                ax.plot(
+                    x[piece],
+                    y[piece],
+                    linestyle="-" if stable[rows[start]] else "--",
+                    color=colour,
+                    label=None if kind in labelled else f"{kind} orbit",
+                )
+                labelled.add(kind)
+                start = i
     for code, name in enumerate(BIFURCATIONS):
         mask = codes == code
         if code == 0 or not mask.any():

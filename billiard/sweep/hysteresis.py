@@ -35,6 +35,8 @@ from typing import Any
 
 import numpy as np
 
+from billiard.kernels import layout as _L
+
 __all__ = [
     "DIRECTIONS",
     "REFUSED",
@@ -69,8 +71,11 @@ CHUNK = 4096
 # Memory of an up/down sweep, for :func:`estimate_size` (measured with tracemalloc on
 # hyperbola-4.5hz, 5 impacts per value: 300 starts x 3 values peak at 15.2 MB, 4,096 x 2
 # at 203 MB, 8,192 x 2 at 206 MB, 16,384 x 2 at 210 MB, 4 x 64 at 4.9 MB).
-#: bytes per trajectory of a chunk while the kernel runs (state vector, ring, statistics)
-TRAJECTORY_BYTES = 50_000
+#: bytes per trajectory of a chunk while the kernel runs (state vector, ring, statistics):
+#: two copies of the state vector (``billiard.kernels.layout.SIZE`` floats) and 40 kB for
+#: the rest; with 1,367-slot state vectors (walls as chains) 300 starts x 3 values peak at
+#: 15.8 MB
+TRAJECTORY_BYTES = 40_000 + 2 * 8 * _L.SIZE
 #: bytes per value: its scene and set-up, kept for the way down
 VALUE_BYTES = 75_000
 #: bytes per start kept from value to value (carried state, start, flags, its grid)

@@ -88,6 +88,32 @@ def test_the_bouncing_balls_branch_is_written(table_scene, tmp_path, capsys):
     assert doubling / unit == pytest.approx([table.period_doubling(0.5)], rel=1e-8)
 
 
+def test_switch_continues_the_period_two_branch_too(table_scene, tmp_path, capsys):
+    """--switch: the period-two branch born at the doubling is in branch.nc, its points
+    of period 2 and branch 1, starting at the doubling."""
+    out = tmp_path / "out"
+    lo, hi = table.amplitude(1.25), table.amplitude(1.7)
+    args = ["orbits", str(table_scene), "--continue", f"drive.amplitude={lo!r}:{hi!r}"]
+    code = main([*args, "--free", "t,v2", "--points", "160", "--switch", "--out", str(out)])
+    assert code == 0
+    text = capsys.readouterr().out
+    assert "switched onto the branch of 2 impacts at drive.amplitude = " in text
+    assert "  period doubling at drive.amplitude" in text  # the period-two orbit's own
+    f = netcdf_file(out / "branch.nc", "r", mmap=False)
+    try:
+        v = f.variables
+        a = v["drive_amplitude"][:].copy()
+        period, branch = v["period"][:].copy(), v["branch"][:].copy()
+        assert v["period"].dimensions == ("point",) and period.dtype.kind == "i"
+    finally:
+        f.close()
+    assert set(branch.tolist()) == {0, 1}
+    assert np.array_equal(period, np.where(branch == 0, 1, 2))
+    unit = table.amplitude(1.0)
+    assert a[branch == 1][0] / unit == pytest.approx(table.period_doubling(0.5), rel=1e-8)
+    assert a[branch == 1].min() == a[branch == 1][0]  # from the doubling upwards
+
+
 @pytest.mark.parametrize(
     "args,message",
     [

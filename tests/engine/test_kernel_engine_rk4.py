@@ -91,3 +91,14 @@ def test_rk4_checkpoints_on_the_kernels_continue_bit_for_bit(monkeypatch, answer
     for state in states[::5]:
         tail, *_ = run(scene, 300, kernels=True, start=state)
         assert tail == rows[state.impacts :], state.impacts
+
+
+def test_rk4_under_contact_phases_leaves_a_wall_for_good():
+    """The fixed-step search has no grazing start: a ball leaving a wall with no normal
+    speed met it again at once (three departures in a row stopped the wedge at impact
+    378); under this search it leaves at RK4_DEPARTURE_SPEED, as before the event
+    locator's grazing starts."""
+    scene = with_values(load_scene("wedge-6.6hz"), {"contact.model": "phases", "run.method": "rk4"})
+    result = simulate(scene, collisions=400)
+    assert result.stop_reason is None and len(result) == 400
+    assert result.status is Status.COMPLETE

@@ -21,6 +21,19 @@ a matrix whose determinant is e^2 and trace 1 + e^2 + (1 + e)^2 a / g. With
 a = -A w^2 sin(theta): a fold (multiplier +1: 1 - tr + det = 0) where sin(theta) = 0, the
 existence boundary Gamma = Gamma_n; a period doubling (multiplier -1: 1 + tr + det = 0)
 where Gamma sin(theta) = 2 (1 + e^2) / (1 + e)^2.
+
+Away from a period-one orbit the same implicit differentiation gives, for a flight of
+tau from (t, v) to t' (approach speed w_r = s'(t') - (v - g tau), a = s''(t')),
+
+    dt'/dt = (s'(t) - v + g tau) / w_r,  dt'/dv = tau / w_r,
+    dv'/dt = ((1 + e) a + e g) dt'/dt - e g,  dv'/dv = ((1 + e) a + e g) dt'/dv - e,
+
+which reduces to the above where s'(t) = -v + g tau (the period-one orbit). The period-two
+orbit born at the period doubling (flights tau_1 + tau_2 = 2 T, tau_1 != T) solves the two
+flights' and impacts' equations, three equations in (t_0, v_0, tau_1) at a given Gamma;
+:func:`period_two` solves them with Gamma unknown and tau_1 given instead (Gamma grows
+with |tau_1 - T| from the doubling), and its multipliers are the eigenvalues of the
+product of the two flights' Jacobians.
 """
 
 from __future__ import annotations
@@ -28,6 +41,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
+from scipy.optimize import brentq, fsolve
 
 from billiard.scene.scene import scene_from_dict
 
@@ -96,3 +110,71 @@ def multipliers(gamma: float, e: float, n: int = 1, stable: bool = True) -> np.n
         ]
     )
     return np.linalg.eigvals(jac)
+
+
+def _table(gamma: float, t: float) -> tuple[float, float, float]:
+    """The table's height (above its mean), velocity and acceleration at t."""
+    a = amplitude(gamma)
+    return a * math.sin(W * t), a * W * math.cos(W * t), -a * W * W * math.sin(W * t)
+
+
+def _impact(gamma: float, e: float, t: float, v: float, tau: float) -> tuple[float, float]:
+    """(flight's miss of the table at t + tau (m), take-off speed after that impact)."""
+    y0, _, _ = _table(gamma, t)
+    y1, u1, _ = _table(gamma, t + tau)
+    return y0 + v * tau - G * tau * tau / 2 - y1, (1 + e) * u1 - e * (v - G * tau)
+
+
+def _period_two_equations(u, e: float, tau1: float) -> list[float]:
+    t0, v0, gamma = u
+    tau2 = 2 * T - tau1
+    miss1, v1 = _impact(gamma, e, t0, v0, tau1)
+    miss2, v0_again = _impact(gamma, e, t0 + tau1, v1, tau2)
+    scale = amplitude(gamma)
+    return [miss1 / scale, miss2 / scale, v0_again - v0]
+
+
+def period_two(tau1: float, e: float) -> tuple[float, np.ndarray, np.ndarray]:
+    """(Gamma, [(t, v) just after each of its two impacts], multipliers) of the
+    period-two orbit whose first flight takes ``tau1`` (s), walked out from the period
+    doubling in eight steps of tau1 (each solve starts from the previous one)."""
+    gamma = period_doubling(e)
+    u = np.array([math.acos(onset(e) / gamma) / W, G * T / 2, gamma])
+    for k in range(1, 9):
+        args = (e, T + (tau1 - T) * k / 8)
+        # full_output: fsolve reports, rather than warns, that 1e-14 is past rounding
+        u = fsolve(_period_two_equations, u, args=args, xtol=1e-14, full_output=True)[0]
+    assert max(abs(r) for r in _period_two_equations(u, *args)) < 1e-12
+    t0, v0, gamma = (float(c) for c in u)
+    _, v1 = _impact(gamma, e, t0, v0, tau1)
+    states = np.array([[t0 % T, v0], [(t0 + tau1) % T, v1]])
+    jac = _flight_jacobian(gamma, e, t0 + tau1, v1, 2 * T - tau1) @ _flight_jacobian(
+        gamma, e, t0, v0, tau1
+    )
+    return gamma, states, np.linalg.eigvals(jac)
+
+
+def _flight_jacobian(gamma: float, e: float, t: float, v: float, tau: float) -> np.ndarray:
+    """d(t', v')/d(t, v) of a flight of tau from (t, v) and its impact (derived above)."""
+    _, u0, _ = _table(gamma, t)
+    _, u1, a1 = _table(gamma, t + tau)
+    approach = u1 - (v - G * tau)
+    dt_dt, dt_dv = (u0 - v + G * tau) / approach, tau / approach
+    k = (1 + e) * a1 + e * G
+    return np.array([[dt_dt, dt_dv], [k * dt_dt - e * G, k * dt_dv - e]])
+
+
+def period_two_at(gamma: float, e: float) -> tuple[np.ndarray, np.ndarray]:
+    """([(t, v) after each impact], multipliers) of the period-two orbit at ``gamma``
+    (above the period doubling), its first flight the longer one."""
+    tau1 = brentq(lambda tau: period_two(tau, e)[0] - gamma, T * (1 + 1e-9), 1.3 * T, xtol=1e-15)
+    return period_two(tau1, e)[1:]
+
+
+def period_two_doubling(e: float) -> float:
+    """Gamma at which the period-two orbit doubles its period in turn (a multiplier -1
+    of its map: det(J + I) = 0), found on tau1 in (1.05 T, 1.3 T)."""
+    tau1 = brentq(
+        lambda tau: np.prod(period_two(tau, e)[2] + 1.0).real, 1.05 * T, 1.3 * T, xtol=1e-16
+    )
+    return period_two(tau1, e)[0]
