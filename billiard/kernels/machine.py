@@ -1424,6 +1424,8 @@ def lid_step(ctx, p, walls, out, cout, until, sout, srows):
                             theta, q3)  # fmt: skip
     # released (lift-off): in flight at the lid with no normal speed relative to it, its
     # acceleration away from the lid opens the gap (a grazing start)
+    if reason == END_LIFT_OFF:
+        push_off(ctx, 0.0, -1.0)  # under the fixed-step search only: away from the lid
     return -1
 
 
