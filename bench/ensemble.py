@@ -347,24 +347,27 @@ def sweep_overhead(quick: bool) -> dict:
     }
 
 
+def _map(side: int) -> Any:
+    """The targets' ``side`` x ``side`` drive.frequency x drive.amplitude map of the
+    parabola: 200 impacts after a 300-impact transient, 10 kept."""
+    from billiard.scene.scene import load_scene
+    from billiard.sweep import Sweep, parse_vary
+
+    axes = (
+        parse_vary(f"drive.frequency=4.5:6.5:{side}"),
+        parse_vary(f"drive.amplitude=0.01:0.04:{side}"),
+    )
+    return Sweep(load_scene(MAP_SCENE), axes, impacts=200, transient=300, keep=10)
+
+
 def _map_sweep(side: int, workers: int, patched: bool = True) -> dict:
     """A ``side`` x ``side`` drive.frequency x drive.amplitude map of the parabola, 200
     impacts after a 300-impact transient, through run_sweep (plots excluded); with
     ``patched`` False every parameter set is set up on its own (the path before)."""
-    from billiard.scene.scene import load_scene
-    from billiard.sweep import Sweep, batch, parse_vary, run_sweep
+    from billiard.sweep import batch, run_sweep
     from billiard.sweep.progress import SweepProgress
 
-    sweep = Sweep(
-        load_scene(MAP_SCENE),
-        (
-            parse_vary(f"drive.frequency=4.5:6.5:{side}"),
-            parse_vary(f"drive.amplitude=0.01:0.04:{side}"),
-        ),
-        impacts=200,
-        transient=300,
-        keep=10,
-    )
+    sweep = _map(side)
     before = os.environ.get(batch.PATCH_ENV)
     os.environ[batch.PATCH_ENV] = "1" if patched else "0"  # read by the workers too
     try:
@@ -492,19 +495,9 @@ def _map_chunk(side: int, patched: bool) -> float:
     this process (no pool, no files): set-ups, trajectories and measurements."""
     import numpy as np
 
-    from billiard.scene.scene import load_scene
-    from billiard.sweep import Sweep, batch, parse_vary
+    from billiard.sweep import batch
 
-    sweep = Sweep(
-        load_scene(MAP_SCENE),
-        (
-            parse_vary(f"drive.frequency=4.6:6.4:{side}"),
-            parse_vary(f"drive.amplitude=0.011:0.039:{side}"),
-        ),
-        impacts=200,
-        transient=300,
-        keep=10,
-    )
+    sweep = _map(side)
     os.environ[batch.PATCH_ENV] = "1" if patched else "0"
     try:
         began = time.perf_counter()
@@ -520,8 +513,6 @@ def parameter_map(quick: bool) -> dict:
     through the sweep on all cores at two sizes, whose slope (start-up cancelled)
     projects the 10^6-point map. The files of that map are estimated, the parent's
     peak memory measured."""
-    from billiard.scene.scene import load_scene
-    from billiard.sweep import Sweep, parse_vary
     from billiard.sweep.execute import estimate_size
 
     cores = os.cpu_count() or 1
@@ -538,16 +529,7 @@ def parameter_map(quick: bool) -> dict:
     b = statistics.median(r["wall"] for r in runs if r["side"] == large)
     per_point = (b - a) / (large**2 - small**2)
     side = int(MAP_POINTS**0.5)
-    big = Sweep(
-        load_scene(MAP_SCENE),
-        (
-            parse_vary(f"drive.frequency=4.5:6.5:{side}"),
-            parse_vary(f"drive.amplitude=0.01:0.04:{side}"),
-        ),
-        impacts=200,
-        transient=300,
-        keep=10,
-    )
+    big = _map(side)
     return {
         "runs": runs,
         "chunk_pairs": pairs,
