@@ -9,7 +9,6 @@ from __future__ import annotations
 
 import argparse
 import math
-import os
 import sys
 import time
 from collections.abc import Sequence
@@ -22,7 +21,7 @@ from billiard.analysis.calibrate import CalibrationError, Orbit, calibrate_law
 from billiard.analysis.dissipation import impact_dissipation, relative_energy
 from billiard.models.impact import IMPACT_LAWS, with_law
 from billiard.plot import paper_laws_figure
-from billiard.reproduce.paper import FULL_COLLISIONS, ReproduceError, check_writable
+from billiard.reproduce.paper import FULL_COLLISIONS, ReproduceError, check_outputs
 from billiard.reproduce.runs import RunStats, run_scene
 from billiard.runfile.tables import read_collisions
 from billiard.scene.scene import PAPER_SCENES, Scene, load_scene, with_values
@@ -167,11 +166,7 @@ def run_laws(args: argparse.Namespace) -> int:
     full = args.collisions == FULL_COLLISIONS and laws == list(IMPACT_LAWS)
     runs = Path(args.runs)
     docs = Path(args.docs) if args.docs is not None else Path("docs") if full else runs
-    check_writable(runs, "--runs")
-    check_writable(docs, "--docs")
-    for path in (docs / "impact-laws.md", docs / "figures" / "laws"):
-        if path.exists() and not os.access(path, os.W_OK):
-            raise ReproduceError(f"--docs {docs}: {path} is read-only")
+    check_outputs(runs, docs, "impact-laws.md", "laws")
     if args.docs is None and not full:
         print(
             f"billiard: note: not the full comparison: the page goes to "

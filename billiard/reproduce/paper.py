@@ -121,6 +121,20 @@ def check_writable(folder: Path, what: str) -> None:
         raise ReproduceError(f"{what} {folder}: cannot write in {probe} (read-only)")
 
 
+def check_outputs(runs: Path, docs: Path, page: str, figures: str) -> None:
+    """Refuse, before any work, output folders that cannot be written, or a page
+    ``docs/page`` or figure folder ``docs/figures/figures`` that exists read-only.
+
+    Raises:
+        ReproduceError: one line naming the folder or file.
+    """
+    check_writable(runs, "--runs")
+    check_writable(docs, "--docs")
+    for path in (docs / page, docs / "figures" / figures):
+        if path.exists() and not os.access(path, os.W_OK):
+            raise ReproduceError(f"--docs {docs}: {path} is read-only")
+
+
 def run_reproduce(args: argparse.Namespace) -> int:
     if isinstance(args.collisions, bool) or args.collisions < 1:
         raise ReproduceError(f"reproduce: --collisions must be >= 1, got {args.collisions}")
@@ -134,11 +148,7 @@ def run_reproduce(args: argparse.Namespace) -> int:
         docs = Path("docs")
     else:
         docs = runs
-    check_writable(runs, "--runs")
-    check_writable(docs, "--docs")
-    for path in (docs / "paper-reproduction.md", docs / "figures" / "paper"):
-        if path.exists() and not os.access(path, os.W_OK):
-            raise ReproduceError(f"--docs {docs}: {path} is read-only")
+    check_outputs(runs, docs, "paper-reproduction.md", "paper")
     if args.docs is None and not full:
         print(
             f"billiard: note: not the full reproduction (--collisions {args.collisions}, "
