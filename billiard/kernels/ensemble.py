@@ -244,6 +244,11 @@ def measure(ctx, p, walls, row, ring, stats, consts, transient, total, target):
     is. A kernel stop raises out of here with ST_STATUS left at RUN_PENDING."""
     if stats[ST_STATUS] != RUN_PENDING:
         return
+    if ctx[EN_STOP] != 0.0:
+        # a stop in an earlier call that nothing caught (a GPU thread just ends there):
+        # the run failed then, and is not stepped on from its stopped state
+        settle(ctx, stats)
+        return
     stop = min(total, target)
     while ctx[EN_IMPACTS] < stop:
         if not step(ctx, p, walls, row, 0):
@@ -268,6 +273,17 @@ def finish(ctx, ring, stats, consts, total):
         stats[ST_STATUS] = RUN_COMPLETE
 
 
+@inline
+def settle(ctx, stats):
+    """A trajectory that a kernel stop ended, ST_STATUS still RUN_PENDING: RUN_FAILED,
+    ST_CODE the stop's code from ``ctx[EN_STOP]`` (0 for an arithmetic fault). Called
+    where the CPU catches the stop, and by :func:`measure` for a stop that nothing
+    caught (a GPU thread just ends there)."""
+    if stats[ST_STATUS] == RUN_PENDING:
+        stats[ST_STATUS] = RUN_FAILED
+        stats[ST_CODE] = ctx[EN_STOP]
+
+
 @jit
 def measure_guarded(ctx, p, walls, row, ring, stats, consts, transient, total, target):
     """:func:`measure`, a kernel stop or arithmetic fault caught: ST_STATUS RUN_FAILED,
@@ -278,8 +294,7 @@ def measure_guarded(ctx, p, walls, row, ring, stats, consts, transient, total, t
     try:
         measure(ctx, p, walls, row, ring, stats, consts, transient, total, target)
     except Exception:  # noqa: BLE001 - numba catches any exception or none
-        stats[ST_STATUS] = RUN_FAILED
-        stats[ST_CODE] = ctx[EN_STOP]
+        settle(ctx, stats)
 
 
 @jit

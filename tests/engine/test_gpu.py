@@ -184,3 +184,49 @@ def test_one_launch_takes_one_curve_and_the_impacts_model():
         gpu.run_rows_gpu([phases], 10)
     with pytest.raises(ValueError, match="no simulations"):
         gpu.run_rows_gpu([], 10)
+
+
+#: threads on the simulated GPU, one of which stops at its 5th impact as a device thread
+#: stops (its code in its state vector, its statistics pending, the thread ended)
+_STOPPED = """
+from numba import cuda
+from billiard.engine import ensemble as EN, gpu
+from billiard.kernels import ensemble as E, layout as L
+from billiard.scene.scene import load_scene
+assert gpu.simulated()
+setup = EN.prepare(load_scene("wedge-6.6hz"))
+ctxs, ok = EN.start(setup, [-0.01, 0.012, 0.0], [0.06, 0.08, 0.07])
+assert ok.all()
+measure = gpu.device_module(setup.sim, "ensemble").measure
+def stopping(ctxs, params, rows, rings, stats, consts, transient, total, target):
+    i = cuda.grid(1)
+    if i < ctxs.shape[0]:
+        measure(ctxs[i], params[i], 0, rows[i], rings[i], stats[i], consts[i], transient,
+                total, target)
+        if i == 1 and target == 5:
+            ctxs[i, L.EN_STOP] = L.E_NO_IMPACT
+gpu._measure[gpu.device_kernels(setup.sim).__name__] = cuda.jit(stopping)
+consts = EN.constants(setup.scene, 1e-5, 64, 256)
+stats, _ = gpu.advance_ensemble(
+    setup.sim, ctxs, setup.params, consts, transient=2, impacts=10, width=256, rounds=5
+)
+for row in stats:
+    print(int(row[E.ST_STATUS]), int(row[E.ST_CODE]), int(row[E.ST_TOTAL]))
+"""
+
+
+@needs_numba_cuda
+def test_a_thread_stopped_in_one_launch_is_failed_not_stepped_on(tmp_path):
+    """A GPU thread that stops in a kernel stop just ends, its code in its state vector:
+    in the next launch it is failed with that code, and not stepped on from its stopped
+    state (which could end "complete", with measurements of a broken trajectory)."""
+    from billiard.kernels import ensemble as E
+
+    env = dict(os.environ, NUMBA_ENABLE_CUDASIM="1")
+    done = subprocess.run(
+        [sys.executable, "-c", _STOPPED], env=env, cwd=tmp_path, capture_output=True, text=True
+    )
+    assert done.returncode == 0, done.stderr[-3000:]
+    rows = [tuple(map(int, line.split())) for line in done.stdout.splitlines()]
+    complete, failed = int(E.RUN_COMPLETE), int(E.RUN_FAILED)
+    assert rows == [(complete, 0, 12), (failed, L.E_NO_IMPACT, 5), (complete, 0, 12)]
