@@ -50,8 +50,13 @@ __all__ = [
     "VERDICTS",
 ]
 
-#: why the GPU does not run a contact-phases scene
-GPU_PHASES = "contact.model = 'phases' runs on the CPU only (the GPU kernels have impacts only)"
+#: why the GPU does not run a contact-phases scene, and where it runs instead (the
+#: state machine, with its third derivatives and nearest-point functions, has no device
+#: twin; a sweep on the GPU runs such points on the CPU)
+GPU_PHASES = (
+    "contact.model = 'phases' runs on the CPU only: the GPU kernels have the impacts "
+    "model, not the contact state machine (use device 'cpu')"
+)
 #: the scene keys of a start: what may differ between the trajectories of one set-up
 BALL_KEYS = (
     "initial.q1",

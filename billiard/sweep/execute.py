@@ -789,6 +789,15 @@ def _finished(directory: Path, sweep: Sweep) -> bytearray:
 GPU_CHUNK = 1 << 17
 
 
+def _phases_note(sweep: Sweep) -> str:
+    """What of a GPU sweep runs on the CPU: its contact-phases points, if it may have
+    any (the GPU kernels have the impacts model only)."""
+    phases = sweep.scene.contact.model == "phases"
+    if phases or any(axis.key == "contact.model" for axis in sweep.axes):
+        return "; contact phases on the CPU: the GPU kernels have the impacts model only"
+    return ""
+
+
 def chunk_size(points: int, workers: int) -> int:
     """Points per chunk: up to MAX_CHUNK, but at least CHUNKS_PER_WORKER chunks per
     worker while there are points enough (every worker busy to the end)."""
@@ -906,7 +915,11 @@ def run_sweep(
                 else lambda left: chunk_size(left, pool.threads(pool.seen))
             )
             first = size if isinstance(size, int) else size(todo)
-            on = f"{where} (trajectories on the GPU)" if device == "gpu" else where
+            on = (
+                f"{where} (trajectories on the GPU{_phases_note(sweep)})"
+                if device == "gpu"
+                else where
+            )
             store.log(
                 f"start: {todo} of {sweep.size} points on {on}, {first} per chunk"
                 + ("" if isinstance(size, int) else " (resized as workers come and go)")

@@ -13,6 +13,7 @@ import sys
 
 import pytest
 
+import billiard
 from billiard.cli import main
 from billiard.engine import gpu
 
@@ -96,3 +97,31 @@ def test_device_gpu_without_a_gpu_is_one_line(tmp_path, capsys, monkeypatch):
     assert code == 2
     assert err == "billiard: error: --device gpu: no CUDA GPU: numba-cuda found no CUDA GPU\n"
     assert not (tmp_path / "out").exists()
+
+
+PHASES = [
+    "sweep", "wedge-6.6hz", "--set", "contact.model=phases", "--vary", "initial.q1=-0.01,0.01",
+    "--impacts", "6", "--no-plot", "--workers", "1",
+]  # fmt: skip
+
+
+def test_contact_phases_with_device_gpu_run_on_the_cpu_and_say_so(tmp_path, monkeypatch):
+    """The GPU kernels have the impacts model only: a sweep's contact-phases points run on
+    the CPU, and its log says so and why; an ensemble refuses, naming the reason and the
+    device that runs it."""
+    monkeypatch.setattr(gpu, "available", lambda: None)  # no GPU is touched
+    out = tmp_path / "out"
+    assert main([*PHASES, "--device", "gpu", "--out", str(out)]) == 0
+    log = (out / "sweep.log").read_text()
+    assert (
+        "(trajectories on the GPU; contact phases on the CPU: the GPU kernels have the "
+        "impacts model only)" in log
+    )
+    scene = billiard.load_scene("wedge-6.6hz")
+    phases = billiard.with_values(scene, {"contact.model": "phases"})
+    with pytest.raises(ValueError) as refused:
+        billiard.run_ensemble(phases, q1=[0.0], q2=[0.06], impacts=2, device="gpu")
+    assert str(refused.value) == (
+        "contact.model = 'phases' runs on the CPU only: the GPU kernels have the impacts "
+        "model, not the contact state machine (use device 'cpu')"
+    )
