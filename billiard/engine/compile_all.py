@@ -205,17 +205,19 @@ def _ignore(*_: Any) -> None:
 
 
 def _ensemble(scene: Any) -> None:
-    """A two-trajectory ensemble of ``scene``: the ensemble kernels (its start check
-    and its measured loop, :mod:`billiard.kernels.ensemble`)."""
+    """A two-trajectory ensemble of ``scene``: the ensemble kernels (its start check,
+    its measured loop and the reading of the kept impacts,
+    :mod:`billiard.kernels.ensemble`)."""
     from billiard.engine import ensemble
 
     setup = ensemble.prepare(scene)
     ctxs, ok = ensemble.start(setup, [0.0, 0.01], [0.05, 0.06])
     consts = ensemble.constants(scene, 1e-5, 64, 256)
-    ensemble.advance(
+    stats, rings = ensemble.advance(
         ctxs[ok], setup.params, setup.walls, consts, transient=1, impacts=2, width=4,
         threads=1, nears=setup.nears,
     )  # fmt: skip
+    ensemble.last_impacts(stats, rings, 2)
 
 
 def compile_all() -> bool:

@@ -40,6 +40,7 @@ __all__ = [
     "advance",
     "advance_setup",
     "at_rest_scene",
+    "last_impacts",
     "patch",
     "PATCH_KEYS",
     "prepare",
@@ -608,9 +609,19 @@ def advance_setup(
     device: str = "cpu",
     threads: int | None = None,
     progress: Callable[[int], None] | None = None,
-) -> tuple[np.ndarray, np.ndarray]:
+    keep: int | None = None,
+    states: bool = True,
+) -> tuple[np.ndarray, Any]:
     """:func:`advance` of trajectories of ``setup`` on ``device``: ``"cpu"`` (``threads``
     threads) or ``"gpu"`` (:func:`billiard.engine.gpu.advance_ensemble`).
+
+    ``keep`` None: returns (stats, rings), as :func:`advance`. ``keep`` K: returns
+    (stats, (heights, tofs)), the last K measured heights (m) and times of flight (s) of
+    each trajectory (n x K each, oldest first, NaN-padded at the front;
+    :func:`billiard.kernels.ensemble.tail`, on the device on a GPU), and no ring leaves
+    the GPU. ``states`` False: the GPU does not copy the state vectors back (``ctxs``
+    are then left as given there; the CPU advances them in place either way). What a
+    sweep stores needs neither ring nor state vector (docs/sweeps.md, "On a GPU").
 
     Raises:
         ValueError: ``"gpu"`` for a contact-phases set-up (the GPU kernels have the
@@ -623,9 +634,23 @@ def advance_setup(
 
         return gpu.advance_ensemble(
             setup.sim, ctxs, setup.params, consts, transient=transient, impacts=impacts,
-            width=width,
+            width=width, keep=keep, states=states,
         )  # fmt: skip
-    return advance(
+    stats, rings = advance(
         ctxs, setup.params, setup.walls, consts, transient=transient, impacts=impacts,
         width=width, threads=threads, progress=progress, nears=setup.nears,
     )  # fmt: skip
+    return stats, (rings if keep is None else last_impacts(stats, rings, keep))
+
+
+def last_impacts(stats: np.ndarray, rings: np.ndarray, keep: int) -> tuple[np.ndarray, ...]:
+    """The last ``keep`` measured heights (m) and times of flight (s) of each
+    trajectory, oldest first, NaN-padded at the front (n x keep each): the kernels'
+    :func:`~billiard.kernels.ensemble.tail`, which the GPU runs on the device."""
+    from billiard.kernels.ensemble import tails
+
+    n = rings.shape[0]
+    heights, tofs = np.empty((n, keep)), np.empty((n, keep))
+    if n and keep:
+        tails(np.ascontiguousarray(rings), np.ascontiguousarray(stats), heights, tofs)
+    return heights, tofs

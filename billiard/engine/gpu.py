@@ -18,6 +18,10 @@ trajectories, one thread each.
   advances ``ctxs[i]`` (the state vector of :func:`billiard.engine.ctx.state_vector`)
   with the curve parameters ``params[i]`` by :func:`billiard.kernels.loop.run_chunk`,
   writing its rows into ``out[i]`` (the kernel :func:`advance`).
+* :func:`advance_ensemble`: the ensemble kernel's measured trajectories
+  (:func:`billiard.kernels.ensemble.measure`, one thread each), then, on the device, the
+  stop codes and the kept impacts (:func:`reduce_kernel`); what is copied back is what
+  the caller asks for: a sweep's chunk takes the statistics and the kept impacts alone.
 
 The seam between the targets, where the device differs from the CPU (the same
 physics, not the same bits):
@@ -62,6 +66,7 @@ __all__ = [
     "PACKAGE",
     "THREADS",
     "BATCH",
+    "ROUNDS",
     "advance",
     "advance_ensemble",
     "available",
@@ -69,6 +74,7 @@ __all__ = [
     "device_module",
     "ensemble_kernel",
     "launch",
+    "reduce_kernel",
     "run_rows_gpu",
 ]
 
@@ -270,6 +276,11 @@ def run_rows_gpu(
 
 #: package name -> the ensemble kernel compiled for its twin
 _measure: dict[str, Any] = {}
+#: package name -> the end-of-batch kernel (stop codes, kept tails) compiled for its twin
+_reduce: dict[str, Any] = {}
+#: impacts per trajectory of one launch of :func:`advance_ensemble` (between launches
+#: the host sees Ctrl-C and reports progress)
+ROUNDS = 2000
 #: trajectories per launch batch of :func:`advance_ensemble` (their state vectors and
 #: rings on the device: about 24 kB each with a ring of 256 impacts)
 BATCH = 1 << 18
@@ -295,6 +306,29 @@ def _measure_kernel(ensemble: ModuleType) -> Any:
     return _cuda().jit(run)
 
 
+def reduce_kernel(sim: Any) -> Any:
+    """The kernel ``reduce(ctxs, rings, stats, heights, tofs)`` of the curve of
+    ``sim``, launched after a batch's last launch of :func:`ensemble_kernel`: thread
+    ``i`` puts a kernel stop's code into ``stats[i]``
+    (:func:`billiard.kernels.ensemble.settle`) and reads the last ``heights.shape[1]``
+    heights and times of flight of its ring into ``heights[i]`` and ``tofs[i]``
+    (:func:`billiard.kernels.ensemble.tail`, which the CPU's ``last_impacts`` calls
+    too), so that neither state vector nor ring need leave the device."""
+    return _device_kernel(sim, _reduce, "ensemble", _reduce_kernel)
+
+
+def _reduce_kernel(ensemble: ModuleType) -> Any:
+    settle, tail = ensemble.settle, ensemble.tail
+
+    def reduce(ctxs, rings, stats, heights, tofs):
+        i = cuda.grid(1)
+        if i < ctxs.shape[0]:
+            settle(ctxs[i], stats[i])
+            tail(rings[i], stats[i], heights[i], tofs[i])
+
+    return _cuda().jit(reduce)
+
+
 def advance_ensemble(
     sim: Any,
     ctxs: np.ndarray,
@@ -304,46 +338,81 @@ def advance_ensemble(
     transient: int,
     impacts: int,
     width: int,
-    rounds: int = 2000,
+    keep: int | None = None,
+    states: bool = True,
+    rounds: int | None = None,
     progress: Any = None,
     threads: int = THREADS,
-) -> tuple[np.ndarray, np.ndarray]:
+    clock: dict[str, float] | None = None,
+) -> tuple[np.ndarray, Any]:
     """:func:`billiard.engine.ensemble.advance` on the GPU: every trajectory (rows of
-    ``ctxs``, of the curve of ``sim``; advanced in place) to ``transient + impacts``
-    impacts, in launches of ``rounds`` impacts per trajectory over batches of
-    :data:`BATCH` trajectories (the arrays stay on the device between the launches of
-    a batch; Ctrl-C is seen between launches). A thread that stops in a kernel stop
-    leaves ST_STATUS at RUN_PENDING (its code in ``ctxs[i, EN_STOP]``): it is reported
-    as RUN_FAILED with ST_CODE that code. Returns (stats, rings)."""
+    ``ctxs``, of the curve of ``sim``) to ``transient + impacts`` impacts, in launches
+    of ``rounds`` (default :data:`ROUNDS`) impacts per trajectory over batches of
+    :data:`BATCH` trajectories
+    (the arrays stay on the device between the launches of a batch; Ctrl-C is seen
+    between launches). A thread that stops in a kernel stop just ends, its code in its
+    state vector: it is reported as RUN_FAILED with ST_CODE that code, set on the device
+    (by :func:`billiard.kernels.ensemble.measure` in the next launch, which does not
+    step it again, or by :func:`reduce_kernel` after the last).
+
+    What comes back per trajectory: ``stats`` (NSTAT floats) always; with ``keep`` None
+    its whole ring (``width`` x RCOL floats: 14 kB for 256 impacts), else only the last
+    ``keep`` heights and times of flight, read from the ring on the device (16 bytes an
+    impact); with ``states`` its state vector (``ctxs`` advanced in place, 11 kB), else
+    ``ctxs`` are left as given. The rows of scratch and the rings are made on the device
+    (never copied there). ``clock``, when given, gets ``"kernel_s"``: the seconds of the
+    launches alone (each synchronised), no set-up or copies.
+
+    Returns:
+        ``(stats, rings)`` with ``keep`` None, else ``(stats, (heights, tofs))`` (n x
+        keep each, oldest first, NaN-padded at the front; m, s).
+    """
+    import time
+
     from billiard.kernels import ensemble as E
 
     gpu = _cuda()
-    kernel = ensemble_kernel(sim)
+    kernel, reduce = ensemble_kernel(sim), reduce_kernel(sim)
     n = ctxs.shape[0]
     params = np.array(np.broadcast_to(params, (n, params.shape[-1])), order="C")
     consts = np.array(np.broadcast_to(consts, (n, E.NCONST)), order="C")
     stats = np.zeros((n, E.NSTAT))
     stats[:, E.ST_STATUS] = E.RUN_PENDING
-    rings = np.empty((n, width, E.RCOL))
+    rings = np.empty((n, width, E.RCOL)) if keep is None else None
+    tail = 0 if keep is None else keep
+    heights, tofs = np.empty((n, tail)), np.empty((n, tail))
     total = transient + impacts
+    rounds = rounds or ROUNDS
+    seconds = 0.0
     for lo in range(0, n, BATCH):
         hi = min(n, lo + BATCH)
         count = hi - lo
-        device = [gpu.to_device(np.ascontiguousarray(a[lo:hi])) for a in (ctxs, params)]
-        device.append(gpu.device_array((count, L.NCOL)))  # each thread's scratch row
-        device += [gpu.to_device(np.ascontiguousarray(a[lo:hi])) for a in (rings, stats, consts)]
+        up = [gpu.to_device(np.ascontiguousarray(a[lo:hi])) for a in (ctxs, params, stats, consts)]
+        d_ctxs, d_params, d_stats, d_consts = up
+        d_rows = gpu.device_array((count, L.NCOL))  # each thread's scratch row
+        d_rings = gpu.device_array((count, width, E.RCOL))  # read only once written
         blocks = (count + threads - 1) // threads
         target = 0
         while target < total:
             target = min(total, target + rounds)
-            kernel[blocks, threads](*device[:6], transient, total, target)
+            began = time.perf_counter()
+            kernel[blocks, threads](d_ctxs, d_params, d_rows, d_rings, d_stats, d_consts,
+                                    transient, total, target)  # fmt: skip
             gpu.synchronize()
+            seconds += time.perf_counter() - began
             if progress is not None:
                 progress(lo, count, target)
-        ctxs[lo:hi] = device[0].copy_to_host()
-        rings[lo:hi] = device[3].copy_to_host()
-        stats[lo:hi] = device[4].copy_to_host()
-    stopped = stats[:, E.ST_STATUS] == E.RUN_PENDING
-    stats[stopped, E.ST_STATUS] = E.RUN_FAILED
-    stats[stopped, E.ST_CODE] = ctxs[stopped, L.EN_STOP]
-    return stats, rings
+        d_heights = gpu.device_array((count, tail))
+        d_tofs = gpu.device_array((count, tail))
+        reduce[blocks, threads](d_ctxs, d_rings, d_stats, d_heights, d_tofs)
+        d_stats.copy_to_host(stats[lo:hi])
+        if keep is None:
+            d_rings.copy_to_host(rings[lo:hi])
+        elif tail:
+            d_heights.copy_to_host(heights[lo:hi])
+            d_tofs.copy_to_host(tofs[lo:hi])
+        if states:
+            ctxs[lo:hi] = d_ctxs.copy_to_host()
+    if clock is not None:
+        clock["kernel_s"] = seconds
+    return stats, (rings if keep is None else (heights, tofs))

@@ -23,7 +23,8 @@ highest impact, the low-velocity-rule and lid impacts, the period of the post-im
 state and the time one period takes. ``ring`` holds the last ``ring.shape[0]`` measured
 impacts' (t, q1, q2, v1, v2, omega, tof) (``R_*``; impact m of the measured ones in
 slot m % width), from which the period is found and the last K heights and times of
-flight are read.
+flight are read (:func:`tail`: on the GPU on the device, so that a trajectory's ring
+never leaves it).
 
 The period test is :func:`billiard.sweep.attractor.find_period`'s, with the same
 arithmetic: the smallest k <= ``max_period`` (and <= half the window) for which the last
@@ -277,8 +278,10 @@ def finish(ctx, ring, stats, consts, total):
 def settle(ctx, stats):
     """A trajectory that a kernel stop ended, ST_STATUS still RUN_PENDING: RUN_FAILED,
     ST_CODE the stop's code from ``ctx[EN_STOP]`` (0 for an arithmetic fault). Called
-    where the CPU catches the stop, and by :func:`measure` for a stop that nothing
-    caught (a GPU thread just ends there)."""
+    where the CPU catches the stop, by :func:`measure` for a stop that nothing caught (a
+    GPU thread just ends there), and on the GPU after a batch's last launch
+    (:func:`billiard.engine.gpu.reduce_kernel`), so that no state vector leaves the
+    device for its code."""
     if stats[ST_STATUS] == RUN_PENDING:
         stats[ST_STATUS] = RUN_FAILED
         stats[ST_CODE] = ctx[EN_STOP]
@@ -295,6 +298,35 @@ def measure_guarded(ctx, p, walls, row, ring, stats, consts, transient, total, t
         measure(ctx, p, walls, row, ring, stats, consts, transient, total, target)
     except Exception:  # noqa: BLE001 - numba catches any exception or none
         settle(ctx, stats)
+
+
+@inline
+def tail(ring, stats, heights, tofs):
+    """The last ``heights.shape[0]`` measured impact heights (m) and times of flight
+    (s) of one trajectory, read from its ring into ``heights`` and ``tofs``, oldest
+    first, NaN before its first measured impact (fewer measured than kept). The one
+    reading of a ring's tail: :func:`tails` on the CPU, the GPU's reduction on the
+    device."""
+    keep = heights.shape[0]
+    width = ring.shape[0]
+    measured = int(stats[ST_MEASURED])
+    for j in range(keep):
+        m = measured - keep + j
+        if m >= 0:
+            slot = m % width
+            heights[j] = ring[slot, R_Q2]
+            tofs[j] = ring[slot, R_TOF]
+        else:
+            heights[j] = math.nan
+            tofs[j] = math.nan
+
+
+@jit
+def tails(rings, stats, heights, tofs):
+    """:func:`tail` of every trajectory i (``rings[i]``, ``stats[i]``) into
+    ``heights[i]`` and ``tofs[i]`` (n x keep each)."""
+    for i in range(rings.shape[0]):
+        tail(rings[i], stats[i], heights[i], tofs[i])
 
 
 @jit

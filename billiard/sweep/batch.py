@@ -31,7 +31,7 @@ import numpy as np
 from billiard.engine import ensemble as EN
 from billiard.sweep.attractor import CLASSES, PERIOD_WINDOW
 from billiard.sweep.columns import MODES, RUN_STATUSES, STATUSES
-from billiard.sweep.ensemble import last_impacts, measured_columns
+from billiard.sweep.ensemble import measured_columns
 
 __all__ = ["measure_batch"]
 
@@ -237,9 +237,11 @@ def _measure_family(
     setup, scene = setups[0][0], setups[0][1]
     transient, impacts = int(settings["transient"]), int(settings["impacts"])
     width = max(PERIOD_WINDOW, keep, 1)
-    stats, rings = EN.advance_setup(
+    # only what the sweep stores: no ring or state vector leaves a GPU
+    stats, (heights, tofs) = EN.advance_setup(
         setup, ctxs, np.concatenate(consts), transient=transient, impacts=impacts,
-        width=width, device="cpu" if setup.phases else device, threads=1,
+        width=width, device="cpu" if setup.phases else device, threads=1, keep=keep,
+        states=False,
     )  # fmt: skip
     heights_at_rest = np.concatenate(rest_height)
     columns = measured_columns(
@@ -257,7 +259,6 @@ def _measure_family(
     left += [index[r] for r in np.nonzero(~ok)[0]]
     if not keep_rows.size:
         return None, left
-    heights, tofs = last_impacts(stats[keep_rows], rings[keep_rows], keep)
     n = keep_rows.size
     attractor = np.array([CLASSES.index(c) for c in columns["attractor"][keep_rows]], np.int8)
     run_status = np.array(
@@ -285,7 +286,7 @@ def _measure_family(
         "tof_std": columns["tof_std"][keep_rows],
         "lyapunov": np.full(n, math.nan),
         "lyapunov_per_second": np.full(n, math.nan),
-        "last_height": heights,
-        "last_tof": tofs,
+        "last_height": heights[keep_rows],
+        "last_tof": tofs[keep_rows],
     }
     return part, left

@@ -115,7 +115,8 @@ class EnsembleResult:
         last_height, last_tof: the last K impact heights (m) and times of flight (s) of
             each start, NaN-padded at the front (shape: starts + (K,)).
         final: the ball's state after its last impact, name -> array (``t``, ``q1``,
-            ``q2``, ``v1``, ``v2``, ``omega``; s, m, m/s, rad/s).
+            ``q2``, ``v1``, ``v2``, ``omega``; s, m, m/s, rad/s); empty when the run
+            kept no states (``run_ensemble(..., states=False)``).
         seconds: wall-clock time of the run (s).
     """
 
@@ -217,6 +218,7 @@ def run_ensemble(
     threads: int | None = None,
     progress: Callable[[int], None] | None = None,
     device: str = "cpu",
+    states: bool = True,
 ) -> EnsembleResult:
     """Run one trajectory per start (arrays broadcast together: positions in m,
     velocities in m/s, spin in rad/s, all at time t in s) of ``scene`` (a scene or a
@@ -226,6 +228,9 @@ def run_ensemble(
     the sweep's period test and resting band (docs/sweeps.md). ``device``: ``"cpu"``
     (all cores, or ``threads``) or ``"gpu"`` (an NVIDIA GPU through numba-cuda: the
     same physics, not the same bits; docs/sweeps.md, "GPU"; the impacts model only).
+    ``states`` False: the final state vectors are not kept (``final`` is empty,
+    ``ctxs`` None), so that a GPU copies back only the measurements (about 112 bytes
+    and 16 per kept impact a start, rather than 11 kB more).
 
     Raises:
         ValueError: a scene the ensemble kernel does not take (method rk4; contact
@@ -252,21 +257,24 @@ def run_ensemble(
     run = np.nonzero(valid)[0]
     stats = np.zeros((n, E.NSTAT))
     stats[:, E.ST_STATUS] = E.RUN_FAILED
-    rings = np.empty((n, width, E.RCOL))  # a slot is read only once written
+    last_height, last_tof = np.full((n, keep), math.nan), np.full((n, keep), math.nan)
     if run.size:
-        sub = np.ascontiguousarray(ctxs[run])
-        s, r = EN.advance_setup(
+        whole = run.size == n  # every start valid: advanced where they are
+        sub = ctxs if whole else np.ascontiguousarray(ctxs[run])
+        s, (h, f) = EN.advance_setup(
             setup, sub, consts, transient=transient, impacts=impacts, width=width,
-            device=device, threads=threads, progress=progress,
+            device=device, threads=threads, progress=progress, keep=keep, states=states,
         )  # fmt: skip
-        stats[run], rings[run], ctxs[run] = s, r, sub
+        stats[run], last_height[run], last_tof[run] = s, h, f
+        if states and not whole:
+            ctxs[run] = sub
     columns = measured_columns(stats, valid, setup.rest_height, rest_band, scene)
     columns = {"q1_start": arrays[0].ravel(), "q2_start": arrays[1].ravel()} | columns
-    last_height, last_tof = last_impacts(stats, rings, keep)
     final = {
         name: column(ctxs, quantity).reshape(shape)
         for name, quantity in (("t", "engine.t"), ("q1", "engine.q1"), ("q2", "engine.q2"))
         + (("v1", "engine.u1"), ("v2", "engine.u2"), ("omega", "engine.u3"))
+        if states
     }
     return EnsembleResult(
         scene=scene,
@@ -277,7 +285,7 @@ def run_ensemble(
         final=final,
         seconds=time.perf_counter() - began,
         device=device,
-        ctxs=ctxs,
+        ctxs=ctxs if states else None,
     )
 
 
@@ -355,24 +363,3 @@ def measured_columns(
         "run_status": run_status,
         "final_mode": final_mode,
     }
-
-
-def last_impacts(stats: np.ndarray, rings: np.ndarray, keep: int) -> tuple[np.ndarray, ...]:
-    """The last ``keep`` measured heights and times of flight of each trajectory, oldest
-    first, NaN-padded at the front (n x keep each)."""
-    from billiard.kernels import ensemble as E
-
-    n, width = rings.shape[0], rings.shape[1]
-    heights = np.full((n, keep), np.nan)
-    tofs = np.full((n, keep), np.nan)
-    if keep == 0:
-        return heights, tofs
-    measured = stats[:, E.ST_MEASURED].astype(np.int64)
-    back = np.arange(keep, 0, -1)  # keep ... 1 impacts before the end
-    index = measured[:, None] - back[None, :]
-    present = index >= 0
-    slots = np.where(present, index, 0) % width
-    rows = np.arange(n)[:, None]
-    heights[present] = rings[rows, slots, E.R_Q2][present]
-    tofs[present] = rings[rows, slots, E.R_TOF][present]
-    return heights, tofs

@@ -122,6 +122,40 @@ def test_measurements_match_the_sweeps_statistics() -> None:
             assert stats[i, E.ST_PERIOD] == expected == period
 
 
+def test_the_kept_impacts_are_the_runs_last_measured_ones() -> None:
+    """advance_setup(keep=K): each trajectory's last K measured heights and times of
+    flight are the run's last K records, oldest first, NaN before the first measured
+    one; through a ring that wrapped (width 8 < 23 measured) and one that did not (a
+    run ended by its duration after fewer measured impacts than kept)."""
+    scene = load_scene("wedge-6.6hz")
+    setup = EN.prepare(scene)
+    starts = ((0.01, 0.08, None), (-0.012, 0.06, None), (0.005, 0.07, 0.6))
+    transient, impacts, keep, width = 7, 23, 6, 8
+    rows = []
+    for q1, q2, duration in starts:
+        ctx, ok = EN.start(setup, [q1], [q2], duration=duration)
+        assert ok.all()
+        rows.append(ctx[0])
+    consts = EN.constants(scene, 1e-5, 64, 256)
+    stats, (heights, tofs) = EN.advance_setup(
+        setup, np.array(rows), consts, transient=transient, impacts=impacts, width=width,
+        keep=keep, threads=1,
+    )  # fmt: skip
+    assert heights.shape == tofs.shape == (len(starts), keep)
+    short = 0
+    for i, (q1, q2, duration) in enumerate(starts):
+        point = with_values(scene, {"initial.q1": q1, "initial.q2": q2})
+        cols = simulate(point, collisions=transient + impacts, duration=duration).columns
+        h = np.asarray(cols["q2"][transient:], float)[-keep:]
+        tof = np.asarray(cols["tof"][transient:], float)[-keep:]
+        pad = np.full(keep - h.size, np.nan)
+        short += 0 < h.size < keep
+        assert stats[i, E.ST_MEASURED] == len(cols["q2"][transient:])
+        np.testing.assert_array_equal(heights[i], np.concatenate([pad, h]))
+        np.testing.assert_array_equal(tofs[i], np.concatenate([pad, tof]))
+    assert short == 1  # the one ended by its duration measured fewer than K, not none
+
+
 def test_a_duration_ends_trajectories_as_a_run_ends() -> None:
     """run.duration: the trajectory stops before the first impact after t + duration,
     at the run's impact count."""

@@ -230,3 +230,107 @@ def test_a_thread_stopped_in_one_launch_is_failed_not_stepped_on(tmp_path):
     rows = [tuple(map(int, line.split())) for line in done.stdout.splitlines()]
     complete, failed = int(E.RUN_COMPLETE), int(E.RUN_FAILED)
     assert rows == [(complete, 0, 12), (failed, L.E_NO_IMPACT, 5), (complete, 0, 12)]
+
+
+#: a parameter map's ensemble on the simulated GPU against the CPU: the reduced copy
+#: (stats and the kept tails: what a sweep stores) and the full one (rings and state
+#: vectors). Threads that stop as a device thread stops (their code in their state
+#: vector, nothing else written) are injected into the real kernel: one in its first
+#: launch, stepped no further after it; one in its last, whose code comes from the
+#: end-of-batch kernel. Prints the bytes copied back per trajectory, both ways.
+_REDUCED = """
+import numpy as np
+from numba import cuda
+from numba.cuda.simulator.cudadrv import devicearray
+from billiard.engine import ensemble as EN, gpu
+from billiard.kernels import ensemble as E, layout as L
+from billiard.scene.scene import load_scene, with_values
+from billiard.sweep.attractor import PERIOD_WINDOW
+assert gpu.simulated() and gpu.available() is None
+
+copied = []
+to_host = devicearray.FakeCUDAArray.copy_to_host
+def counted(self, ary=None, stream=0):
+    copied.append(self.nbytes)
+    return to_host(self, ary, stream)
+devicearray.FakeCUDAArray.copy_to_host = counted
+
+gpu.BATCH, gpu.ROUNDS = 4, 5  # six trajectories in two batches, launches of 5 impacts
+transient, impacts, keep = 6, 12, 4
+base = EN.prepare(load_scene("wedge-6.6hz"))
+family = [base] + [
+    EN.patch(base, with_values(base.scene, values))
+    for values in ({"drive.frequency": 6.3, "contact.restitution": 0.4}, {"drive.amplitude": 0.025})
+]
+ctxs, consts = [], []
+for k, setup in enumerate(family):
+    c, ok = EN.start(setup, [-0.01 + 0.01 * k, 0.012], [0.06, 0.08 - 0.01 * k])
+    assert ok.all()
+    ctxs.append(c)
+    for tolerance in (1e-5, 0.2):  # none, or a period within this tolerance (m)
+        consts.append(EN.constants(setup.scene, tolerance, 64, PERIOD_WINDOW))
+ctxs, consts = np.concatenate(ctxs), np.array(consts)
+n = ctxs.shape[0]
+kw = dict(transient=transient, impacts=impacts, width=PERIOD_WINDOW)
+cpu_ctxs = ctxs.copy()
+cpu, (cpu_h, cpu_t) = EN.advance_setup(base, cpu_ctxs, consts, threads=1, keep=keep, **kw)
+assert (cpu[:, E.ST_STATUS] == E.RUN_COMPLETE).all()
+assert (cpu[:, E.ST_PERIOD] > 0).any() and (cpu[:, E.ST_PERIOD] == 0).any()
+
+measure = gpu.device_module(base.sim, "ensemble").measure
+FIRST, LAST = float(L.E_NO_IMPACT), float(L.E_ROOT)
+def stopping(ctxs, params, rows, rings, stats, consts, transient, total, target):
+    i = cuda.grid(1)
+    if i < ctxs.shape[0]:
+        if i == 2 and target == total:
+            ctxs[i, L.EN_STOP] = LAST
+            return
+        measure(ctxs[i], params[i], 0, rows[i], rings[i], stats[i], consts[i], transient,
+                total, target)
+        if i == 1 and target == gpu.ROUNDS:
+            ctxs[i, L.EN_STOP] = FIRST
+package = gpu.device_kernels(base.sim).__name__
+gpu._measure[package] = cuda.jit(stopping)
+copied.clear()
+given = ctxs.copy()
+got, (h, t) = EN.advance_setup(base, given, consts, device="gpu", keep=keep, states=False, **kw)
+reduced = sum(copied) / n
+assert np.array_equal(given, ctxs, equal_nan=True)  # no state vector came back
+failed = {1: FIRST, 5: FIRST, 2: LAST}  # thread 1 of each batch, thread 2 of the first
+for i in range(n):
+    if i in failed:
+        assert got[i, E.ST_STATUS] == E.RUN_FAILED and got[i, E.ST_CODE] == failed[i], (i, got[i])
+        continue
+    assert np.array_equal(got[i], cpu[i]), i
+    assert np.array_equal(h[i], cpu_h[i], equal_nan=True), i
+    assert np.array_equal(t[i], cpu_t[i], equal_nan=True), i
+
+del gpu._measure[package]  # the real kernel: the full copy, nothing stopped
+copied.clear()
+given = ctxs.copy()
+got, rings = EN.advance_setup(base, given, consts, device="gpu", **kw)
+full = sum(copied) / n
+assert np.array_equal(got, cpu) and np.array_equal(given, cpu_ctxs, equal_nan=True)
+h, t = EN.last_impacts(got, rings, keep)
+assert np.array_equal(h, cpu_h, equal_nan=True) and np.array_equal(t, cpu_t, equal_nan=True)
+print(reduced, full)
+"""
+
+
+@needs_numba_cuda
+def test_the_reduced_copy_is_the_cpus_measurements_and_small(tmp_path):
+    """What a sweep stores, copied back from the (simulated) GPU: stats, periods,
+    heights and times of flight of a parameter map equal the CPU's bit for bit, the
+    stop codes of failed threads arrive, and each trajectory brings back at most 100 +
+    16 * keep + 8 * NSTAT bytes (against its state vector and ring by default)."""
+    from billiard.kernels.ensemble import NSTAT
+
+    env = dict(os.environ, NUMBA_ENABLE_CUDASIM="1")
+    done = subprocess.run(
+        [sys.executable, "-c", _REDUCED], env=env, cwd=tmp_path, capture_output=True, text=True
+    )
+    assert done.returncode == 0, done.stderr[-3000:]
+    reduced, full = (float(x) for x in done.stdout.split())
+    keep = 4
+    assert NSTAT * 8 <= reduced <= 100 + 16 * keep + NSTAT * 8
+    assert full > L.SIZE * 8  # the default copy brings the state vectors back

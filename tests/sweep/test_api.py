@@ -91,3 +91,21 @@ def test_an_ensemble_result_shows_as_a_table():
     for name, count in zip(names, counts, strict=True):
         assert f"{name} {count} (" in page
     assert "3 trajectories" in page and "wedge-6.6hz" in page
+
+
+def test_an_ensemble_without_states_keeps_the_same_measurements():
+    """states=False (what the GPU copies back for a sweep): the same columns and kept
+    impacts, no final states; an invalid start among them stays invalid."""
+    kw = dict(q1=np.array([-0.01, 0.0, 0.5]), q2=0.09, impacts=20, transient=5, keep=6)
+    full = billiard.run_ensemble("wedge-6.6hz", **kw)
+    lean = billiard.run_ensemble("wedge-6.6hz", states=False, **kw)
+    assert full.attractor.tolist()[2] == "invalid" and set(full.final) == {
+        "t", "q1", "q2", "v1", "v2", "omega"
+    }  # fmt: skip
+    for name, column in full.columns.items():
+        nan = column.dtype.kind == "f"  # an invalid start's means are NaN
+        assert np.array_equal(lean.columns[name], column, equal_nan=nan), name
+    assert np.array_equal(lean.last_height, full.last_height, equal_nan=True)
+    assert np.array_equal(lean.last_tof, full.last_tof, equal_nan=True)
+    assert not np.isnan(full.last_height[:2]).any() and np.isnan(full.last_height[2]).all()
+    assert lean.final == {} and lean.ctxs is None
