@@ -249,3 +249,20 @@ def test_the_locked_orbits_branch_is_written(table_scene, tmp_path, capsys):
     assert periods.tolist() == [1] * len(a)
     grazing = a[codes == BIFURCATIONS.index("grazing")] / table.amplitude(1.0)
     assert grazing == pytest.approx([1.59734], abs=2e-5)
+
+
+def test_an_orbit_rolling_on_a_sloped_wall_is_refused_with_exit_status_2(tmp_path, capsys):
+    """The parabola shaken vertically under contact phases, the ball started off its
+    bottom: it rolls to and fro and lifts off its sloped wall, a lift-off that depends on
+    that motion (docs/orbits.md, scope)."""
+    out = tmp_path / "out"
+    sets = ["contact.model=phases", "drive.direction=vertical", "drive.amplitude=0.02"]
+    sets += ["initial.q1=0.05"]
+    args = ["orbits", "parabola-5.4hz", "--continue", "drive.amplitude=0.01:0.03"]
+    for item in sets:
+        args += ["--set", item]
+    assert main([*args, "--out", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert err.splitlines()[-1].startswith("billiard: error: ") and "Traceback" not in err
+    assert "where it is not horizontal or moves along it while curved" in err
+    assert not out.exists()
