@@ -27,6 +27,8 @@ import numpy as np
 from billiard.engine.simulation import Simulation
 from billiard.engine.state import BallState
 from billiard.errors import SimulationError
+from billiard.orbits.errors import OrbitError, SequenceChange
+from billiard.orbits.jacobian import map_jacobian
 from billiard.runfile.record import ImpactRecord
 
 __all__ = ["LID", "STATE", "Landing", "OrbitError", "ReturnMap", "SequenceChange", "landing"]
@@ -35,16 +37,6 @@ __all__ = ["LID", "STATE", "Landing", "OrbitError", "ReturnMap", "SequenceChange
 STATE: tuple[str, ...] = ("t", "s", "v1", "v2", "omega")
 #: The wall index of the lid (collisions.csv's ``wall``).
 LID = -1
-
-
-class OrbitError(ValueError):
-    """No orbit can be computed here: bad input (a scene outside the method's scope, a
-    guess that is no post-impact state) or a search that failed. One line, for the user."""
-
-
-class SequenceChange(OrbitError):
-    """The orbit's impacts hit other walls than the branch's, or, through contact
-    phases, its lift-offs come other drive periods apart or not at all: past a grazing."""
 
 
 @dataclass(frozen=True)
@@ -198,8 +190,6 @@ class ReturnMap:
     def jacobian(self, x: np.ndarray, wall: int, records: list[Any]) -> np.ndarray:
         """The exact 5x5 Jacobian of P^N at ``x`` along ``records``
         (:func:`billiard.orbits.jacobian.map_jacobian`)."""
-        from billiard.orbits.jacobian import map_jacobian  # it builds on this module
-
         return map_jacobian(self, x, wall, records)
 
 
