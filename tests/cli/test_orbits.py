@@ -8,6 +8,7 @@ import signal
 import subprocess
 import sys
 import time
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -266,3 +267,23 @@ def test_an_orbit_rolling_on_a_sloped_wall_is_refused_with_exit_status_2(tmp_pat
     assert err.splitlines()[-1].startswith("billiard: error: ") and "Traceback" not in err
     assert "where it is not horizontal or moves along it while curved" in err
     assert not out.exists()
+
+
+def test_the_docs_locked_orbit_command_runs_as_shown(tmp_path, monkeypatch, capsys):
+    """docs/orbits.md's table scene and command, as a reader copies them: the orbit of
+    one lift-off and the grazing the page states."""
+    monkeypatch.setenv("BILLIARD_HOME", str(tmp_path / "home"))
+    page = (Path(__file__).resolve().parents[2] / "docs" / "orbits.md").read_text()
+    after = page.split("With the table as a scene file, `table.toml`:", 1)[1]
+    toml = after.split("```toml\n", 1)[1].split("```", 1)[0]
+    command = after.split("```bash\n", 1)[1].split("```", 1)[0].split()
+    assert command[:3] == ["billiard", "orbits", "table.toml"]
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "table.toml").write_text(toml)
+    assert main(command[1:]) == 0
+    text = capsys.readouterr().out
+    assert "orbit of 1 lift-off at drive.amplitude = 0.000808 m" in text
+    assert "multipliers 0, 0" in text
+    grazing = float(text.split("grazing at drive.amplitude = ")[1].split()[0])
+    assert grazing == pytest.approx(0.000992307, abs=1e-9)
+    assert (tmp_path / "runs" / "orbits-locked" / "branch.nc").is_file()
