@@ -61,7 +61,7 @@ def cmd_orbits(args: argparse.Namespace) -> int:
     from billiard.sweep.units import key_long_name, key_unit
 
     if args.period < 1:
-        raise UserError(f"orbits: --period must be >= 1 impact, got {args.period}")
+        raise UserError(f"orbits: --period must be >= 1, got {args.period}")
     if args.points < 2:
         raise UserError(f"orbits: --points must be >= 2, got {args.points}")
     key, lo, hi = _span(args.continue_)
@@ -89,8 +89,9 @@ def cmd_orbits(args: argparse.Namespace) -> int:
     over = _over(args.over, key) if args.over else None  # read first: refused before the work
     guess = _guess(args)
     start = find_orbit(scene, args.period, guess=guess, free=free, settle=SETTLE)
+    counted = "lift-off" if getattr(scene.contact, "model", "impacts") == "phases" else "impact"
     print(
-        f"orbits: orbit of {_impacts(args.period)} at {key} = "
+        f"orbits: orbit of {_count(args.period, counted)} at {key} = "
         f"{scene_value(scene, key):.10g} {key_unit(key)}: q2 = {start.lab[1]:.6f} m, "
         f"{'stable' if start.stable else 'unstable'}, multipliers "
         + ", ".join(_complex(m) for m in start.multipliers)
@@ -99,7 +100,7 @@ def cmd_orbits(args: argparse.Namespace) -> int:
     arrays = branch.arrays()
     out.mkdir(parents=True, exist_ok=True)
     unit = key_unit(key)
-    title = f"{scene.name}: orbits of {_impacts(args.period)} in {key}"
+    title = f"{scene.name}: orbits of {_count(args.period, counted)} in {key}"
     nc = write_branch(
         out / "branch.nc", arrays, key, title, units=unit, long_name=key_long_name(key)
     )
@@ -118,7 +119,7 @@ def cmd_orbits(args: argparse.Namespace) -> int:
         rows = [i for i, s in enumerate(branch.segment) if s == k]
         first, period = rows[0], branch.orbits[rows[0]].impacts
         print(
-            f"orbits: switched onto the branch of {_impacts(period)} at {key} = "
+            f"orbits: switched onto the branch of {_count(period, counted)} at {key} = "
             f"{branch.values[first]:.12g} {unit}: {len(rows)} points"
         )
         for name in BIFURCATIONS[1:]:
@@ -128,8 +129,9 @@ def cmd_orbits(args: argparse.Namespace) -> int:
     return 0
 
 
-def _impacts(n: int) -> str:
-    return "1 impact" if n == 1 else f"{n} impacts"
+def _count(n: int, unit: str) -> str:
+    """``1 impact``, ``2 lift-offs``."""
+    return f"1 {unit}" if n == 1 else f"{n} {unit}s"
 
 
 def _complex(m: complex) -> str:
@@ -162,10 +164,17 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
         "by pseudo-arclength continuation, locating folds, period doublings, "
         "Neimark-Sacker points and grazing (with --switch, continuing the period-2N branches "
         "born at period doublings). Writes DIR/branch.nc and DIR/branch.png. "
-        'Needs contact.model = "impacts". See docs/orbits.md.',
+        'Under contact.model = "phases": orbits that lie on the shaken table between '
+        "flights (N counts lift-offs). See docs/orbits.md.",
     )
     p.add_argument("scene", help="built-in scene name or a scene .toml file")
-    p.add_argument("--period", type=int, default=1, metavar="N", help="impacts per period")
+    p.add_argument(
+        "--period",
+        type=int,
+        default=1,
+        metavar="N",
+        help='impacts per period (lift-offs under contact.model = "phases")',
+    )
     p.add_argument(
         "--continue",
         dest="continue_",
@@ -190,7 +199,8 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
         "--free",
         metavar="NAMES",
         help="the coordinates Newton varies, comma-separated from t,s,v1,v2,omega "
-        "(default all; e.g. t,v2 for a ball bouncing straight up)",
+        '(default all, t,v2 under contact.model = "phases"; e.g. t,v2 for a ball '
+        "bouncing straight up)",
     )
     p.add_argument("--points", type=int, default=200, help="most points of the branch")
     p.add_argument(

@@ -289,6 +289,12 @@ def step(ctx, p, walls):
             t_root = touched_root(ctx, p, walls, i, tau, t_b, a)
         elif (a > 0.0 and 0.0 >= b) or (a == 0.0 and b < 0.0):
             t_root = first_root(ctx, p, walls, i, tau, t_b, a)
+        elif i == 0 and tau == 0.0 and a < 0.0:
+            # no normal force from the start: a phase begun where another one's end met
+            # the lift-off (rolling's friction limit mu_s N - |F| reaches zero with N
+            # where F = 0, and its root, an ulp earlier, left N just below zero) lifts
+            # off at once; else the wall would hold the ball with N < 0
+            t_root = tau
         if t_root >= 0.0 and (end_i < 0 or t_root < end_t):
             end_t, end_i = t_root, i
     ctx[PH_END_T] = end_t

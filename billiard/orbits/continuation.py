@@ -42,9 +42,9 @@ from billiard.orbits.bifurcation import (
     neimark_sacker_pair,
     test_functions,
 )
-from billiard.orbits.jacobian import map_jacobian
 from billiard.orbits.newton import NEWTON_TOL, Orbit, free_indices, stable
-from billiard.orbits.returnmap import STATE, OrbitError, ReturnMap, landing
+from billiard.orbits.phases import return_map
+from billiard.orbits.returnmap import STATE, OrbitError, ReturnMap, SequenceChange, landing
 from billiard.scene.scene import SceneError, with_values
 
 __all__ = [
@@ -128,6 +128,7 @@ class Branch:
         out["bifurcation"] = np.array(self.bifurcation, dtype=np.int8)
         # which branch a point lies on, and its period: a switched branch's are 2N
         out["period"] = np.array([o.impacts for o in self.orbits], dtype=np.int32)
+        out["drive_periods"] = np.array([o.periods for o in self.orbits], dtype=np.int32)
         out["branch"] = np.array(self.segment, dtype=np.int32)
         return out
 
@@ -153,13 +154,10 @@ def variable_name(key: str) -> str:
     return key.replace(".", "_")
 
 
-class SequenceChange(OrbitError):
-    """The orbit's impacts hit other walls than the branch's: past a grazing."""
-
-
 class _Problem:
     """The branch's equations F(x, lam) = 0 over the varied coordinates ``idx``, the
-    impacts hitting the walls ``walls`` in turn."""
+    impacts hitting the walls ``walls`` in turn (the map's
+    :meth:`~billiard.orbits.returnmap.ReturnMap.route`)."""
 
     def __init__(self, scene, period, key, idx, wall, periods, scale, walls):
         self.scene, self.period, self.key = scene, period, key
@@ -176,7 +174,7 @@ class _Problem:
                 scene = with_values(self.scene, {self.key: lam})
             except SceneError as exc:
                 raise OrbitError(f"{self.key} = {lam:.10g}: {exc}") from None
-            rm = ReturnMap(scene, self.period)
+            rm = return_map(scene, self.period)
             if len(self._maps) > 8:
                 self._maps.clear()
             self._maps[lam] = rm
@@ -191,7 +189,7 @@ class _Problem:
     def residual(self, x: np.ndarray, lam: float) -> tuple[np.ndarray, Any, ReturnMap]:
         rm = self.rmap(lam)
         landing, records = rm(x, self.wall)
-        if tuple(int(r.wall) for r in records) != self.walls:
+        if rm.route(x, records) != self.walls:
             raise SequenceChange("the orbit left its wall sequence")
         res = landing.x - x
         res[0] -= self.periods * rm.period
@@ -217,15 +215,15 @@ class _Problem:
         return (fa - fb)[self.idx] / (a - b) * self.scale[-1] / self.scale[:-1]
 
     def system(self, z: np.ndarray, column: np.ndarray):
-        """(F scaled, [dF/dx dF/dlam] scaled, records, rm, full Jacobian) at z, with the
-        lam column given."""
+        """(F scaled, [dF/dx dF/dlam] scaled, the point at z but its z, full Jacobian)
+        at z, with the lam column given."""
         x, lam = self.full(z)
         res, records, rm = self.residual(x, lam)
-        jac = map_jacobian(rm, x, self.wall, records)
+        jac = rm.jacobian(x, self.wall, records)
         sx = self.scale[:-1]
         dfx = (jac[np.ix_(self.idx, self.idx)] - np.eye(len(self.idx))) * sx[None, :]
         big = np.hstack([dfx / sx[:, None], column[:, None]])
-        return res[self.idx] / sx, big, records, rm, jac
+        return res[self.idx] / sx, big, _Point(z, records, jac, rm, big, rm.sequence(x, records))
 
     def correct(
         self,
@@ -246,11 +244,11 @@ class _Problem:
         if column is None:
             column = self.lambda_column(z)
         for it in range(1, MAX_CORRECTOR + 1):
-            f, big, records, rm, jac = self.system(z, column)
+            f, big, here = self.system(z, column)
             if floor and it > 1:
                 y = z[:-1] * self.scale[:-1]
                 if np.max(np.abs(f * self.scale[:-1]) / (1.0 + np.abs(y))) <= RESIDUAL_FLOOR:
-                    return _Point(z, records, jac, rm, big), it
+                    return here, it
             a = np.vstack([big, normal])
             b = np.concatenate([f, [normal @ (z - z0)]])
             try:
@@ -265,7 +263,8 @@ class _Problem:
                 # the last step moved z by 1e-12 of itself: the records and Jacobian of
                 # the point before it stand for it (the Jacobian to 1e-12, the impact
                 # sequence exactly) without another engine
-                return _Point(z, records, jac, rm, big), it
+                here.z = z
+                return here, it
         raise OrbitError("the corrector did not converge")
 
 
@@ -303,9 +302,10 @@ class _Point:
     jac: np.ndarray
     rm: ReturnMap
     big: np.ndarray
+    seq: tuple  # the map's sequence of the records
 
     def sequence(self):
-        return tuple((int(r.wall), str(r.regime)) for r in self.records)
+        return self.seq
 
 
 def _orbit(problem: _Problem, p: _Point) -> tuple[float, Orbit]:
@@ -444,8 +444,8 @@ def continue_branch(
     idx = [STATE.index(n) for n in start.free]
     floor = np.array([start_period(scene), 1e-3, 1e-2, 1e-2, 1.0])
     scale = np.append(np.maximum(np.abs(start.x), floor)[idx], max(abs(lam0), hi - lo))
-    walls = tuple(w for w, _ in start.sequence)
-    problem = _Problem(scene, start.impacts, key, idx, start.wall, start.periods, scale, walls)
+    problem = _Problem(scene, start.impacts, key, idx, start.wall, start.periods, scale, None)
+    problem.walls = problem.rmap(lam0).route(start.x, start.records)
     problem.x_full = start.x.copy()
     z0 = np.append(start.x[idx], lam0) / scale
     first = problem.correct(z0, np.eye(len(z0))[-1])[0]
@@ -516,11 +516,13 @@ def _switch(
         problem.wall,
         2 * problem.periods,
         problem.scale,
-        problem.walls * 2,
+        None,
     )
     doubled.x_full = problem.x_full
-    _, big, records, rm, jac = doubled.system(doubling.z, np.zeros(len(idx)))
-    found: list[tuple[_Point, int]] = [(_Point(doubling.z, records, jac, rm, big), NONE)]
+    x, lam = doubled.full(doubling.z)
+    rm = doubled.rmap(lam)
+    doubled.walls = rm.route(x, rm(x, problem.wall)[1])  # the period-N route, twice
+    found: list[tuple[_Point, int]] = [(doubled.system(doubling.z, np.zeros(len(idx)))[2], NONE)]
     h = h0
     for _ in range(SWITCH_TRIES):
         try:

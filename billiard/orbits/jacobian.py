@@ -29,13 +29,14 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
+from typing import Any
 
 import numpy as np
 from scipy.integrate import solve_ivp
 
 from billiard.generated import ball as gball
 from billiard.generated import orbit as gorbit
-from billiard.orbits.returnmap import OrbitError, ReturnMap
+from billiard.orbits.errors import OrbitError
 from billiard.runfile.record import ImpactRecord
 
 __all__ = ["FLIGHT_RTOL", "flight_transition", "map_jacobian"]
@@ -104,7 +105,7 @@ def flight_transition(
     return y[:4], sens[:, :4], sens[:, 4]
 
 
-def _impact_jacobian(rm: ReturnMap, u: np.ndarray, omega: float, z: float, vb) -> np.ndarray:
+def _impact_jacobian(rm: Any, u: np.ndarray, omega: float, z: float, vb) -> np.ndarray:
     """d(u1+, u2+, u3+)/d(u1, u2, u3, z, vb1, vb2) of the impact law in the regime the
     engine's law takes for these pre-impact speeds (the low-velocity rule's e = 1
     included). A ball lying on the wall (the rule's shifted approach) is no smooth impact:
@@ -124,9 +125,7 @@ def _impact_jacobian(rm: ReturnMap, u: np.ndarray, omega: float, z: float, vb) -
     return np.array(gorbit.impact_stick_jacobian(*args))
 
 
-def leg_jacobian(
-    rm: ReturnMap, air: _Air, x: np.ndarray, wall: int, record: ImpactRecord
-) -> np.ndarray:
+def leg_jacobian(rm: Any, air: _Air, x: np.ndarray, wall: int, record: ImpactRecord) -> np.ndarray:
     """d x_k+1 / d x_k (5x5) of one leg: from post-impact ``x`` on ``wall`` to the impact
     the engine recorded as ``record``."""
     drive = rm.drive
@@ -179,7 +178,7 @@ def leg_jacobian(
     return out
 
 
-def _tangent(rm: ReturnMap, wall: int, z: float, zs: float) -> np.ndarray:
+def _tangent(rm: Any, wall: int, z: float, zs: float) -> np.ndarray:
     """dq/ds (dimensionless): how the touching ball's centre moves with the contact
     abscissa, (L - r z_s) c1 on a curve wall (L = 1 / cos z), (1, 0) on the lid."""
     if wall < 0:
@@ -188,11 +187,11 @@ def _tangent(rm: ReturnMap, wall: int, z: float, zs: float) -> np.ndarray:
     return (1.0 / c - rm.radius * zs) * np.array([c, math.sin(z)])
 
 
-def map_jacobian(
-    rm: ReturnMap, x: np.ndarray, wall: int, records: Sequence[ImpactRecord]
-) -> np.ndarray:
+def map_jacobian(rm: Any, x: np.ndarray, wall: int, records: Sequence[ImpactRecord]) -> np.ndarray:
     """The 5x5 Jacobian of P^N at ``x`` on ``wall``, along the engine's ``records`` of the
-    N impacts from there (:meth:`ReturnMap.__call__`)."""
+    N impacts from there (:meth:`ReturnMap.__call__`). ``rm`` is the
+    :class:`~billiard.orbits.returnmap.ReturnMap` (its wall geometry, drive and scene;
+    not imported here: the map's ``jacobian`` calls this function)."""
     air = _Air(rm.scene)
     jac = np.eye(5)
     xk, wk = np.asarray(x, float), wall

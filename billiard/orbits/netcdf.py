@@ -6,8 +6,8 @@ named with underscores (``drive_amplitude``); the orbit's state just after its f
 impact (``t_phase``, ``s``, ``q1``, ``q2``, ``v1``, ``v2``, ``omega``); the Floquet
 multipliers as ``multipliers_real`` and ``multipliers_imag``; ``stable`` 0/1; and
 ``bifurcation``, an int8 code with ``flag_values`` and ``flag_meanings``; ``period``
-(impacts) and ``branch`` (0 the continued branch, k the k-th switched onto at a period
-doubling) as int32.
+(impacts, or lift-offs through contact phases), ``drive_periods`` and ``branch`` (0 the
+continued branch, k the k-th switched onto at a period doubling) as int32.
 """
 
 from __future__ import annotations
@@ -56,7 +56,11 @@ def attributes(key: str, units: str = "", long_name: str = "") -> dict[str, dict
         "flag_values": np.array([0, 1], dtype=np.int8),
         "flag_meanings": "unstable stable",
     }
-    out["period"] = {"long_name": "impacts per period of the orbit", "units": "1"}
+    out["period"] = {
+        "long_name": "impacts per period of the orbit (lift-offs through contact phases)",
+        "units": "1",
+    }
+    out["drive_periods"] = {"long_name": "drive periods per period of the orbit", "units": "1"}
     out["branch"] = {
         "long_name": "branch of the point: 0 the one continued, k >= 1 the k-th period-2N "
         "branch switched onto at a period doubling",

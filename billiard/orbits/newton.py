@@ -19,7 +19,7 @@ from typing import Any
 
 import numpy as np
 
-from billiard.orbits.jacobian import map_jacobian
+from billiard.orbits.phases import return_map
 from billiard.orbits.returnmap import STATE, Landing, OrbitError, ReturnMap
 from billiard.runfile.record import ImpactRecord
 
@@ -42,13 +42,15 @@ class Orbit:
         x: (t, s, v1, v2, omega) just after the first impact (s, m, m/s, m/s, rad/s),
             t reduced to [0, T).
         wall: the wall of the first impact (-1 the lid).
-        impacts: N, impacts per period of the orbit.
+        impacts: N, impacts per period of the orbit (lift-offs for an orbit through
+            contact phases: :class:`~billiard.orbits.phases.PhaseMap`).
         periods: m, drive periods per period of the orbit.
         jacobian: the Jacobian of P^N at x (the varied coordinates only).
         multipliers: its eigenvalues, the Floquet multipliers (largest modulus first).
         stable: all multipliers strictly inside the unit circle.
-        sequence: (wall, regime) of each of the N impacts.
-        records: the engine's records of the N impacts.
+        sequence: (wall, regime) of each of the N impacts (the map's
+            :meth:`~billiard.orbits.returnmap.ReturnMap.sequence`).
+        records: the engine's records of the N impacts (and contact phases).
         lab: (q1, q2) (m) of the centre just after the first impact.
         residual: max |P^N(x) - x - m T e_t| relative to 1 + |x| at the end (NaN for
             a point of a continued branch, converged by its corrector's step instead).
@@ -63,7 +65,7 @@ class Orbit:
     multipliers: np.ndarray
     stable: bool
     sequence: tuple[tuple[int, str], ...]
-    records: list[ImpactRecord] = field(repr=False)
+    records: list[Any] = field(repr=False)
     lab: tuple[float, float]
     residual: float
     free: tuple[str, ...]
@@ -115,37 +117,40 @@ def newton(
     """Newton's method for a fixed point of ``rm`` (P^N) from the guess ``x0`` on ``wall``.
 
     Args:
-        free: the coordinates varied (default all of :data:`STATE`); the others stay at
-            the guess and must then be invariant (a ball on a flat table bouncing
-            straight up: v1 = omega = 0 stays so).
+        free: the coordinates varied (default the map's ``FREE``: all of :data:`STATE`
+            for impacts, t and v2 through contact phases); the others stay at the guess
+            and must then be invariant (a ball on a flat table bouncing straight up:
+            v1 = omega = 0 stays so).
         periods: drive periods per orbit (default: the guess's flight time, rounded).
 
     Raises:
         OrbitError: no convergence, the orbit leaves its wall sequence during the
             search, or a held coordinate is not invariant.
     """
-    idx = free_indices(free)
+    idx = free_indices(rm.FREE if free is None else free)
+    rm.check_free(idx)
     x = np.array(x0, dtype=float)
     if x.shape != (len(STATE),) or not np.all(np.isfinite(x)):
         raise OrbitError(f"a guess is five finite numbers ({', '.join(STATE)}), not {x0!r}")
+    x, wall = rm.enter(x, wall)
     x[0] %= rm.period
     landing, records = rm(x, wall)
     if periods is None:
         periods = int(round((landing.x[0] - x[0]) / rm.period))
     if periods < 1:
         raise OrbitError(
-            f"the guess's {rm.impacts} impact(s) take {landing.x[0] - x[0]:.6g} s, "
+            f"the guess's {rm.impacts} {rm.UNIT}(s) take {landing.x[0] - x[0]:.6g} s, "
             f"less than half a drive period ({rm.period:.6g} s): no periodic orbit near it"
         )
     size = 1.0 + np.abs(x)
     for _ in range(MAX_STEPS):
         if landing.wall != wall:
             raise OrbitError(
-                f"the guess does not return to its wall after {rm.impacts} impact(s) "
+                f"the guess does not return to its wall after {rm.impacts} {rm.UNIT}(s) "
                 f"(wall {wall} to wall {landing.wall})"
             )
         res = _residual(rm, x, landing, periods)
-        jac = map_jacobian(rm, x, wall, records)
+        jac = rm.jacobian(x, wall, records)
         a = jac[np.ix_(idx, idx)] - np.eye(len(idx))
         step = -np.linalg.lstsq(a, res[idx], rcond=None)[0]
         x[idx] += step
@@ -166,7 +171,7 @@ def newton(
     residual = float(np.max(np.abs(res) / size))
     if held and np.max(np.abs(res[held]) / size[held]) > 1e3 * NEWTON_TOL:
         names = ", ".join(STATE[i] for i in held)
-        raise OrbitError(f"the held coordinates ({names}) change along the orbit: free them")
+        raise OrbitError(f"the held coordinates ({names}) change along the orbit: {rm.HELD_HINT}")
     return _orbit(rm, x, wall, periods, records, idx, residual)
 
 
@@ -175,11 +180,11 @@ def _orbit(
     x: np.ndarray,
     wall: int,
     periods: int,
-    records: list[ImpactRecord],
+    records: list[Any],
     idx: list[int],
     residual: float,
 ) -> Orbit:
-    jac = map_jacobian(rm, x, wall, records)[np.ix_(idx, idx)]
+    jac = rm.jacobian(x, wall, records)[np.ix_(idx, idx)]
     mults = np.linalg.eigvals(jac)
     mults = mults[np.argsort(-np.abs(mults), kind="stable")]
     ball = rm.ball(x, wall)
@@ -191,7 +196,7 @@ def _orbit(
         jacobian=jac,
         multipliers=mults,
         stable=stable(mults),
-        sequence=tuple((int(r.wall), str(r.regime)) for r in records),
+        sequence=rm.sequence(x, records),
         records=records,
         lab=(ball.q1, ball.q2),
         residual=residual,
@@ -210,17 +215,19 @@ def find_orbit(
     """A period-``period`` orbit (``period`` impacts) of ``scene``, by Newton's method.
 
     Args:
-        scene: a scene (``contact.model = "impacts"``).
-        period: N, impacts per period.
+        scene: a scene: under ``contact.model = "impacts"`` any; under ``"phases"`` one
+            whose orbit lies on the table between its flights
+            (:class:`~billiard.orbits.phases.PhaseMap`, docs/orbits.md).
+        period: N, impacts per period (lift-offs per period under ``"phases"``).
         guess: (t, s, v1, v2, omega) just after an impact on ``wall``, a dict of them,
             an :class:`~billiard.runfile.record.ImpactRecord` (the wall is then the
             record's), or None: the state after ``settle`` impacts of the scene's run.
-        free: coordinates Newton varies (default all).
+        free: coordinates Newton varies (default all; t and v2 under ``"phases"``).
 
     Returns:
         The :class:`Orbit`, converged to :data:`NEWTON_TOL` in its state.
     """
-    rm = ReturnMap(scene, period)
+    rm = return_map(scene, period)
     if guess is None:
         records = rm.run_scene(settle)
         guess = records[-1]

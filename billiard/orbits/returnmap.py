@@ -27,19 +27,16 @@ import numpy as np
 from billiard.engine.simulation import Simulation
 from billiard.engine.state import BallState
 from billiard.errors import SimulationError
+from billiard.orbits.errors import OrbitError, SequenceChange
+from billiard.orbits.jacobian import map_jacobian
 from billiard.runfile.record import ImpactRecord
 
-__all__ = ["LID", "STATE", "Landing", "OrbitError", "ReturnMap", "landing"]
+__all__ = ["LID", "STATE", "Landing", "OrbitError", "ReturnMap", "SequenceChange", "landing"]
 
 #: The coordinates of a post-impact state, in order (units: s, m, m/s, m/s, rad/s).
 STATE: tuple[str, ...] = ("t", "s", "v1", "v2", "omega")
 #: The wall index of the lid (collisions.csv's ``wall``).
 LID = -1
-
-
-class OrbitError(ValueError):
-    """No orbit can be computed here: bad input (a scene outside the method's scope, a
-    guess that is no post-impact state) or a search that failed. One line, for the user."""
 
 
 @dataclass(frozen=True)
@@ -56,18 +53,30 @@ class ReturnMap:
     """The map from one post-impact state to the one ``impacts`` impacts later.
 
     Args:
-        scene: a scene with ``contact.model = "impacts"`` (an orbit through a rolling or
-            sliding phase is out of scope: docs/orbits.md says why).
+        scene: a scene with ``contact.model = "impacts"`` (under ``"phases"`` the map
+            through contact phases is :class:`billiard.orbits.phases.PhaseMap`'s;
+            :func:`billiard.orbits.phases.return_map` picks the one a scene needs).
         impacts: N, the number of impacts of one period of the orbit.
 
     Raises:
         OrbitError: a scene under contact phases, a boundary at rest, N < 1.
     """
 
+    #: the scene's ``contact.model`` this map runs
+    MODEL = "impacts"
+    #: what N counts, for messages
+    UNIT = "impact"
+    #: the coordinates Newton varies when none are named (None: all of :data:`STATE`)
+    FREE: tuple[str, ...] | None = None
+    #: what to do when a held coordinate changes along the orbit
+    HELD_HINT = "free them"
+
     def __init__(self, scene: Any, impacts: int = 1):
         if int(impacts) != impacts or impacts < 1:
-            raise OrbitError(f"the period must be a whole number of impacts >= 1, not {impacts}")
-        if getattr(scene.contact, "model", "impacts") != "impacts":
+            raise OrbitError(
+                f"the period must be a whole number of {self.UNIT}s >= 1, not {impacts}"
+            )
+        if getattr(scene.contact, "model", "impacts") != self.MODEL:
             raise OrbitError(
                 'periodic orbits need contact.model = "impacts": under "phases" an orbit may '
                 "pass through a rolling or sliding phase, whose end is no impact "
@@ -152,11 +161,36 @@ class ReturnMap:
             raise OrbitError("the scene's run has no impact to start an orbit from")
         return records
 
-    def __call__(self, x: np.ndarray, wall: int) -> tuple[Landing, list[ImpactRecord]]:
+    def __call__(self, x: np.ndarray, wall: int) -> tuple[Landing, list[Any]]:
         """P^N(x): where the N-th impact from ``x`` on ``wall`` lands, and the records of
         the N impacts."""
         records = self.run(x, wall)
         return landing(records[-1]), records
+
+    # ------------------------------------------------------------------ the orbit's kind
+
+    def enter(self, x: np.ndarray, wall: int) -> tuple[np.ndarray, int]:
+        """A guess on the map's section: every post-impact state is one here."""
+        return x, wall
+
+    def check_free(self, idx: list[int]) -> None:
+        """Refuse (OrbitError) free coordinates (positions in :data:`STATE`) whose
+        derivatives the map's Jacobian does not have: none here."""
+
+    def sequence(self, x: np.ndarray, records: list[Any]) -> tuple[tuple[Any, ...], ...]:
+        """What a branch of orbits keeps between two points: (wall, regime) of each
+        impact; where it changes the map is not smooth (a grazing). ``x`` is the start."""
+        return tuple((int(r.wall), str(r.regime)) for r in records)
+
+    def route(self, x: np.ndarray, records: list[Any]) -> tuple[Any, ...]:
+        """The part of :meth:`sequence` without which no orbit of the branch exists: the
+        walls hit in turn (a regime may change on the way, a bifurcation located)."""
+        return tuple(int(r.wall) for r in records)
+
+    def jacobian(self, x: np.ndarray, wall: int, records: list[Any]) -> np.ndarray:
+        """The exact 5x5 Jacobian of P^N at ``x`` along ``records``
+        (:func:`billiard.orbits.jacobian.map_jacobian`)."""
+        return map_jacobian(self, x, wall, records)
 
 
 def landing(record: ImpactRecord) -> Landing:

@@ -34,7 +34,7 @@ from typing import Any
 
 from billiard.scene.checks import SceneError, check_name, error, shown
 from billiard.scene.display import html_table, scene_line, scene_rows
-from billiard.scene.keys import check_keys, sets_keys
+from billiard.scene.keys import SECTION_KEYS, check_keys, sets_keys
 from billiard.scene.spec import (
     BUILTIN_CURVES,
     DRAG_MODELS,
@@ -200,10 +200,42 @@ def with_values(scene: Scene, changes: Mapping[str, Any]) -> Scene:
     ``ball.radius`` here keeps ``air.c_lin`` and ``air.c_quad`` unless they are changed
     too (a load-time override of ``ball.radius`` does re-derive them).
     """
+    sections = _section_changes(changes)
+    if sections is not None:
+        # the common case (a sweep point, a parameter-map point): only the changed
+        # sections are built again, each validating itself as scene_from_dict would;
+        # the round trip through nested dicts took most of a patched map point's set-up
+        return dataclasses.replace(
+            scene,
+            **{
+                section: dataclasses.replace(getattr(scene, section), **keys)
+                for section, keys in sections.items()
+            },
+        )
     data = scene_to_dict(scene)
     for dotted, value in changes.items():
         _apply(data, dotted, value, f"change {dotted!r}")
     return scene_from_dict(data, name=scene.name)
+
+
+def _section_changes(changes: Mapping[str, Any]) -> dict[str, dict[str, Any]] | None:
+    """``changes`` as {section: {key: value}} where every change is a plain key of a
+    section whose new value needs nothing from another section, else None (then the
+    changes take the path through :func:`scene_from_dict`: nested keys, unknown keys and
+    their hints, drag coefficients derived again from the ball)."""
+    out: dict[str, dict[str, Any]] = {}
+    for dotted, value in changes.items():
+        if not isinstance(dotted, str):
+            return None
+        section, _, key = dotted.partition(".")
+        if key not in SECTION_KEYS.get(section, ()) or (section, key) == ("boundary", "parameters"):
+            return None
+        if section == "air" and value is None:  # resolved from the ball by scene_from_dict
+            return None
+        out.setdefault(section, {})[key] = value
+    # built (and so validated) in the sections' order, as scene_from_dict does: the
+    # same error first
+    return {section: out[section] for section in SECTIONS if section in out}
 
 
 def replace(scene: Scene, **section_changes: Any) -> Scene:

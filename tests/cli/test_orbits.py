@@ -8,6 +8,7 @@ import signal
 import subprocess
 import sys
 import time
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -125,8 +126,14 @@ def test_switch_continues_the_period_two_branch_too(table_scene, tmp_path, capsy
         (["--continue", "drive.amplitude=0:1", "--free", "t,x"], "--free"),
         (["--continue", "drive.amplitude=0:1", "--at", "drive.frequency=5"], "--at names"),
         (
-            ["--continue", "drive.amplitude=0:1", "--set", "contact.model=phases"],
-            'need contact.model = "impacts"',
+            ["--continue", "drive.amplitude=0:1", "--set", "contact.model=phases"]
+            + ["--set", "drive.direction=horizontal"],
+            "orbits through contact phases need a vertical drive",
+        ),
+        (
+            ["--continue", "drive.amplitude=0:1", "--set", "contact.model=phases"]
+            + ["--free", "t,s,v2"],
+            "through a contact phase only t and v2 can be free, not s",
         ),
         (["--continue", "drive.amplitude=0:1", "--over", "/nonexistent"], "no sweep.nc"),
     ],
@@ -210,3 +217,73 @@ def test_the_start_from_another_value_or_from_a_run(table_scene, tmp_path, capsy
     for value, t in zip(a, phase, strict=True):
         expected, _ = table.orbit(value / table.amplitude(1.0), 0.5)
         assert t == pytest.approx(expected, abs=1e-12)
+
+
+def test_the_locked_orbits_branch_is_written(table_scene, tmp_path, capsys):
+    """Under contact phases the table's ball lies on it between flights: the orbit of one
+    lift-off, superstable, its branch ending where the chatter meets the next lift-off
+    (Gamma 1.5973, tests/orbits/test_phases.py). The ball starts lying on the table (from
+    the scene's bounce it settles on the bouncing orbit of Gamma 1.3, which has no contact
+    phase)."""
+    out = tmp_path / "out"
+    lo, hi = table.amplitude(1.1), table.amplitude(1.7)
+    lying = [
+        f"initial.q2={table.FLOOR + table.R!r}",
+        f"initial.v2={table.amplitude(1.3) * table.W!r}",
+    ]
+    args = ["orbits", str(table_scene), "--set", "contact.model=phases"]
+    args += ["--set", lying[0], "--set", lying[1]]
+    args += ["--continue", f"drive.amplitude={lo!r}:{hi!r}", "--points", "200", "--out", str(out)]
+    assert main(args) == 0
+    text = capsys.readouterr().out
+    assert text.startswith("orbits: orbit of 1 lift-off at drive.amplitude")
+    assert "stable, multipliers 0, 0" in text and "grazing at drive.amplitude" in text
+    f = netcdf_file(out / "branch.nc", "r", mmap=False)
+    try:
+        v = f.variables
+        a, codes = v["drive_amplitude"][:].copy(), v["bifurcation"][:].copy()
+        periods = v["drive_periods"][:].copy()
+        assert v["period"][:].tolist() == [1] * len(a)
+        assert v["multipliers_real"][:].tolist() == [[0.0, 0.0]] * len(a)
+    finally:
+        f.close()
+    assert periods.tolist() == [1] * len(a)
+    grazing = a[codes == BIFURCATIONS.index("grazing")] / table.amplitude(1.0)
+    assert grazing == pytest.approx([1.59734], abs=2e-5)
+
+
+def test_an_orbit_rolling_on_a_sloped_wall_is_refused_with_exit_status_2(tmp_path, capsys):
+    """The parabola shaken vertically under contact phases, the ball started off its
+    bottom: it rolls to and fro and lifts off its sloped wall, a lift-off that depends on
+    that motion (docs/orbits.md, scope)."""
+    out = tmp_path / "out"
+    sets = ["contact.model=phases", "drive.direction=vertical", "drive.amplitude=0.02"]
+    sets += ["initial.q1=0.05"]
+    args = ["orbits", "parabola-5.4hz", "--continue", "drive.amplitude=0.01:0.03"]
+    for item in sets:
+        args += ["--set", item]
+    assert main([*args, "--out", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert err.splitlines()[-1].startswith("billiard: error: ") and "Traceback" not in err
+    assert "where it is not horizontal or moves along it while curved" in err
+    assert not out.exists()
+
+
+def test_the_docs_locked_orbit_command_runs_as_shown(tmp_path, monkeypatch, capsys):
+    """docs/orbits.md's table scene and command, as a reader copies them: the orbit of
+    one lift-off and the grazing the page states."""
+    monkeypatch.setenv("BILLIARD_HOME", str(tmp_path / "home"))
+    page = (Path(__file__).resolve().parents[2] / "docs" / "orbits.md").read_text()
+    after = page.split("With the table as a scene file, `table.toml`:", 1)[1]
+    toml = after.split("```toml\n", 1)[1].split("```", 1)[0]
+    command = after.split("```bash\n", 1)[1].split("```", 1)[0].split()
+    assert command[:3] == ["billiard", "orbits", "table.toml"]
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "table.toml").write_text(toml)
+    assert main(command[1:]) == 0
+    text = capsys.readouterr().out
+    assert "orbit of 1 lift-off at drive.amplitude = 0.000808 m" in text
+    assert "multipliers 0, 0" in text
+    grazing = float(text.split("grazing at drive.amplitude = ")[1].split()[0])
+    assert grazing == pytest.approx(0.000992307, abs=1e-9)
+    assert (tmp_path / "runs" / "orbits-locked" / "branch.nc").is_file()

@@ -12,6 +12,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+from billiard.scene.keys import SECTION_KEYS
 from billiard.scene.scene import (
     Scene,
     SceneError,
@@ -369,6 +370,43 @@ def test_with_values_and_replace() -> None:
         replace(scene, contact=dataclasses.replace(scene.contact, restitution=-0.1))
     with pytest.raises(SceneError, match="scene section 'ball'"):
         replace(scene, ball=scene.contact)
+
+
+def _through_dicts(scene: Scene, changes: dict) -> Scene:
+    """``changes`` applied to the scene's nested dicts and built again: the definition
+    that with_values' section-by-section path must follow."""
+    data = scene_to_dict(scene)
+    for dotted, value in changes.items():
+        section, key = dotted.split(".")
+        data[section][key] = value
+    return scene_from_dict(data, name=scene.name)
+
+
+_KEYS = [f"{section}.{key}" for section, keys in SECTION_KEYS.items() for key in keys]
+_VALUES = [0.0, 0.01, 0.25, 0.4, 5.0, 1e-4, 2, -1.0, 1e9, math.nan, None, True, "x",
+           "phases", "walton", "vertical", "rk4", [1], {"a": 1}]  # fmt: skip
+
+
+@settings(max_examples=300, deadline=None)
+@given(
+    name=st.sampled_from(["parabola-5.4hz", "wedge-6.6hz", "hyperbola-4.5hz"]),
+    changes=st.dictionaries(st.sampled_from(_KEYS), st.sampled_from(_VALUES), min_size=1,
+                            max_size=3),
+)  # fmt: skip
+def test_with_values_builds_what_the_dicts_build(name: str, changes: dict) -> None:
+    """Changed section by section (a sweep point's path), a scene equals the one built
+    from its changed dicts, or both are refused with the same message."""
+    scene = load_scene(name)
+    try:
+        expected = _through_dicts(scene, changes)
+    except SceneError as exc:
+        with pytest.raises(SceneError) as info:
+            with_values(scene, changes)
+        assert str(info.value) == str(exc)
+        return
+    got = with_values(scene, changes)
+    assert got == expected
+    assert scene_to_toml(got) == scene_to_toml(expected)
 
 
 # ---------------------------------------------------------------------------------

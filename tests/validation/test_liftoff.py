@@ -26,7 +26,7 @@ from scipy.optimize import brentq
 
 from billiard.engine.simulation import Simulation
 from billiard.runfile.record import ContactRecord, ImpactRecord
-from billiard.scene.scene import scene_from_dict
+from billiard.scene.scene import scene_from_dict, with_values
 from tests.validation.test_chatter import FLOOR, F, G, R, W, landing
 
 PERIODS = 10
@@ -192,3 +192,32 @@ def test_a_hop_shorter_than_the_first_substep_lands_where_it_should(gamma, bound
     )
     assert hop < 0.1 / F  # shorter than the first substep
     assert max(abs(x) for x in errors) <= bound
+
+
+@pytest.mark.parametrize("gamma", [1.595, 1.5965, 1.5972])
+def test_a_rolling_ball_leaves_where_its_friction_limit_meets_the_lift_off(gamma):
+    """With friction the rolling phase also watches mu_s N - |F|, which on the flat table
+    (F = 0) reaches zero with N, at the lift-off. At these Gamma (e = 0.5, the ball
+    landing up to 1e-3 s before the lift-off phase) the friction's root came an ulp
+    before N's: the phase ended in ``slip`` with N just below zero, and the sliding phase
+    after it, its N negative from its start, never saw N fall through zero: the table
+    held the ball down, N / m down to -5.9 m/s^2, for 22 ms, and it lifted off a period
+    late. No phase may have N < 0: the table's acceleration -A w^2 sin(w t) stays above
+    -g over every phase."""
+    amp = amplitude(gamma)
+    scene = with_values(
+        table_scene(gamma, 0.5), {"contact.mu_static": 0.3, "contact.mu_kinetic": 0.2}
+    )
+    sim = Simulation(scene)
+    phases: list[ContactRecord] = []
+    sim.on_contact = phases.append
+    while sim.step(until=4 / F) is not None:
+        pass
+    for p in phases:
+        times = [p.t_start + (p.t_end - p.t_start) * k / 64 for k in range(65)]
+        lowest = min(G - amp * W**2 * math.sin(W * t) for t in times)
+        # N / m = g + D'' to the rounding of the lift-off's time (1e-13 s of a jerk of
+        # A w^3 = 1.5e3 m/s^3 at Gamma 1.6: 2e-10 m/s^2)
+        assert lowest >= -1e-9, (p, lowest)
+    # and so it lifts off once a period (at t = 5.3 ms, 55.3 ms, ...)
+    assert len([p for p in phases if p.end == "lift-off"]) == 4
