@@ -902,6 +902,9 @@ def main(argv: list[str] | None = None) -> int:
         publish(docs)
     else:
         publish(docs, measure(args.quick, save=lambda r: _partial(docs, r)))
+        # the whole measurement is in bench.json now: the partial copy only served an
+        # interrupted run
+        saved_results(docs).with_suffix(".json.partial").unlink(missing_ok=True)
     print(f"bench.ensemble: wrote the ensemble section of {docs / 'sweeps.md'}")
     return 0
 
