@@ -289,16 +289,37 @@ def _panel(
     return bar
 
 
+#: periods named in a period map's legend: beyond, the most common ``PERIODS_SHOWN - 1``
+#: are named and the others drawn together in :data:`OTHER_PERIODS`
+PERIODS_SHOWN = 12
+#: the colour of the periods a map's legend does not name (light grey: tab10 has a
+#: mid grey)
+OTHER_PERIODS = (0.85, 0.85, 0.85)
+
+
 def _period_panel(ax: Any, xe: Any, ye: Any, period: np.ndarray) -> Any:
     """Periods are categories: one distinct colour per period found, named in a legend
     (a colour scale would suggest that period 3 lies between 2 and 4 as a height does)."""
     # NaN: none (the file's _FillValue); 0 too, the "none" of files written before it
-    found = np.unique(period[np.isfinite(period) & (period > 0)]).astype(int)
+    found, counts = np.unique(period[np.isfinite(period) & (period > 0)], return_counts=True)
+    found = found.astype(int)
+    shown = found
+    if len(found) > PERIODS_SHOWN:
+        # a large map finds dozens of periods, most in a few cells: their legend filled
+        # the figure and their colours could not be told apart; the most common are
+        # named, the rest share one grey
+        shown = np.sort(found[np.argsort(-counts, kind="stable")[: PERIODS_SHOWN - 1]])
     ids = np.full(period.shape, -1)
-    for k, value in enumerate(found):
+    for k, value in enumerate(shown):
         ids[period == value] = k
-    labels = [f"period {value}" for value in found]
-    handles = category_map(ax, xe, ye, ids, labels, distinct_colours(len(found)))
+    labels = [f"period {value}" for value in shown]
+    colours = distinct_colours(len(shown), taken=[OTHER_PERIODS])
+    others = found[~np.isin(found, shown)]
+    if others.size:
+        ids[np.isfinite(period) & (period > 0) & (ids < 0)] = len(shown)
+        labels.append(f"{others.size} other periods, {others.min()} to {others.max()}")
+        colours.append(OTHER_PERIODS)
+    handles = category_map(ax, xe, ye, ids, labels, colours)
     legend = category_legend(ax, handles, "impacts per repetition\nof the state")
     if legend is None:
         ax.text(0.5, 0.5, "no period found", transform=ax.transAxes, ha="center", fontsize=8)

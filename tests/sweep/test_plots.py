@@ -120,6 +120,30 @@ def test_period_map_is_categorical_one_colour_per_period_with_a_legend():
     assert patches == _cell_colours(fig, 0)
 
 
+def test_a_map_of_many_periods_names_the_most_common_and_greys_the_rest():
+    """Dozens of periods (a 10^6-point parameter map finds 56): the most common are named,
+    each in its colour, the others drawn together in one grey and one legend line."""
+    from billiard.sweep.plots import OTHER_PERIODS, PERIODS_SHOWN
+
+    scene = load_scene("parabola-5.4hz")
+    axes = (parse_vary("drive.frequency=5.0:5.4:10"), parse_vary("drive.amplitude=0.02:0.03:6"))
+    sweep = Sweep(scene, axes, impacts=300, transient=100)
+    # 20 periods in the 60 cells, the lower the more common (ties: the lower first)
+    counts = [8, 7, 6, 5, 5, 4, 4, 3, 3, 2, 2, 2, 2, 1, 1, 1, 1, 1, 1, 1]
+    cells = np.concatenate([np.full(n, float(k)) for k, n in enumerate(counts, start=1)])
+    fig = heatmaps_figure(sweep, _data(sweep, period=cells.reshape(sweep.shape)))
+    texts = _legend_texts(fig.axes[0])
+    assert len(texts) == PERIODS_SHOWN
+    common = range(1, PERIODS_SHOWN)  # the most cells
+    assert texts[:-1] == [f"period {k} ({int((cells == k).sum())} points)" for k in common]
+    rest = cells[cells >= PERIODS_SHOWN]
+    others = 20 - (PERIODS_SHOWN - 1)
+    assert texts[-1] == f"{others} other periods, {PERIODS_SHOWN} to 20 ({rest.size} points)"
+    colours = _cell_colours(fig, 0)
+    assert len(colours) == PERIODS_SHOWN
+    assert (*OTHER_PERIODS, 1.0) in colours
+
+
 def test_period_map_without_any_period_says_so():
     sweep = _sweep()
     fig = heatmaps_figure(sweep, _data(sweep, period=np.full(sweep.shape, np.nan)))
