@@ -402,8 +402,10 @@ def advance_ensemble(
             seconds += time.perf_counter() - began
             if progress is not None:
                 progress(lo, count, target)
-        d_heights = gpu.device_array((count, tail))
-        d_tofs = gpu.device_array((count, tail))
+        # at least one column: a device array of size 0 has no device pointer, which a
+        # launch on some numba-cuda versions refuses (numba issues 4140, 6050)
+        d_heights = gpu.device_array((count, max(tail, 1)))
+        d_tofs = gpu.device_array((count, max(tail, 1)))
         reduce[blocks, threads](d_ctxs, d_rings, d_stats, d_heights, d_tofs)
         d_stats.copy_to_host(stats[lo:hi])
         if keep is None:
