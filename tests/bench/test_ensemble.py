@@ -14,22 +14,19 @@ import sys
 import pytest
 
 from billiard.kernels.ensemble import NSTAT
+from tests.copies import COUNT_COPIES
 
-_RATE = """
+_RATE = (
+    COUNT_COPIES
+    + """
 import json
-from numba.cuda.simulator.cudadrv import devicearray
 from bench import ensemble
 from billiard.engine import gpu
 assert gpu.simulated()
-copied = []
-to_host = devicearray.FakeCUDAArray.copy_to_host
-def counted(self, ary=None, stream=0):
-    copied.append(self.nbytes)
-    return to_host(self, ary, stream)
-devicearray.FakeCUDAArray.copy_to_host = counted
 rate = ensemble.gpu_rate(4, 5, 1)
 print(json.dumps(rate | {"copied": sum(copied)}))
 """
+)
 
 
 @pytest.mark.skipif(importlib.util.find_spec("numba_cuda") is None, reason="no numba-cuda")

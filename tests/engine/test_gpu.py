@@ -30,6 +30,7 @@ from billiard.kernels import layout as L
 from billiard.kernels.loop import run_chunk
 from billiard.runfile.record import COLUMNS
 from billiard.scene.scene import load_scene, with_values
+from tests.copies import COUNT_COPIES
 
 #: impacts per trajectory
 IMPACTS = 40
@@ -238,22 +239,16 @@ def test_a_thread_stopped_in_one_launch_is_failed_not_stepped_on(tmp_path):
 #: vector, nothing else written) are injected into the real kernel: one in its first
 #: launch, stepped no further after it; one in its last, whose code comes from the
 #: end-of-batch kernel. Prints the bytes copied back per trajectory, both ways.
-_REDUCED = """
+_REDUCED = (
+    COUNT_COPIES
+    + """
 import numpy as np
 from numba import cuda
-from numba.cuda.simulator.cudadrv import devicearray
 from billiard.engine import ensemble as EN, gpu
 from billiard.kernels import ensemble as E, layout as L
 from billiard.scene.scene import load_scene, with_values
 from billiard.sweep.attractor import PERIOD_WINDOW
 assert gpu.simulated() and gpu.available() is None
-
-copied = []
-to_host = devicearray.FakeCUDAArray.copy_to_host
-def counted(self, ary=None, stream=0):
-    copied.append(self.nbytes)
-    return to_host(self, ary, stream)
-devicearray.FakeCUDAArray.copy_to_host = counted
 
 gpu.BATCH, gpu.ROUNDS = 4, 5  # six trajectories in two batches, launches of 5 impacts
 transient, impacts, keep = 6, 12, 4
@@ -315,6 +310,7 @@ h, t = EN.last_impacts(got, rings, keep)
 assert np.array_equal(h, cpu_h, equal_nan=True) and np.array_equal(t, cpu_t, equal_nan=True)
 print(reduced, full)
 """
+)
 
 
 @needs_numba_cuda
