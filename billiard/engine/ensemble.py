@@ -441,7 +441,7 @@ def start_verdicts(setup: EnsembleSetup, q1: Any, q2: Any, t: float = 0.0) -> np
     the set-up's checks). Made in blocks: no state vector is kept."""
     q1, q2 = (np.ravel(np.asarray(x, dtype=np.float64)) for x in np.broadcast_arrays(q1, q2))
     codes = np.zeros(q1.size, dtype=np.int8)
-    block = 4096  # state vectors of 9 kB each
+    block = 4096  # state vectors of 11 kB each
     out = np.empty((min(block, q1.size), setup.template.size))
     for lo in range(0, q1.size, block):
         hi = min(q1.size, lo + block)

@@ -65,7 +65,7 @@ _BALL = tuple(f"engine.{name}" for name in ("t", "theta", "q1", "q2", "u1", "u2"
 _CARRIED = ("engine.q3", "engine.clock", "engine.clock_error", "flight.step")
 _STATE = _BALL + _CARRIED
 #: trajectories per call of the kernel: bounds the memory of the state vectors (about
-#: 9 kB each) and rings (about 14 kB each); between values only _STATE is kept
+#: 11 kB each) and rings (about 14 kB each); between values only _STATE is kept
 CHUNK = 4096
 
 # Memory of an up/down sweep, for :func:`estimate_size` (measured with tracemalloc on
@@ -202,7 +202,7 @@ def start_grid(scene: Any, setup: Any, count: int) -> tuple[np.ndarray, np.ndarr
     for _ in range(8):
         q1, q2 = np.meshgrid(np.linspace(lo, hi, side), np.linspace(bottom, top, side))
         q1, q2 = q1.ravel(), q2.ravel()
-        # checked in blocks: a state vector per grid point (9 kB) is not kept
+        # checked in blocks: a state vector per grid point (11 kB) is not kept
         valid = np.nonzero(start_verdicts(setup, q1, q2, t=initial.t) == 0)[0]
         if valid.size >= count:
             pick = valid[np.rint(np.linspace(0, valid.size - 1, count)).astype(np.int64)]

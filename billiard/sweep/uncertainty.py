@@ -47,7 +47,7 @@ __all__ = [
 ]
 
 #: trajectories per call of the kernel: bounds the memory of the rings (256 impacts x 7
-#: floats each, about 14 kB per trajectory) and of the state vectors (about 9 kB each)
+#: floats each, about 14 kB per trajectory) and of the state vectors (about 11 kB each)
 CHUNK = 8192
 
 # Memory of an estimate, for :func:`estimate_size` (measured with tracemalloc on
