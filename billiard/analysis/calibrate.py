@@ -25,7 +25,7 @@ from billiard.analysis.phase import PhaseFrame, phase_frame, phase_point
 from billiard.errors import GeometryError
 from billiard.models.impact import IMPACT_LAWS, with_law
 from billiard.run.simulate import simulate
-from billiard.scene.scene import Scene, SceneError, with_values
+from billiard.scene.scene import Scene, SceneError, key_number, key_value, with_values
 
 
 class CalibrationError(ValueError):
@@ -253,13 +253,13 @@ def calibrate_law(
 
 
 def _current_value(scene: Scene, parameter: str) -> float:
-    section, _, key = parameter.partition(".")
     try:
-        value = getattr(getattr(scene, section), key)
-    except AttributeError:
+        value = key_number(scene, parameter)
+    except KeyError:
         raise CalibrationError(f"unknown scene parameter {parameter!r}") from None
-    if isinstance(value, bool) or not isinstance(value, (int, float)) or value <= 0:
+    if value is None or value <= 0:
         raise CalibrationError(
-            f"scene parameter {parameter!r} = {value!r} is not a positive number to calibrate"
+            f"scene parameter {parameter!r} = {key_value(scene, parameter)!r} is not a "
+            "positive number to calibrate"
         )
-    return float(value)
+    return value

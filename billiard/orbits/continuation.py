@@ -45,7 +45,7 @@ from billiard.orbits.bifurcation import (
 from billiard.orbits.newton import NEWTON_TOL, Orbit, free_indices, stable
 from billiard.orbits.phases import return_map
 from billiard.orbits.returnmap import STATE, OrbitError, ReturnMap, SequenceChange, landing
-from billiard.scene.scene import SceneError, with_values
+from billiard.scene.scene import SceneError, key_number, with_values
 
 __all__ = [
     "Branch",
@@ -666,14 +666,13 @@ def start_period(scene: Any) -> float:
 
 def scene_value(scene: Any, key: str) -> float:
     """The value of numeric scene key ``key`` (OrbitError for another)."""
-    section, _, name = key.partition(".")
     try:
-        value = getattr(getattr(scene, section), name)
-    except AttributeError:
+        value = key_number(scene, key)
+    except KeyError:
         raise OrbitError(f"unknown scene key {key!r}") from None
-    if isinstance(value, bool) or not isinstance(value, (int, float)):
+    if value is None:
         raise OrbitError(f"scene key {key!r} is not a number, and cannot be continued")
-    return float(value)
+    return value
 
 
 def continue_orbit(

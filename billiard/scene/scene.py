@@ -76,6 +76,8 @@ __all__ = [
     "fowles_coefficients",
     "load_scene",
     "replace",
+    "key_number",
+    "key_value",
     "scene_from_dict",
     "scene_from_toml",
     "scene_to_dict",
@@ -236,6 +238,32 @@ def _section_changes(changes: Mapping[str, Any]) -> dict[str, dict[str, Any]] | 
     # built (and so validated) in the sections' order, as scene_from_dict does: the
     # same error first
     return {section: out[section] for section in SECTIONS if section in out}
+
+
+def key_value(scene: Scene, key: str) -> Any:
+    """The value of scene key ``key`` (``"section.name"``), as the scene holds it.
+
+    Raises:
+        KeyError: the scene has no such key.
+    """
+    section, _, name = key.partition(".")
+    try:
+        return getattr(getattr(scene, section), name)
+    except AttributeError:
+        raise KeyError(key) from None
+
+
+def key_number(scene: Scene, key: str) -> float | None:
+    """:func:`key_value` as a float, None when it is not a number (a string, a bool,
+    an absent value).
+
+    Raises:
+        KeyError: the scene has no such key.
+    """
+    value = key_value(scene, key)
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        return None
+    return float(value)
 
 
 def replace(scene: Scene, **section_changes: Any) -> Scene:

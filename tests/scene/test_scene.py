@@ -20,6 +20,8 @@ from billiard.scene.scene import (
     builtin_scenes,
     curve_kind,
     fowles_coefficients,
+    key_number,
+    key_value,
     load_scene,
     replace,
     scene_from_dict,
@@ -590,3 +592,13 @@ def test_valid_edge_values_are_accepted() -> None:
     assert scene.contact.restitution == 0.0
     assert scene.run.rtol == 1e-3
     assert scene.run.collisions == 1
+
+
+def test_key_number_reads_numeric_keys_only() -> None:
+    scene = with_values(load_scene("wedge-6.6hz"), {"run.collisions": 7})
+    assert key_number(scene, "drive.frequency") == scene.drive.frequency
+    assert key_number(scene, "run.collisions") == 7.0
+    assert key_number(scene, "contact.model") is None  # a string
+    assert key_value(scene, "contact.model") == scene.contact.model
+    with pytest.raises(KeyError):
+        key_number(scene, "drive.frequncy")
